@@ -1,0 +1,86 @@
+"""Errors raised for bad input, and the small checkers that produce them.
+
+Every message names the key path of the offending value, so that a scene
+loader can prefix the file name and print one line:
+``body[2].shape.radius: must be > 0, got -1.0``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+__all__ = ["SpecError", "check_number", "check_vec2", "check_int", "check_points"]
+
+
+class SpecError(ValueError):
+    """Invalid user input (scene, field spec, shape); ``path`` is the key path."""
+
+    def __init__(self, path: str, message: str):
+        self.path = path
+        self.message = message
+        super().__init__(f"{path}: {message}" if path else message)
+
+    def under(self, prefix: str) -> "SpecError":
+        """The same error with ``prefix`` prepended to its key path."""
+        if not prefix:
+            return self
+        if not self.path:
+            path = prefix
+        elif self.path.startswith("["):
+            path = prefix + self.path
+        else:
+            path = f"{prefix}.{self.path}"
+        return SpecError(path, self.message)
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def check_number(value: Any, path: str, *, low: float | None = None,
+                 low_open: bool = False, high: float | None = None) -> float:
+    """A finite float, optionally bounded below (``low``, strict if ``low_open``) and above."""
+    if not _is_number(value):
+        raise SpecError(path, f"must be a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise SpecError(path, f"must be finite, got {value}")
+    if low is not None:
+        if low_open and not value > low:
+            raise SpecError(path, f"must be > {low:g}, got {value:g}")
+        if not low_open and not value >= low:
+            raise SpecError(path, f"must be >= {low:g}, got {value:g}")
+    if high is not None and value > high:
+        raise SpecError(path, f"must be <= {high:g}, got {value:g}")
+    return value
+
+
+def check_int(value: Any, path: str, *, low: int | None = None, high: int | None = None) -> int:
+    """An integer (a float with an integral value is not accepted)."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise SpecError(path, f"must be an integer, got {value!r}")
+    if low is not None and value < low:
+        raise SpecError(path, f"must be >= {low}, got {value}")
+    if high is not None and value > high:
+        raise SpecError(path, f"must be <= {high}, got {value}")
+    return int(value)
+
+
+def check_vec2(value: Any, path: str, *, positive: bool = False) -> tuple[float, float]:
+    """A pair of finite floats ``[x, y]`` (both > 0 if ``positive``)."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
+        raise SpecError(path, f"must be a pair [x, y], got {value!r}")
+    x = check_number(value[0], f"{path}[0]", low=0.0 if positive else None, low_open=positive)
+    y = check_number(value[1], f"{path}[1]", low=0.0 if positive else None, low_open=positive)
+    return x, y
+
+
+def check_points(value: Any, path: str, *, minimum: int = 3) -> list[tuple[float, float]]:
+    """A list of at least ``minimum`` finite points ``[[x, y], ...]``."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence):
+        raise SpecError(path, f"must be a list of [x, y] points, got {value!r}")
+    if len(value) < minimum:
+        raise SpecError(path, f"needs at least {minimum} points, got {len(value)}")
+    return [check_vec2(p, f"{path}[{i}]") for i, p in enumerate(value)]

@@ -1,0 +1,13 @@
+"""Signed distance fields with analytic gradients, vectorized over (N, 2) points.
+
+``field(spec)`` builds a field from the nested dicts a scene file uses;
+``PRIMITIVES`` and ``OPERATORS`` map names to constructors. Conventions (signs,
+shapes, exactness) are in ``sdfphys.sdf.base``.
+"""
+
+from . import curved, operators, polygonal  # noqa: F401  (register primitives and operators)
+from .base import FALLBACK_DIRECTION, OPERATORS, PRIMITIVES, Field, Param, safe_normalize
+from .build import field
+
+__all__ = ["Field", "Param", "PRIMITIVES", "OPERATORS", "field", "safe_normalize",
+           "FALLBACK_DIRECTION"]
