@@ -1,0 +1,50 @@
+"""The Contacts bundle: every contact point of one step as a struct of arrays."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+__all__ = ["Contacts"]
+
+
+@dataclass
+class Contacts:
+    """K contact points, one row each (world frame, metres).
+
+    body_a, body_b: (K,) int64 body indices (scene order), body_a < body_b
+        for contacts produced by the world; ``collide()`` keeps a = first shape.
+    point: (K, 2) midway between the two surfaces (as pymunk's (point_a + point_b) / 2).
+    normal: (K, 2) unit, pointing from a toward b.
+    depth: (K,) penetration; > 0 overlapping, < 0 separated (speculative contact).
+    feature: (K,) int64 key, unique within a pair and stable from step to step while
+        the contact persists (the solver matches warm-start impulses on
+        (body_a, body_b, feature)).
+    """
+
+    body_a: np.ndarray
+    body_b: np.ndarray
+    point: np.ndarray
+    normal: np.ndarray
+    depth: np.ndarray
+    feature: np.ndarray
+
+    @classmethod
+    def empty(cls) -> "Contacts":
+        return cls(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 2)),
+                   np.zeros((0, 2)), np.zeros(0), np.zeros(0, np.int64))
+
+    def __len__(self) -> int:
+        return len(self.depth)
+
+    def take(self, index: np.ndarray) -> "Contacts":
+        """The rows selected by ``index`` (an index or boolean array)."""
+        return Contacts(*(getattr(self, f.name)[index] for f in fields(self)))
+
+    @classmethod
+    def concatenate(cls, parts: list["Contacts"]) -> "Contacts":
+        parts = [p for p in parts if len(p)]
+        if not parts:
+            return cls.empty()
+        return cls(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(cls)))
