@@ -17,10 +17,16 @@ __all__ = ["SpecError", "check_number", "check_vec2", "check_int", "check_points
 class SpecError(ValueError):
     """Invalid user input (scene, field spec, shape); ``path`` is the key path."""
 
-    def __init__(self, path: str, message: str):
+    def __init__(self, path: str, message: str, source: str = ""):
         self.path = path
         self.message = message
-        super().__init__(f"{path}: {message}" if path else message)
+        self.source = source
+        where = ": ".join(s for s in (source, path) if s)
+        super().__init__(f"{where}: {message}" if where else message)
+
+    def in_file(self, source: str) -> "SpecError":
+        """The same error attributed to the file ``source`` (printed first)."""
+        return SpecError(self.path, self.message, source)
 
     def under(self, prefix: str) -> "SpecError":
         """The same error with ``prefix`` prepended to its key path."""
@@ -32,7 +38,7 @@ class SpecError(ValueError):
             path = prefix + self.path
         else:
             path = f"{prefix}.{self.path}"
-        return SpecError(path, self.message)
+        return SpecError(path, self.message, self.source)
 
 
 def _is_number(value: Any) -> bool:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 
-__all__ = ["Settings"]
+__all__ = ["Settings", "PRESETS", "preset"]
 
 
 @dataclass(frozen=True)
@@ -53,3 +53,18 @@ class Settings:
     @classmethod
     def names(cls) -> list[str]:
         return [f.name for f in fields(cls)]
+
+
+#: Quality presets: knob overrides of the defaults (``balanced`` is the defaults).
+PRESETS: dict[str, dict[str, float | int | bool]] = {
+    "fast": {"substeps": 2, "descent_iterations": 8, "descent_starts": 4},
+    "balanced": {},
+    "accurate": {"substeps": 8, "relax_passes": 2, "descent_iterations": 32},
+}
+
+
+def preset(name: str) -> Settings:
+    """The Settings of the quality preset ``name`` (fast | balanced | accurate)."""
+    if name not in PRESETS:
+        raise KeyError(f"unknown quality {name!r}; expected one of {', '.join(PRESETS)}")
+    return Settings().with_values(**PRESETS[name])
