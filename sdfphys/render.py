@@ -1,0 +1,480 @@
+"""Drawing a World onto any pygame Surface (headless-safe: no ``pygame.display`` calls).
+
+Frames and units:
+
+- World: metres, y up. Screen: pixels, y down, origin at the top-left corner;
+  pixel ``(i, j)`` covers ``[i, i + 1) x [j, j + 1)`` and its centre is
+  ``(i + 0.5, j + 0.5)``. The y-flip lives on the ``Camera``, nowhere else.
+- Bodies are drawn from their shapes (``sdfphys.shapes``): circles and
+  triangulated polygons with ``pygame.draw``; SDF bodies as their true filled
+  region ``f <= 0``, rasterized by evaluating the field at the pixel centres of
+  the body's screen bounding box in one numpy batch, with a one-pixel
+  antialiased edge taken from the distance value (coverage ``0.5 - f * scale``
+  clipped to ``[0, 1]``). Unbounded fields (a half-plane ground) are evaluated
+  over the visible screen. Sprites of bodies that did not move since the last
+  frame (static bodies, bodies at rest) are reused.
+- Overlays (``Overlays``): contact points and normals, the SDF distance map
+  with iso-lines (one body's field or the union of all), body bounds.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+import pygame
+
+__all__ = ["DYNAMIC", "KINEMATIC", "STATIC", "BodyFrames", "Camera", "Overlays", "Palette",
+           "Renderer", "body_frames"]
+
+Color = tuple[int, int, int]
+
+#: Motion codes used by the renderer (``body_frames``).
+DYNAMIC, STATIC, KINEMATIC = 0, 1, 2
+_MOTION_NAMES = {"dynamic": DYNAMIC, "static": STATIC, "kinematic": KINEMATIC}
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A view of the world: ``center`` (m) is the world point at the middle of the frame,
+    ``scale`` is pixels per metre, ``size`` the frame ``(width, height)`` in pixels.
+
+    World y points up, screen y points down: ``world_to_screen`` flips it.
+    """
+
+    center: tuple[float, float] = (0.0, 4.0)
+    scale: float = 50.0
+    size: tuple[int, int] = (960, 540)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "center", (float(self.center[0]), float(self.center[1])))
+        object.__setattr__(self, "scale", float(self.scale))
+        object.__setattr__(self, "size", (int(self.size[0]), int(self.size[1])))
+        if not (self.scale > 0 and math.isfinite(self.scale)):
+            raise ValueError(f"camera scale must be a positive number of px/m, got {self.scale}")
+        if self.size[0] < 1 or self.size[1] < 1:
+            raise ValueError(f"camera size must be positive pixels, got {self.size}")
+
+    def world_to_screen(self, points: Any) -> np.ndarray:
+        """Screen pixel coordinates (N, 2) (float, y down) of world ``points`` (N, 2) in m."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        out = np.empty_like(p)
+        out[:, 0] = 0.5 * self.size[0] + (p[:, 0] - self.center[0]) * self.scale
+        out[:, 1] = 0.5 * self.size[1] - (p[:, 1] - self.center[1]) * self.scale
+        return out
+
+    def screen_to_world(self, pixels: Any) -> np.ndarray:
+        """World points (N, 2) in m of screen ``pixels`` (N, 2) (y down); inverse of
+        ``world_to_screen``."""
+        q = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
+        out = np.empty_like(q)
+        out[:, 0] = self.center[0] + (q[:, 0] - 0.5 * self.size[0]) / self.scale
+        out[:, 1] = self.center[1] - (q[:, 1] - 0.5 * self.size[1]) / self.scale
+        return out
+
+    def pixel_centers(self, x0: int, y0: int, width: int, height: int,
+                      step: int = 1) -> np.ndarray:
+        """World points (width, height, 2), indexed ``[i, j]`` like ``pygame.surfarray``,
+        of the centres of the ``step`` x ``step`` pixel blocks of the screen rectangle
+        whose top-left pixel is ``(x0, y0)`` (``step = 1``: the pixel centres)."""
+        sx = x0 + (np.arange(width) + 0.5) * step
+        sy = y0 + (np.arange(height) + 0.5) * step
+        out = np.empty((width, height, 2))
+        out[:, :, 0] = (self.center[0] + (sx - 0.5 * self.size[0]) / self.scale)[:, None]
+        out[:, :, 1] = (self.center[1] - (sy - 0.5 * self.size[1]) / self.scale)[None, :]
+        return out
+
+
+@dataclass(frozen=True)
+class Palette:
+    """Every colour the renderer uses (RGB 0-255); body edges are the fill times ``edge_shade``."""
+
+    background: Color = (22, 24, 30)
+    dynamic: Color = (88, 156, 226)
+    static: Color = (128, 132, 140)
+    kinematic: Color = (226, 172, 72)
+    edge_shade: float = 0.55
+    mark: Color = (236, 236, 236)
+    contact: Color = (240, 64, 64)
+    speculative: Color = (240, 200, 60)
+    bounds: Color = (90, 220, 120)
+    field_inside: Color = (70, 130, 230)
+    field_outside: Color = (232, 150, 80)
+    iso: Color = (250, 250, 250)
+    text: Color = (232, 232, 232)
+
+    def fill(self, motion: int) -> Color:
+        """Fill colour of a body with motion code ``DYNAMIC``, ``STATIC`` or ``KINEMATIC``."""
+        return (self.dynamic, self.static, self.kinematic)[motion]
+
+    def edge(self, motion: int) -> Color:
+        """Outline colour of a body: its fill darkened by ``edge_shade``."""
+        return tuple(int(c * self.edge_shade) for c in self.fill(motion))
+
+
+@dataclass(frozen=True)
+class Overlays:
+    """Optional layers drawn over the bodies.
+
+    contacts: contact points (red: overlapping, yellow: speculative) and normals
+        (``normal_length`` m, from body a toward body b).
+    field: the SDF distance map, inside blue and outside orange, darker near the
+        surface, iso-lines every ``iso_spacing`` m and the zero line in white;
+        evaluated every ``field_step`` pixels and smoothly upscaled.
+    field_body: the body whose field is shown; None shows the union of all bodies.
+    bounds: each body's world-space AABB.
+    """
+
+    contacts: bool = False
+    field: bool = False
+    field_body: int | None = None
+    bounds: bool = False
+    normal_length: float = 0.3
+    iso_spacing: float = 0.25
+    field_step: int = 4
+    field_alpha: int = 170
+
+
+@dataclass
+class BodyFrames:
+    """Where each body is, as the renderer needs it (one row per body, scene order).
+
+    com: (B, 2) centre of mass, world m (the origin of the shape's body frame).
+    angle: (B,) rad, counter-clockwise. motion: (B,) DYNAMIC | STATIC | KINEMATIC.
+    shape_id: (B,) index into ``shapes``.
+    """
+
+    com: np.ndarray
+    angle: np.ndarray
+    motion: np.ndarray
+    shape_id: np.ndarray
+    shapes: list
+
+
+def body_frames(world: Any) -> BodyFrames:
+    """The body frames of ``world`` (a ``sdfphys.world.World`` or an object with the same
+    attributes): the centre of mass is ``world.com_position`` when the world has it,
+    otherwise ``position - R(angle) @ shape.origin``."""
+    angle = np.asarray(world.angle, dtype=np.float64).reshape(-1)
+    shape_id = np.asarray(world.shape_id, dtype=np.int64).reshape(-1)
+    shapes = list(world.shapes)
+    com = getattr(world, "com_position", None)
+    if com is None:
+        origin = np.array([np.asarray(s.origin, dtype=np.float64) for s in shapes]).reshape(-1, 2)
+        o = origin[shape_id] if len(shape_id) else np.zeros((0, 2))
+        c, s = np.cos(angle), np.sin(angle)
+        position = np.asarray(world.position, dtype=np.float64).reshape(-1, 2)
+        com = position - np.stack([c * o[:, 0] - s * o[:, 1], s * o[:, 0] + c * o[:, 1]], 1)
+    com = np.asarray(com, dtype=np.float64).reshape(-1, 2)
+    kind = np.asarray(world.kind).reshape(-1)
+    if kind.dtype.kind in "US":
+        motion = np.array([_MOTION_NAMES[str(k)] for k in kind], dtype=np.int64)
+    else:
+        motion = kind.astype(np.int64)
+    return BodyFrames(com, angle, motion, shape_id, shapes)
+
+
+def _draw_coords(camera: Camera, points: np.ndarray) -> np.ndarray:
+    """``pygame.draw`` coordinates (N, 2) (float) of world ``points``: pygame puts
+    integer coordinates at pixel centres, the camera at pixel corners."""
+    return camera.world_to_screen(points) - 0.5
+
+
+def _draw_pixels(camera: Camera, points: np.ndarray) -> np.ndarray:
+    """``_draw_coords`` rounded to the nearest pixel centre (N, 2) int, for the
+    ``pygame.draw`` functions that truncate float coordinates."""
+    return np.round(_draw_coords(camera, points)).astype(np.int64)
+
+
+def _rotate(points: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Body-frame ``points`` (V, 2) rotated by each of ``angle`` (n,): (n, V, 2)."""
+    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
+    x, y = points[None, :, 0], points[None, :, 1]
+    return np.stack([c * x - s * y, s * x + c * y], axis=-1)
+
+
+def _to_body(points: np.ndarray, com: np.ndarray, angle: float) -> np.ndarray:
+    """World ``points`` (..., 2) in the body frame at ``com``, ``angle`` (flattened to (N, 2))."""
+    c, s = math.cos(angle), math.sin(angle)
+    d = points.reshape(-1, 2) - com
+    return np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=1)
+
+
+class Renderer:
+    """Draws worlds through ``camera`` with colours from ``palette``.
+
+    ``draw(surface, world, overlays)`` clears ``surface`` (which should have the
+    camera's size) and draws every body and the requested overlays. The renderer
+    keeps the SDF sprites of the last frame to reuse those of bodies that did not
+    move; it holds no other state.
+    """
+
+    def __init__(self, camera: Camera, palette: Palette = Palette()):
+        self.camera = camera
+        self.palette = palette
+        self._sprites: dict[tuple, tuple] = {}
+
+    def draw(self, surface: pygame.Surface, world: Any, overlays: Overlays = Overlays()) -> None:
+        """Clear ``surface`` and draw ``world`` (bodies, then the chosen ``overlays``)."""
+        surface.fill(self.palette.background)
+        frames = body_frames(world)
+        kinds = np.array([s.kind for s in frames.shapes], dtype=object)
+        body_kind = kinds[frames.shape_id] if len(frames.shape_id) else np.zeros(0, object)
+        visible = self._visible(frames)
+        self._draw_sdf_bodies(surface, frames, np.flatnonzero(visible & (body_kind == "sdf")))
+        self._draw_meshes(surface, frames, np.flatnonzero(visible & (body_kind == "mesh")))
+        self._draw_circles(surface, frames, np.flatnonzero(visible & (body_kind == "circle")))
+        if overlays.field:
+            self._draw_field(surface, frames, overlays)
+        if overlays.bounds:
+            self._draw_bounds(surface, frames, np.flatnonzero(visible))
+        if overlays.contacts:
+            self._draw_contacts(surface, world.contacts, overlays.normal_length)
+
+    # ----------------------------------------------------------------------------------
+    # Bodies
+    # ----------------------------------------------------------------------------------
+
+    def _visible(self, frames: BodyFrames) -> np.ndarray:
+        """(B,) bool: the body's bounding circle reaches the screen."""
+        radius = np.array([float(s.radius) for s in frames.shapes])[frames.shape_id]
+        centre = self.camera.world_to_screen(frames.com)
+        r = radius * self.camera.scale + 2.0
+        w, h = self.camera.size
+        with np.errstate(invalid="ignore"):
+            return ~np.isfinite(r) | ((centre[:, 0] + r >= 0) & (centre[:, 0] - r <= w)
+                                      & (centre[:, 1] + r >= 0) & (centre[:, 1] - r <= h))
+
+    def _draw_circles(self, surface: pygame.Surface, frames: BodyFrames,
+                      index: np.ndarray) -> None:
+        if not len(index):
+            return
+        cam, pal = self.camera, self.palette
+        radius = np.array([float(getattr(s, "radius", 0.0)) for s in frames.shapes])
+        r_m = radius[frames.shape_id[index]]
+        angle = frames.angle[index]
+        mark = frames.com[index] + r_m[:, None] * np.stack([np.cos(angle), np.sin(angle)], 1)
+        centre = _draw_coords(cam, frames.com[index])
+        tip = _draw_coords(cam, mark).tolist()
+        # aacircle fills the pixels within radius + 0.5 of a pixel centre (ints):
+        # centre and radius are rounded so that the disc covers [x - r, x + r].
+        pixel = np.round(centre).astype(np.int64).tolist()
+        r_px = np.maximum(np.round(r_m * cam.scale - 0.5), 0).astype(np.int64).tolist()
+        centre = centre.tolist()
+        for k, motion in enumerate(frames.motion[index].tolist()):
+            pygame.draw.aacircle(surface, pal.fill(motion), pixel[k], r_px[k])
+            pygame.draw.aacircle(surface, pal.edge(motion), pixel[k], r_px[k], 1)
+            pygame.draw.aaline(surface, pal.mark, centre[k], tip[k])
+
+    def _draw_meshes(self, surface: pygame.Surface, frames: BodyFrames,
+                     index: np.ndarray) -> None:
+        cam, pal = self.camera, self.palette
+        sid = frames.shape_id[index]
+        for shape_id in np.unique(sid):
+            bodies = index[sid == shape_id]
+            outline = np.asarray(frames.shapes[shape_id].outline, dtype=np.float64)
+            world = _rotate(outline, frames.angle[bodies]) + frames.com[bodies, None, :]
+            screen = _draw_coords(cam, world).reshape(len(bodies), -1, 2)
+            pixel = np.round(screen).astype(np.int64).tolist()
+            screen = screen.tolist()
+            for k, motion in enumerate(frames.motion[bodies].tolist()):
+                pygame.draw.polygon(surface, pal.fill(motion), pixel[k])
+                pygame.draw.aalines(surface, pal.edge(motion), True, screen[k])
+
+    def _draw_sdf_bodies(self, surface: pygame.Surface, frames: BodyFrames,
+                         index: np.ndarray) -> None:
+        sprites: dict[tuple, tuple] = {}
+        for b in index.tolist():
+            shape = frames.shapes[frames.shape_id[b]]
+            motion = int(frames.motion[b])
+            key = (id(shape), frames.com[b].tobytes(), float(frames.angle[b]), motion,
+                   self.camera, self.palette)
+            entry = self._sprites.get(key)
+            if entry is None:
+                entry = (shape, *self._sdf_sprite(shape, frames.com[b], float(frames.angle[b]),
+                                                  motion))
+            sprites[key] = entry
+            if entry[1] is not None:
+                surface.blit(entry[1], entry[2])
+        self._sprites = sprites
+
+    def _screen_rect(self, shape: Any, com: np.ndarray, angle: float) -> pygame.Rect:
+        """Screen rectangle (clipped to the frame, 1 px margin for the edge) that holds
+        the body's region f <= 0; the whole frame for unbounded shapes."""
+        w, h = self.camera.size
+        frame = pygame.Rect(0, 0, w, h)
+        box = np.asarray(shape.bounds(), dtype=np.float64)
+        if not np.all(np.isfinite(box)):
+            return frame
+        corners = np.array([[box[0], box[1]], [box[2], box[1]], [box[2], box[3]],
+                            [box[0], box[3]]])
+        px = self.camera.world_to_screen(_rotate(corners, np.array([angle]))[0] + com)
+        x0, y0 = np.floor(px.min(axis=0)) - 1
+        x1, y1 = np.ceil(px.max(axis=0)) + 1
+        return pygame.Rect(int(x0), int(y0), int(x1 - x0), int(y1 - y0)).clip(frame)
+
+    def _sdf_sprite(self, shape: Any, com: np.ndarray, angle: float,
+                    motion: int) -> tuple[pygame.Surface | None, tuple[int, int]]:
+        """An RGBA sprite of the region f <= 0 and its screen position.
+
+        Coverage of a pixel is ``clip(0.5 - f * scale, 0, 1)`` (f at the pixel centre,
+        the one-pixel antialiased edge); pixels within 1.5 px inside the surface blend
+        to the edge colour. The sprite is cropped to its non-transparent pixels.
+        """
+        rect = self._screen_rect(shape, com, angle)
+        if rect.width == 0 or rect.height == 0:
+            return None, (0, 0)
+        centres = self.camera.pixel_centers(rect.x, rect.y, rect.width, rect.height)
+        d = shape.field.distance(_to_body(centres, com, angle))
+        d_px = d.reshape(rect.width, rect.height) * self.camera.scale
+        coverage = np.clip(0.5 - d_px, 0.0, 1.0)
+        inside = np.flatnonzero(coverage.any(axis=1))
+        rows = np.flatnonzero(coverage.any(axis=0))
+        if not len(inside):
+            return None, (0, 0)
+        i0, i1, j0, j1 = inside[0], inside[-1] + 1, rows[0], rows[-1] + 1
+        coverage, d_px = coverage[i0:i1, j0:j1], d_px[i0:i1, j0:j1]
+        edge_weight = np.clip(d_px + 1.5, 0.0, 1.0)[:, :, None]
+        fill = np.array(self.palette.fill(motion), dtype=np.float64)
+        edge = np.array(self.palette.edge(motion), dtype=np.float64)
+        sprite = pygame.Surface((i1 - i0, j1 - j0), pygame.SRCALPHA, 32)
+        rgb = pygame.surfarray.pixels3d(sprite)
+        rgb[...] = (fill + (edge - fill) * edge_weight + 0.5).astype(np.uint8)
+        del rgb
+        alpha = pygame.surfarray.pixels_alpha(sprite)
+        alpha[...] = (coverage * 255.0 + 0.5).astype(np.uint8)
+        del alpha
+        return sprite, (rect.x + int(i0), rect.y + int(j0))
+
+    # ----------------------------------------------------------------------------------
+    # Overlays
+    # ----------------------------------------------------------------------------------
+
+    def world_bounds(self, frames: BodyFrames, index: np.ndarray) -> np.ndarray:
+        """World AABBs (n, 4) ``[xmin, ymin, xmax, ymax]`` (m) of bodies ``index``: the
+        body-frame ``bounds()`` box rotated into the world (circles: exact; unbounded
+        shapes: infinite or NaN components)."""
+        out = np.empty((len(index), 4))
+        sid = frames.shape_id[index]
+        for shape_id in np.unique(sid):
+            rows = np.flatnonzero(sid == shape_id)
+            bodies = index[rows]
+            shape = frames.shapes[shape_id]
+            com = frames.com[bodies]
+            if shape.kind == "circle":
+                r = float(shape.radius)
+                out[rows] = np.concatenate([com - r, com + r], axis=1)
+                continue
+            x0, y0, x1, y1 = np.asarray(shape.bounds(), dtype=np.float64)
+            corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+            with np.errstate(invalid="ignore"):
+                world = _rotate(corners, frames.angle[bodies]) + com[:, None, :]
+            out[rows] = np.concatenate([world.min(axis=1), world.max(axis=1)], axis=1)
+        return out
+
+    def _draw_bounds(self, surface: pygame.Surface, frames: BodyFrames,
+                     index: np.ndarray) -> None:
+        boxes = self.world_bounds(frames, index)
+        boxes = boxes[np.all(np.isfinite(boxes), axis=1)]
+        lo = self.camera.world_to_screen(boxes[:, [0, 3]])
+        hi = self.camera.world_to_screen(boxes[:, [2, 1]])
+        for (x0, y0), (x1, y1) in zip(lo.tolist(), hi.tolist()):
+            pygame.draw.rect(surface, self.palette.bounds,
+                             pygame.Rect(round(x0), round(y0), max(1, round(x1 - x0)),
+                                         max(1, round(y1 - y0))), 1)
+
+    def _draw_contacts(self, surface: pygame.Surface, contacts: Any, length: float) -> None:
+        if contacts is None or not len(contacts.depth):
+            return
+        point = np.asarray(contacts.point, dtype=np.float64)
+        normal = np.asarray(contacts.normal, dtype=np.float64)
+        start = _draw_pixels(self.camera, point).tolist()
+        end = _draw_pixels(self.camera, point + length * normal).tolist()
+        for k, depth in enumerate(np.asarray(contacts.depth).tolist()):
+            colour = self.palette.contact if depth > 0 else self.palette.speculative
+            pygame.draw.line(surface, colour, start[k], end[k], 2)
+            pygame.draw.circle(surface, colour, start[k], 3)
+
+    def _draw_field(self, surface: pygame.Surface, frames: BodyFrames,
+                    overlays: Overlays) -> None:
+        cam, step = self.camera, max(1, int(overlays.field_step))
+        cw, ch = -(-cam.size[0] // step), -(-cam.size[1] // step)
+        centres = cam.pixel_centers(0, 0, cw, ch, step)
+        d = distance_map(frames, centres[:, 0, 0], centres[0, :, 1], overlays.field_body)
+        d = np.where(np.isfinite(d), d, 1e6)
+        image = _distance_colours(d, cam.scale / step, overlays.iso_spacing, self.palette)
+        layer = pygame.transform.smoothscale(pygame.surfarray.make_surface(image),
+                                             (cw * step, ch * step))
+        layer.set_alpha(int(overlays.field_alpha))
+        surface.blit(layer, (0, 0))
+
+
+def distance_map(frames: BodyFrames, xs: np.ndarray, ys: np.ndarray,
+                 body: int | None = None) -> np.ndarray:
+    """Signed distance (W, H) on the world grid ``xs`` (W,) x ``ys`` (H,) (m; ``xs``
+    increasing, ``ys`` monotonic): body ``body``'s field, or the union (minimum) of the
+    fields of all bodies when ``body`` is None.
+
+    For the union, bodies are taken largest first and a body's field is evaluated only
+    at grid points where the lower bound ``|p - com| - radius`` of its distance is
+    below the current minimum, inside the window ``radius + max(minimum)`` around its
+    centre of mass: the cost grows with the area each body wins, not with B x grid.
+    (For fields that are bounds rather than exact distances the pruned values could
+    have been smaller: the map is a view, not a query.)
+    """
+    xs, ys = np.asarray(xs, dtype=np.float64), np.asarray(ys, dtype=np.float64)
+    flip = len(ys) > 1 and ys[0] > ys[-1]
+    y_up = ys[::-1] if flip else ys
+    radius = np.array([float(s.radius) for s in frames.shapes])[frames.shape_id]
+    bodies = [body] if body is not None else np.argsort(-radius, kind="stable").tolist()
+    best = np.full((len(xs), len(y_up)), np.inf)
+    for b in bodies:
+        shape = frames.shapes[frames.shape_id[b]]
+        cx, cy = frames.com[b]
+        r = radius[b]
+        if np.isfinite(r):
+            reach = r + best.max()
+            i0, i1 = np.searchsorted(xs, [cx - reach, cx + reach])
+            j0, j1 = np.searchsorted(y_up, [cy - reach, cy + reach])
+        else:
+            i0, i1, j0, j1 = 0, len(xs), 0, len(y_up)
+        block = best[i0:i1, j0:j1]
+        if block.size == 0:
+            continue
+        dx, dy = xs[i0:i1] - cx, y_up[j0:j1] - cy
+        limit = block + r
+        with np.errstate(invalid="ignore"):
+            near = (limit > 0) & (dx[:, None] ** 2 + dy[None, :] ** 2 < limit * limit)
+        ii, jj = np.nonzero(near)
+        if not len(ii):
+            continue
+        if shape.kind == "circle":
+            d = np.hypot(dx[ii], dy[jj]) - r
+        else:
+            points = np.stack([xs[i0 + ii], y_up[j0 + jj]], axis=1)
+            d = shape.field.distance(_to_body(points, frames.com[b], frames.angle[b]))
+        block[ii, jj] = np.minimum(block[ii, jj], d)
+    return best[:, ::-1] if flip else best
+
+
+def _distance_colours(d: np.ndarray, scale: float, spacing: float, pal: Palette) -> np.ndarray:
+    """RGB (W, H, 3) uint8 of the distance map ``d`` (m) sampled at ``scale`` samples per
+    metre: inside/outside colour, darker near the surface, bands with a line every
+    ``spacing`` m, the zero line in ``pal.iso``."""
+    base = np.where((d <= 0)[:, :, None], np.array(pal.field_inside, float),
+                    np.array(pal.field_outside, float))
+    shade = 0.4 + 0.6 * (1.0 - np.exp(-np.abs(d) / (2.0 * spacing)))
+    band = 0.82 + 0.18 * np.cos(2.0 * np.pi * d / spacing)
+    colour = base * (shade * band)[:, :, None]
+    off = np.abs(d - spacing * np.round(d / spacing)) * scale
+    line = 0.5 * np.clip(1.0 - off, 0.0, 1.0)[:, :, None]
+    zero = np.clip(1.5 - np.abs(d) * scale, 0.0, 1.0)[:, :, None]
+    iso = np.array(pal.iso, float)
+    colour = colour + (iso - colour) * line
+    colour = colour + (iso - colour) * zero
+    return np.clip(colour + 0.5, 0, 255).astype(np.uint8)

@@ -1,0 +1,349 @@
+"""Renderer and camera: pixels land where the camera says, SDF bodies cover their area."""
+
+import os
+import subprocess
+import sys
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+import pygame
+
+from sdfphys import sdf
+from sdfphys.collide.contacts import Contacts
+from sdfphys.render import (
+    Camera,
+    Overlays,
+    Palette,
+    Renderer,
+    body_frames,
+    distance_map,
+)
+
+BLACK = (0, 0, 0)
+WHITE = (255, 255, 255)
+
+
+# ------------------------------------------------------------------------------------------
+# Stand-ins with the attributes of sdfphys.shapes / sdfphys.world that the renderer reads.
+# ------------------------------------------------------------------------------------------
+
+class Ring:
+    """Annulus between radii r and R (exact distance)."""
+
+    def __init__(self, outer, inner):
+        self.outer, self.inner = outer, inner
+
+    def distance(self, p):
+        p = np.asarray(p, dtype=float).reshape(-1, 2)
+        mid, half = (self.outer + self.inner) / 2, (self.outer - self.inner) / 2
+        return np.abs(np.hypot(p[:, 0], p[:, 1]) - mid) - half
+
+    def bounds(self):
+        return np.array([-self.outer, -self.outer, self.outer, self.outer])
+
+
+class Ground:
+    """Half-plane y <= 0 (unbounded)."""
+
+    def distance(self, p):
+        return np.asarray(p, dtype=float).reshape(-1, 2)[:, 1].copy()
+
+    def bounds(self):
+        return np.array([-np.inf, -np.inf, np.inf, 0.0])
+
+
+def circle_shape(r):
+    return SimpleNamespace(kind="circle", radius=r, origin=np.zeros(2),
+                           field=sdf.field({"type": "circle", "radius": r}),
+                           bounds=lambda: np.array([-r, -r, r, r]))
+
+
+def box_shape(w, h):
+    v = np.array([[-w / 2, -h / 2], [w / 2, -h / 2], [w / 2, h / 2], [-w / 2, h / 2]])
+    return SimpleNamespace(kind="mesh", radius=float(np.hypot(w, h) / 2), origin=np.zeros(2),
+                           vertices=v, outline=v, triangles=np.array([[0, 1, 2], [0, 2, 3]]),
+                           field=sdf.field({"type": "box", "size": [w, h]}),
+                           bounds=lambda: np.array([-w / 2, -h / 2, w / 2, h / 2]))
+
+
+def sdf_shape(field, radius):
+    return SimpleNamespace(kind="sdf", radius=radius, origin=np.zeros(2), field=field,
+                           bounds=field.bounds)
+
+
+def make_world(bodies, contacts=None):
+    """bodies: list of (shape, (x, y), angle, kind)."""
+    shapes = [b[0] for b in bodies]
+    return SimpleNamespace(
+        shapes=shapes, shape_id=np.arange(len(bodies)),
+        position=np.array([b[1] for b in bodies], dtype=float).reshape(-1, 2),
+        angle=np.array([b[2] for b in bodies], dtype=float),
+        kind=np.array([b[3] for b in bodies]),
+        contacts=contacts if contacts is not None else Contacts.empty())
+
+
+def render(world, camera, palette=None, overlays=None):
+    surface = pygame.Surface(camera.size)
+    Renderer(camera, palette or Palette()).draw(surface, world, overlays or Overlays())
+    return pygame.surfarray.array3d(surface)
+
+
+def painted_box(image, background):
+    """(x0, y0, x1, y1) screen extent of the pixels at least half-way from ``background``
+    to full colour (antialiased fringes below half coverage do not count): pixel i spans
+    [i, i + 1)."""
+    gap = np.abs(image.astype(float) - np.array(background, dtype=float)).max(axis=2)
+    xs, ys = np.nonzero(gap >= 0.5 * gap.max()) if gap.max() > 0 else ((), ())
+    assert len(xs), "nothing was drawn"
+    return xs.min(), ys.min(), xs.max() + 1, ys.max() + 1
+
+
+def expected_box(camera, corners):
+    """Screen extent (x0, y0, x1, y1) of world ``corners``."""
+    px = camera.world_to_screen(corners)
+    return px[:, 0].min(), px[:, 1].min(), px[:, 0].max(), px[:, 1].max()
+
+
+PLAIN = Palette(background=BLACK, dynamic=WHITE, edge_shade=1.0)
+
+
+# ------------------------------------------------------------------------------------------
+# Camera
+# ------------------------------------------------------------------------------------------
+
+def test_camera_maps_centre_to_frame_middle_and_flips_y():
+    cam = Camera((1.0, 2.0), 10.0, (200, 100))
+    np.testing.assert_allclose(cam.world_to_screen([[1.0, 2.0]]), [[100.0, 50.0]])
+    np.testing.assert_allclose(cam.world_to_screen([[2.0, 3.0]]), [[110.0, 40.0]])
+
+
+def test_camera_round_trip(rng):
+    cam = Camera((0.3, -4.0), 37.5, (640, 360))
+    points = rng.normal(size=(50, 2)) * 5
+    np.testing.assert_allclose(cam.screen_to_world(cam.world_to_screen(points)), points,
+                               atol=1e-12)
+
+
+def test_camera_pixel_centers_are_screen_to_world_of_half_pixels():
+    cam = Camera((0.0, 4.0), 50.0, (40, 30))
+    grid = cam.pixel_centers(3, 5, 4, 2)
+    np.testing.assert_allclose(grid[2, 1], cam.screen_to_world([[3 + 2.5, 5 + 1.5]])[0])
+
+
+def test_camera_rejects_bad_scale():
+    with pytest.raises(ValueError, match="scale"):
+        Camera((0, 0), 0.0, (10, 10))
+
+
+# ------------------------------------------------------------------------------------------
+# Bodies land where the camera says
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("angle", [0.0, 0.4])
+def test_box_pixels_match_projected_corners(angle):
+    cam = Camera((0.0, 4.0), 50.0, (320, 240))
+    shape = box_shape(2.0, 1.0)
+    world = make_world([(shape, (0.7, 3.4), angle, "dynamic")])
+    image = render(world, cam, PLAIN)
+    c, s = np.cos(angle), np.sin(angle)
+    corners = shape.outline @ np.array([[c, s], [-s, c]]) + np.array([0.7, 3.4])
+    np.testing.assert_allclose(painted_box(image, BLACK), expected_box(cam, corners), atol=1.0)
+
+
+def marked(image, x, y, pal):
+    """The antialiased mark line passes by pixel (x, y): some pixel of the 2x2 block at
+    (x - 1, y - 1) is at least half-way from the fill colour to the mark colour."""
+    block = image[x - 1:x + 1, y - 1:y + 1].reshape(-1, 3).astype(float)
+    fill, mark = np.array(pal.dynamic, float), np.array(pal.mark, float)
+    progress = (block - fill) @ (mark - fill) / np.dot(mark - fill, mark - fill)
+    return progress.max() >= 0.5
+
+
+def test_circle_has_its_extent_and_a_rotation_mark():
+    cam = Camera((0.0, 0.0), 40.0, (200, 200))
+    pal = Palette(background=BLACK)
+    world = make_world([(circle_shape(1.0), (0.5, -0.25), 0.0, "dynamic")])
+    image = render(world, cam, pal)
+    expected = expected_box(cam, np.array([[-0.5, -1.25], [1.5, 0.75]]))
+    np.testing.assert_allclose(painted_box(image, BLACK), expected, atol=1.0)
+    cx, cy = cam.world_to_screen([[0.5, -0.25]])[0].astype(int)
+    assert marked(image, cx + 24, cy, pal)               # the mark points along angle 0 ...
+    assert not marked(image, cx - 24, cy, pal)
+    assert not marked(image, cx, cy - 24, pal)
+    turned = render(make_world([(circle_shape(1.0), (0.5, -0.25), np.pi / 2, "dynamic")]),
+                    cam, pal)
+    assert marked(turned, cx, cy - 24, pal)              # ... y up: angle pi/2 points up
+    assert not marked(turned, cx + 24, cy, pal)
+
+
+def test_static_and_kinematic_bodies_have_their_own_colours():
+    cam = Camera((0.0, 0.0), 20.0, (300, 100))
+    pal = Palette()
+    box = box_shape(1.0, 1.0)
+    world = make_world([(box, (-4.0, 0.0), 0.0, "dynamic"), (box, (0.0, 0.0), 0.0, "static"),
+                        (box, (4.0, 0.0), 0.0, "kinematic")])
+    image = render(world, cam, pal)
+    centres = cam.world_to_screen([[-4.0, 0.0], [0.0, 0.0], [4.0, 0.0]]).astype(int)
+    got = [tuple(image[x, y]) for x, y in centres]
+    assert got == [pal.dynamic, pal.static, pal.kinematic]
+    assert len(set(got)) == 3
+
+
+def test_body_frames_use_shape_origin_when_world_has_no_com_position():
+    shape = box_shape(1.0, 1.0)
+    shape.origin = np.array([0.5, 0.0])       # user origin 0.5 m right of the centre of mass
+    world = make_world([(shape, (2.0, 1.0), np.pi / 2, "dynamic")])
+    np.testing.assert_allclose(body_frames(world).com, [[2.0, 0.5]], atol=1e-12)
+    world.com_position = np.array([[7.0, 7.0]])
+    np.testing.assert_allclose(body_frames(world).com, [[7.0, 7.0]])
+
+
+# ------------------------------------------------------------------------------------------
+# SDF bodies: the true filled shape, rasterized from the field
+# ------------------------------------------------------------------------------------------
+
+def test_sdf_ring_area_and_position():
+    cam = Camera((0.0, 0.0), 50.0, (240, 240))
+    ring = Ring(1.0, 0.6)
+    world = make_world([(sdf_shape(ring, 1.0), (0.3, -0.2), 0.7, "dynamic")])
+    image = render(world, cam, PLAIN)[:, :, 0].astype(float) / 255.0
+    area = np.pi * (1.0 ** 2 - 0.6 ** 2)
+    assert abs(np.count_nonzero(image >= 0.5) / cam.scale ** 2 - area) < 0.01 * area
+    assert abs(image.sum() / cam.scale ** 2 - area) < 0.01 * area
+    assert image[cam.world_to_screen([[0.3, -0.2]]).astype(int)[0][0], 120] == 0.0  # the hole
+    expected = expected_box(cam, np.array([[-0.7, -1.2], [1.3, 0.8]]))
+    np.testing.assert_allclose(painted_box(np.repeat(image[:, :, None], 3, 2), 0.0), expected,
+                               atol=1.0)
+
+
+def test_sdf_edge_is_antialiased_over_one_pixel():
+    cam = Camera((0.0, 0.0), 50.0, (240, 240))
+    world = make_world([(sdf_shape(Ring(1.0, 0.6), 1.0), (0.0, 0.0), 0.0, "dynamic")])
+    image = render(world, cam, PLAIN)[:, :, 0]
+    partial = (image > 0) & (image < 255)
+    assert np.count_nonzero(partial) > 0.5 * 2 * np.pi * 1.6 * cam.scale   # on the edges ...
+    d = Ring(1.0, 0.6).distance(cam.pixel_centers(0, 0, 240, 240).reshape(-1, 2)) * cam.scale
+    assert np.all(np.abs(d.reshape(240, 240)[partial]) <= 0.5 + 1e-9)        # ... and only there
+
+
+def test_sdf_rotated_box_area():
+    cam = Camera((0.0, 0.0), 40.0, (200, 200))
+    field = sdf.field({"type": "box", "size": [2.0, 1.0]})
+    world = make_world([(sdf_shape(field, float(np.hypot(1.0, 0.5))), (0.1, 0.2), 0.5,
+                         "dynamic")])
+    image = render(world, cam, PLAIN)[:, :, 0].astype(float) / 255.0
+    assert abs(image.sum() / cam.scale ** 2 - 2.0) < 0.01 * 2.0
+
+
+def test_unbounded_ground_fills_below_its_surface():
+    cam = Camera((0.0, 1.0), 50.0, (160, 120))
+    pal = Palette()
+    world = make_world([(sdf_shape(Ground(), np.inf), (0.0, 0.0), 0.0, "static")])
+    image = render(world, cam, pal)
+    surface_row = cam.world_to_screen([[0.0, 0.0]])[0, 1]                # y = 0 on screen
+    column = image[80]
+    static = np.all(column == np.array(pal.static), axis=1)
+    background = np.all(column == np.array(pal.background), axis=1)
+    assert np.all(background[: int(surface_row) - 1]) and np.all(static[int(surface_row) + 2:])
+
+
+def test_sdf_sprite_follows_the_body_when_it_moves():
+    cam = Camera((0.0, 0.0), 50.0, (300, 200))
+    world = make_world([(sdf_shape(Ring(0.5, 0.3), 0.5), (-1.0, 0.0), 0.0, "static")])
+    renderer = Renderer(cam, PLAIN)
+    surface = pygame.Surface(cam.size)
+    renderer.draw(surface, world)
+    first = painted_box(pygame.surfarray.array3d(surface), BLACK)
+    renderer.draw(surface, world)
+    assert painted_box(pygame.surfarray.array3d(surface), BLACK) == first
+    world.position[0] = (1.0, 0.5)
+    renderer.draw(surface, world)
+    moved = painted_box(pygame.surfarray.array3d(surface), BLACK)
+    np.testing.assert_array_equal(np.subtract(moved, first), [100, -25, 100, -25])
+
+
+def test_bodies_off_screen_draw_nothing():
+    cam = Camera((0.0, 0.0), 50.0, (100, 100))
+    world = make_world([(circle_shape(0.5), (30.0, 0.0), 0.0, "dynamic"),
+                        (box_shape(1.0, 1.0), (0.0, -30.0), 0.0, "dynamic"),
+                        (sdf_shape(Ring(0.5, 0.3), 0.5), (-30.0, 0.0), 0.0, "dynamic")])
+    assert not np.any(render(world, cam, PLAIN))
+
+
+# ------------------------------------------------------------------------------------------
+# Overlays
+# ------------------------------------------------------------------------------------------
+
+def test_contact_overlay_draws_at_contact_points():
+    cam = Camera((0.0, 0.0), 50.0, (200, 200))
+    pal = Palette(background=BLACK)
+    contacts = Contacts(np.array([0, 0]), np.array([1, 1]), np.array([[1.0, 1.0], [-1.0, -1.0]]),
+                        np.array([[0.0, 1.0], [1.0, 0.0]]), np.array([0.01, -0.01]),
+                        np.array([0, 1]))
+    world = make_world([], contacts)
+    assert not np.any(render(world, cam, pal))
+    image = render(world, cam, pal, Overlays(contacts=True))
+    (x0, y0), (x1, y1) = cam.world_to_screen([[1.0, 1.0], [-1.0, -1.0]]).astype(int)
+    assert tuple(image[x0, y0]) == pal.contact
+    assert tuple(image[x1, y1]) == pal.speculative
+    nx, ny = cam.world_to_screen([[1.0, 1.25]])[0].astype(int)   # along the normal (0, 1)
+    assert tuple(image[nx, ny]) == pal.contact
+    assert np.count_nonzero(np.any(image != 0, axis=2)) < 200     # only near the contacts
+
+
+def test_bounds_overlay_outlines_the_world_aabb():
+    cam = Camera((0.0, 0.0), 50.0, (200, 200))
+    pal = Palette(background=BLACK)
+    world = make_world([(box_shape(1.0, 1.0), (0.0, 0.0), np.pi / 4, "dynamic")])
+    image = render(world, cam, pal, Overlays(bounds=True))
+    half = np.sqrt(0.5)
+    bound = np.all(image == np.array(pal.bounds), axis=2)
+    x0, y0, x1, y1 = painted_box(np.where(bound[:, :, None], 255, 0), 0)
+    np.testing.assert_allclose((x0, y0, x1, y1),
+                               expected_box(cam, np.array([[-half, -half], [half, half]])),
+                               atol=1.0)
+
+
+def test_field_overlay_shades_the_screen_with_a_zero_line():
+    cam = Camera((0.0, 0.0), 50.0, (200, 200))
+    pal = Palette(background=BLACK)
+    world = make_world([(circle_shape(1.0), (0.0, 0.0), 0.0, "dynamic")])
+    plain = render(world, cam, pal)
+    shaded = render(world, cam, pal, Overlays(field=True))
+    assert np.all(np.any(shaded[:, :10] != 0, axis=2))             # far from the body too
+    assert np.any(shaded != plain)
+    # The zero iso-line is the brightest ring: at r = 1 m brighter than at r = 0.75 m.
+    x_edge, y = cam.world_to_screen([[1.0, 0.0]])[0].astype(int)
+    x_in = cam.world_to_screen([[1.0 - 0.15, 0.0]])[0].astype(int)[0]
+    assert shaded[x_edge, y].sum() > shaded[x_in, y].sum() + 60
+
+
+def test_distance_map_union_is_the_minimum_over_bodies(rng):
+    bodies = [(sdf_shape(Ground(), np.inf), (0.0, 0.0), 0.0, "static")]
+    for k in range(12):
+        shape = [circle_shape(0.3), box_shape(0.6, 0.4), sdf_shape(Ring(0.4, 0.2), 0.4)][k % 3]
+        bodies.append((shape, tuple(rng.uniform(-3, 3, 2) + (0, 3)), rng.uniform(0, 6),
+                       "dynamic"))
+    frames = body_frames(make_world(bodies))
+    xs, ys = np.linspace(-5, 5, 41), np.linspace(7, -1, 33)
+    got = distance_map(frames, xs, ys)
+    grid = np.stack(np.meshgrid(xs, ys, indexing="ij"), -1).reshape(-1, 2)
+    brute = np.full(len(grid), np.inf)
+    for b in range(len(bodies)):
+        c, s = np.cos(frames.angle[b]), np.sin(frames.angle[b])
+        local = (grid - frames.com[b]) @ np.array([[c, -s], [s, c]])
+        brute = np.minimum(brute, frames.shapes[b].field.distance(local))
+    np.testing.assert_allclose(got, brute.reshape(41, 33), atol=1e-12)
+    one = distance_map(frames, xs, ys, body=2)
+    np.testing.assert_allclose(one.reshape(-1), frames.shapes[2].field.distance(
+        (grid - frames.com[2]) @ np.array([[np.cos(frames.angle[2]), -np.sin(frames.angle[2])],
+                                           [np.sin(frames.angle[2]), np.cos(frames.angle[2])]])))
+
+
+def test_import_sdfphys_does_not_import_pygame():
+    code = "import sys, sdfphys; assert 'pygame' not in sys.modules, 'pygame imported'"
+    subprocess.run([sys.executable, "-c", code], check=True)
