@@ -31,19 +31,19 @@ class Contacts:
     feature: np.ndarray
 
     @classmethod
-    def empty(cls) -> "Contacts":
+    def empty(cls) -> Contacts:
         return cls(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 2)),
                    np.zeros((0, 2)), np.zeros(0), np.zeros(0, np.int64))
 
     def __len__(self) -> int:
         return len(self.depth)
 
-    def take(self, index: np.ndarray) -> "Contacts":
+    def take(self, index: np.ndarray) -> Contacts:
         """The rows selected by ``index`` (an index or boolean array)."""
         return Contacts(*(getattr(self, f.name)[index] for f in fields(self)))
 
     @classmethod
-    def concatenate(cls, parts: list["Contacts"]) -> "Contacts":
+    def concatenate(cls, parts: list[Contacts]) -> Contacts:
         parts = [p for p in parts if len(p)]
         if not parts:
             return cls.empty()

@@ -1,0 +1,133 @@
+"""Collision detection: broadphase, narrowphase by pair kind, reduction -> Contacts.
+
+``find_contacts`` is the world's per-step query over all bodies; ``collide`` asks
+the same question for two shapes at two poses. Both return a ``Contacts`` bundle
+(world frame): normal unit from body a toward body b, depth > 0 overlapping,
+point midway between the two surfaces, feature keys stable from step to step.
+
+One step of ``find_contacts`` (no Python loop over bodies, pairs or contacts):
+
+1. world AABBs of all bodies, each grown by half the speculative distance, so
+   boxes meet whenever the bodies are closer than that (``broadphase``);
+2. candidate pairs by sort-and-sweep (numba), keeping pairs with a movable body;
+3. pairs oriented lower kind first (circle < mesh < sdf; for equal kinds, lower
+   shape id first) and grouped by their two Shape objects: one pair-function call
+   per group, each evaluating a field once per batch of points (``narrowphase``);
+4. contacts with depth > -speculative distance kept, reduced to at most
+   ``contacts_per_pair`` per pair (``reduce``), sorted by (body_a, body_b, feature).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from ..settings import Settings
+from ..shapes import Shape, shape_from_spec
+from .broadphase import candidate_pairs, world_bounds
+from .contacts import Contacts
+from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
+from .reduce import reduce_contacts
+
+__all__ = ["Contacts", "collide", "find_contacts"]
+
+
+def _distinct(shapes: Sequence[Shape]) -> tuple[list[Shape], np.ndarray]:
+    """Distinct Shape objects and, per entry of ``shapes``, its index among them."""
+    first: dict[int, int] = {}
+    canonical = np.array([first.setdefault(id(s), len(first)) for s in shapes], np.int64)
+    unique = list({id(s): s for s in shapes}.values())
+    return unique, canonical
+
+
+def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
+                 pose: np.ndarray, margin: float, settings: Settings) -> Contacts:
+    """Contacts of the candidate ``pairs`` (P, 2), reduced and sorted (see module doc).
+
+    shapes: distinct Shape objects; body_shape: (B,) index into them per body;
+    pose: (B, 3) centre-of-mass poses (x, y, angle).
+    """
+    kind_rank = np.array([KIND_ORDER.index(s.kind) for s in shapes], np.int64)
+    sa, sb = body_shape[pairs[:, 0]], body_shape[pairs[:, 1]]
+    ka, kb = kind_rank[sa], kind_rank[sb]
+    swap = (ka > kb) | ((ka == kb) & (sa > sb))
+    first = np.where(swap, pairs[:, 1], pairs[:, 0])
+    second = np.where(swap, pairs[:, 0], pairs[:, 1])
+    group = body_shape[first] * len(shapes) + body_shape[second]
+    order = np.argsort(group, kind="stable")
+    first, second, group = first[order], second[order], group[order]
+    bounds = np.flatnonzero(np.diff(group)) + 1
+    parts = []
+    for lo, hi in zip(np.r_[0, bounds], np.r_[bounds, len(group)]):
+        if lo == hi:
+            continue
+        shape_a = shapes[body_shape[first[lo]]]
+        shape_b = shapes[body_shape[second[lo]]]
+        fn = PAIR_FUNCTIONS[(shape_a.kind, shape_b.kind)]
+        a, b = first[lo:hi], second[lo:hi]
+        parts.append(fn(shape_a, shape_b, a, b, pose[a], pose[b], margin, settings))
+    c = Contacts.concatenate(parts)
+    c = c.take(c.depth > -margin)
+    flip = c.body_a > c.body_b
+    c.body_a, c.body_b = np.where(flip, c.body_b, c.body_a), np.where(flip, c.body_a, c.body_b)
+    c.normal = np.where(flip[:, None], -c.normal, c.normal)
+
+    c = c.take(np.lexsort((c.feature, -c.depth, c.body_b, c.body_a)))
+    pair_key = c.body_a * np.int64(len(pose)) + c.body_b
+    starts = np.flatnonzero(np.diff(pair_key)) + 1
+    if len(starts) + 1 < len(c):
+        keep = reduce_contacts(np.r_[0, starts, len(c)], c.point, c.depth,
+                               settings.contacts_per_pair, settings.linear_slop)
+        c = c.take(keep)
+        pair_key = pair_key[keep]
+    return c.take(np.lexsort((c.feature, pair_key)))
+
+
+def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.ndarray,
+                  angle: np.ndarray, movable: np.ndarray, settings: Settings) -> Contacts:
+    """All contacts of B bodies this step, sorted by (body_a, body_b, feature).
+
+    shapes: Shape objects; shape_id: (B,) int index into ``shapes`` per body;
+    position: (B, 2) centre-of-mass world positions (m); angle: (B,) rad;
+    movable: (B,) bool (pairs of two immovable bodies are skipped).
+    Returns contacts with body_a < body_b, depth > -settings.speculative_distance,
+    at most settings.contacts_per_pair per pair.
+    """
+    distinct, canonical = _distinct(shapes)
+    body_shape = canonical[np.asarray(shape_id, np.int64)]
+    local_bounds = np.array([s.bounds() for s in distinct]).reshape(-1, 4)
+    radius = np.array([s.radius for s in distinct], np.float64)
+    position = np.asarray(position, np.float64).reshape(-1, 2)
+    angle = np.asarray(angle, np.float64).reshape(-1)
+    margin = settings.speculative_distance
+    boxes = world_bounds(local_bounds[body_shape], radius[body_shape], position, angle,
+                         0.5 * margin)
+    pairs = candidate_pairs(boxes, np.asarray(movable, bool))
+    pose = np.column_stack([position, angle])
+    return _narrowphase(distinct, body_shape, pairs, pose, margin, settings)
+
+
+def collide(shape_a: Any, pose_a: Sequence[float], shape_b: Any, pose_b: Sequence[float],
+            margin: float = 0.0, settings: Settings | None = None) -> Contacts:
+    """Contacts between two shapes at two poses (body_a = 0, body_b = 1).
+
+    shape_a, shape_b: scene shape dicts (``{"type": "circle", "radius": 0.5}``) or
+    Shape objects. pose_a, pose_b: (x, y, angle) of each shape's USER frame (the
+    scene's ``position`` and ``angle``), m and rad. margin: m, contacts with
+    depth > -margin are returned (0: overlapping only). Normal unit from a toward b,
+    depth > 0 overlapping, point midway between the surfaces (world), at most
+    ``settings.contacts_per_pair`` points.
+    """
+    settings = settings or Settings()
+    shapes = [shape_from_spec(shape_a, "shape_a"), shape_from_spec(shape_b, "shape_b")]
+    user = np.array([pose_a, pose_b], np.float64).reshape(2, 3)
+    pose = user.copy()
+    for k, shape in enumerate(shapes):
+        c, s = np.cos(user[k, 2]), np.sin(user[k, 2])
+        ox, oy = shape.origin
+        pose[k, :2] -= [c * ox - s * oy, s * ox + c * oy]
+    distinct, canonical = _distinct(shapes)
+    return _narrowphase(distinct, canonical, np.array([[0, 1]], np.int64), pose,
+                        float(margin), settings)

@@ -1,0 +1,217 @@
+"""Narrowphase: contact candidates for a batch of body pairs sharing two Shape objects.
+
+``PAIR_FUNCTIONS[(kind_a, kind_b)]`` (kinds in the order circle < mesh < sdf, lower
+kind first as in Box2D's ``b2CollidePolygonAndCircle``) is a pure function
+
+    fn(shape_a, shape_b, body_a, body_b, pose_a, pose_b, margin, settings) -> Contacts
+
+over n pairs that all use the same two Shape objects: body_a, body_b (n,) int64
+ids copied into the result; pose_a, pose_b (n, 3) centre-of-mass poses
+(x, y, angle) in the world (m, rad); margin (m): candidates with depth > -margin are
+returned (speculative contacts). Each shape's field is evaluated in its own body
+frame on ONE batch of points gathered from all n pairs (instancing), so the Python
+cost is per shape pair, not per body. Results (world frame): ``point`` midway
+between the two surfaces, ``normal`` unit from a toward b, ``depth`` > 0
+overlapping, ``feature`` a key stable while the contact persists (layout below).
+No reduction here: ``collide.reduce`` keeps a few points per pair.
+
+Feature key layout (int64): ``source << 56 | element << 8 | start``
+
+    source   0  analytic (circle-circle, circle-any): element = start = 0
+             1  triangle ``element`` of a's mesh, deepest in b's field
+             2  triangle ``element`` of b's mesh, deepest in a's field
+             3  field-field descent (sdf pairs), start = start id
+    element  triangle index in the mesh (< 2^48)
+    start    descent start id (< 256): 0-2 vertices, 3-5 edge midpoints, 6 centroid
+
+Approximations (documented where they act): for a triangle point p inside the
+other field f, depth = -f(p) and normal = -grad f(p); the contact point is p moved
+by depth / 2 along grad f. This is exact when the other surface is flat near the
+contact (a corner pressing into a face) and underestimates depth where a sharp
+feature of the field pokes into a face of the mesh, which is why mesh pairs are
+run both ways.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from ..sdf import safe_normalize
+from ..settings import Settings
+from ..shapes import Shape
+from .contacts import Contacts
+
+__all__ = [
+    "KIND_ORDER",
+    "PAIR_FUNCTIONS",
+    "PairFunction",
+    "collide_circle_and_field",
+    "collide_circles",
+    "collide_mesh_and_sdf",
+    "collide_meshes",
+    "collide_sdfs",
+    "feature_key",
+]
+
+#: Shape kinds in dispatch order: a pair is handled by PAIR_FUNCTIONS[(lower, higher)].
+KIND_ORDER = ("circle", "mesh", "sdf")
+
+PairFunction = Callable[[Shape, Shape, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                         float, Settings], Contacts]
+
+SOURCE_ANALYTIC, SOURCE_A_IN_B, SOURCE_B_IN_A, SOURCE_FIELDS = 0, 1, 2, 3
+
+
+def feature_key(source: int, element: np.ndarray | int, start: np.ndarray | int) -> np.ndarray:
+    """Feature keys (int64) ``source << 56 | element << 8 | start`` (see the module doc)."""
+    return ((np.int64(source) << np.int64(56)) | (np.asarray(element, np.int64) << np.int64(8))
+            | np.asarray(start, np.int64))
+
+
+def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rows of v (n, 2) rotated counter-clockwise by angle (n,) radians."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]], axis=1)
+
+
+def _to_local(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """World points (n, 2) into the body frames of poses (n, 3): R^T (p - x)."""
+    return _rotate(points - pose[:, :2], -pose[:, 2])
+
+
+def collide_circles(circle_a: Shape, circle_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
+                    pose_a: np.ndarray, pose_b: np.ndarray, margin: float,
+                    settings: Settings) -> Contacts:
+    """Circle-circle, analytic (no field evaluation).
+
+    With centres c_a, c_b, radii r_a, r_b and d = |c_b - c_a|: normal n = (c_b - c_a)/d
+    (coincident centres: (1, 0), as pymunk / Chipmunk's circle-circle), depth
+    r_a + r_b - d, point midway between c_a + r_a n and c_b - r_b n.
+    """
+    delta = pose_b[:, :2] - pose_a[:, :2]
+    distance = np.hypot(delta[:, 0], delta[:, 1])
+    depth = circle_a.radius + circle_b.radius - distance
+    keep = depth > -margin
+    normal = safe_normalize(delta[keep])
+    depth = depth[keep]
+    offset = circle_a.radius - 0.5 * depth
+    point = pose_a[keep, :2] + offset[:, None] * normal
+    n = len(depth)
+    return Contacts(body_a[keep], body_b[keep], point, normal, depth,
+                    np.full(n, feature_key(SOURCE_ANALYTIC, 0, 0), np.int64))
+
+
+def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray,
+                             body_b: np.ndarray, pose_a: np.ndarray, pose_b: np.ndarray,
+                             margin: float, settings: Settings) -> Contacts:
+    """Circle against any shape's field: one batched evaluation of f_b at the centres.
+
+    With c the circle centre in b's body frame, (d, g) = f_b(c), grad f_b(c) and
+    r the radius: depth = r - d, normal a->b = -R_b g (g points out of b, toward the
+    circle), point = c - (d + r)/2 g (midway between b's surface point c - d g and
+    the circle's surface point c - r g), in the world. Exact for exact fields;
+    inside b, g is the direction to b's nearest boundary point, as pymunk's
+    circle-polygon (least-penetrating face).
+    """
+    r = circle_a.radius
+    centre = _to_local(pose_a[:, :2], pose_b)
+    d, g = shape_b.field.evaluate(centre)
+    depth = r - d
+    keep = depth > -margin
+    g_world = _rotate(safe_normalize(g[keep]), pose_b[keep, 2])
+    depth = depth[keep]
+    point = pose_a[keep, :2] - (0.5 * (d[keep] + r))[:, None] * g_world
+    return Contacts(body_a[keep], body_b[keep], point, -g_world, depth,
+                    np.full(len(depth), feature_key(SOURCE_ANALYTIC, 0, 0), np.int64))
+
+
+def _mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: np.ndarray,
+                   margin: float, settings: Settings
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                              np.ndarray]:
+    """Deepest points of every triangle of ``mesh`` in ``other``'s field, n pairs at once.
+
+    The triangles (T, 3, 2) of the mesh are moved into other's body frame for each
+    pair (relative angle a_m - a_o, offset R_o^T (x_m - x_o)), giving n T triangles;
+    ``descent.triangle_cull`` drops those that cannot reach depth > -margin, and
+    ``descent.triangle_deepest`` finds the local minima of f over each remaining
+    triangle from its starts. One more evaluation gives the gradient there.
+
+    Returns pair index (C,), midway point (C, 2) world, outward normal of other
+    (C, 2) world (pointing from other toward the mesh), depth (C,) = -f, triangle
+    index (C,) and start id (C,).
+    """
+    from . import descent
+
+    n = len(pose_mesh)
+    tri = mesh.vertices[mesh.triangles]
+    n_tri = len(tri)
+    angle = pose_mesh[:, 2] - pose_other[:, 2]
+    c, s = np.cos(angle), np.sin(angle)
+    rotation = np.stack([np.stack([c, -s], axis=1), np.stack([s, c], axis=1)], axis=1)
+    offset = _to_local(pose_mesh[:, :2], pose_other)
+    local = np.einsum("nij,tkj->ntki", rotation, tri) + offset[:, None, None, :]
+    local = local.reshape(n * n_tri, 3, 2)
+    kept = np.nonzero(descent.triangle_cull(other.field, local, margin))[0]
+    point, value = descent.triangle_deepest(other.field, local[kept],
+                                            iterations=settings.descent_iterations)
+    hit_tri, start = np.nonzero(value < margin)
+    flat = kept[hit_tri]
+    p = point[hit_tri, start]
+    depth = -value[hit_tri, start]
+    g = safe_normalize(other.field.evaluate(p)[1])
+    pair = flat // n_tri
+    mid = p + (0.5 * depth)[:, None] * g
+    rot = pose_other[pair, 2]
+    return (pair, _rotate(mid, rot) + pose_other[pair, :2], _rotate(g, rot), depth,
+            flat % n_tri, start)
+
+
+def collide_meshes(mesh_a: Shape, mesh_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
+                   pose_a: np.ndarray, pose_b: np.ndarray, margin: float,
+                   settings: Settings) -> Contacts:
+    """Mesh-mesh: a's triangles in b's polygon field, then b's triangles in a's field.
+
+    Both directions are needed: a vertex of a inside b is found by the first, a
+    vertex of b inside a by the second (each is the exact deepest point when the
+    face it presses on is flat, which the reduction then picks from).
+    """
+    pair, point, out_b, depth, tri, start = _mesh_in_field(mesh_a, mesh_b, pose_a, pose_b,
+                                                           margin, settings)
+    first = Contacts(body_a[pair], body_b[pair], point, -out_b, depth,
+                     feature_key(SOURCE_A_IN_B, tri, start))
+    pair, point, out_a, depth, tri, start = _mesh_in_field(mesh_b, mesh_a, pose_b, pose_a,
+                                                           margin, settings)
+    second = Contacts(body_a[pair], body_b[pair], point, out_a, depth,
+                      feature_key(SOURCE_B_IN_A, tri, start))
+    return Contacts.concatenate([first, second])
+
+
+def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
+                         pose_a: np.ndarray, pose_b: np.ndarray, margin: float,
+                         settings: Settings) -> Contacts:
+    """Mesh-sdf: the mesh's triangles in the sdf's field (see ``_mesh_in_field``)."""
+    pair, point, out_b, depth, tri, start = _mesh_in_field(mesh_a, sdf_b, pose_a, pose_b,
+                                                           margin, settings)
+    return Contacts(body_a[pair], body_b[pair], point, -out_b, depth,
+                    feature_key(SOURCE_A_IN_B, tri, start))
+
+
+def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
+                 pose_a: np.ndarray, pose_b: np.ndarray, margin: float,
+                 settings: Settings) -> Contacts:
+    """Sdf-sdf: projected descent from sampled starts (Liu et al. 2024)."""
+    raise NotImplementedError("sdf-sdf contacts wait for sdfphys.collide.descent")
+
+
+#: (kind_a, kind_b) -> pair function, kind_a <= kind_b in KIND_ORDER.
+PAIR_FUNCTIONS: dict[tuple[str, str], PairFunction] = {
+    ("circle", "circle"): collide_circles,
+    ("circle", "mesh"): collide_circle_and_field,
+    ("circle", "sdf"): collide_circle_and_field,
+    ("mesh", "mesh"): collide_meshes,
+    ("mesh", "sdf"): collide_mesh_and_sdf,
+    ("sdf", "sdf"): collide_sdfs,
+}

@@ -1,0 +1,129 @@
+"""Contact reduction: a few well-spread points per body pair.
+
+The narrowphase may report many candidate points for one pair (every triangle,
+every descent start). The solver needs few: in 2D, a flat contact patch is held
+by its two end points, and each additional face in contact (a box in a V groove, a
+concave L on two supports) adds at most two more. Reduction, per pair, after
+Box2D's manifolds (two points per face contact) and MuJoCo's multi-contact
+reduction (keep the deepest, then points that maximize the spread):
+
+1. start with the deepest candidate (ties broken by the smaller feature key);
+2. repeatedly add the candidate with the largest *novelty* with respect to the
+   kept set, while that novelty exceeds ``tolerance`` and fewer than ``budget``
+   points are kept;
+3. after each addition, drop kept points that have become redundant (their
+   novelty with respect to the other kept points is at most ``tolerance``).
+
+Novelty of a candidate c (point p, depth d) with respect to a kept set K is the
+smallest, over the "elements" of K (each kept point, and each segment between two
+kept points), of ``max(|p - q|, d - d_q)``, q the nearest point of the element
+to p and d_q the depth interpolated linearly there. A point lying on the segment
+between two kept points (within ``tolerance``), no deeper than the interpolation
+of their depths, adds nothing: for a straight edge against a flat surface the
+separation is an affine function along the edge, so constraints that hold at the
+two end points hold in between. Step 3 lets the end points of a flat patch
+replace a deepest point that happened to lie in its middle (equal depths), so a
+box resting flat on a box keeps exactly its two corners.
+
+Everything runs in one numba function over all pairs (no Python loop over pairs or
+contacts); the input order fixes every tie, so the result is deterministic.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["reduce_contacts"]
+
+
+@njit(cache=True)
+def _element_novelty(px: float, py: float, d: float, ax: float, ay: float, da: float,
+                     bx: float, by: float, db: float) -> float:
+    """max(distance, depth excess) of (p, d) to the segment a-b (a point if a == b)."""
+    ex = bx - ax
+    ey = by - ay
+    length2 = ex * ex + ey * ey
+    t = 0.0
+    if length2 > 0.0:
+        t = ((px - ax) * ex + (py - ay) * ey) / length2
+        t = min(max(t, 0.0), 1.0)
+    qx = ax + t * ex - px
+    qy = ay + t * ey - py
+    distance = np.sqrt(qx * qx + qy * qy)
+    excess = d - (da + t * (db - da))
+    return max(distance, excess)
+
+
+@njit(cache=True)
+def _novelty(c: int, kept: np.ndarray, n_kept: int, skip: int, point: np.ndarray,
+             depth: np.ndarray) -> float:
+    """Novelty of candidate ``c`` against ``kept[:n_kept]`` except ``kept[skip]``."""
+    best = np.inf
+    px, py, d = point[c, 0], point[c, 1], depth[c]
+    for u in range(n_kept):
+        if u == skip:
+            continue
+        a = kept[u]
+        for v in range(u, n_kept):
+            if v == skip:
+                continue
+            b = kept[v]
+            best = min(best, _element_novelty(px, py, d, point[a, 0], point[a, 1], depth[a],
+                                              point[b, 0], point[b, 1], depth[b]))
+    return best
+
+
+@njit(cache=True)
+def _reduce(start: np.ndarray, point: np.ndarray, depth: np.ndarray, budget: int,
+            tolerance: float, keep: np.ndarray) -> None:
+    kept = np.empty(budget, np.int64)
+    for g in range(start.shape[0] - 1):
+        s, e = start[g], start[g + 1]
+        kept[0] = s
+        n_kept = 1
+        for _ in range(e - s):
+            if n_kept >= budget:
+                break
+            best, best_score = -1, tolerance
+            for c in range(s, e):
+                is_kept = False
+                for u in range(n_kept):
+                    is_kept = is_kept or kept[u] == c
+                if is_kept:
+                    continue
+                score = _novelty(c, kept, n_kept, -1, point, depth)
+                if score > best_score:
+                    best, best_score = c, score
+            if best < 0:
+                break
+            kept[n_kept] = best
+            n_kept += 1
+            u = 0
+            while u < n_kept - 1:
+                if _novelty(kept[u], kept, n_kept, u, point, depth) <= tolerance:
+                    kept[u:n_kept - 1] = kept[u + 1:n_kept].copy()
+                    n_kept -= 1
+                else:
+                    u += 1
+        for u in range(n_kept):
+            keep[kept[u]] = True
+
+
+def reduce_contacts(pair_start: np.ndarray, point: np.ndarray, depth: np.ndarray,
+                    budget: int, tolerance: float) -> np.ndarray:
+    """Mask (K,) bool of the candidates kept, at most ``budget`` per pair.
+
+    pair_start: (G + 1,) int64 offsets: pair g owns candidates
+        ``pair_start[g]:pair_start[g + 1]``, sorted by depth (deepest first), then
+        by feature key. point: (K, 2) contact points (m, any common frame).
+    depth: (K,) penetration (m, > 0 overlapping). budget: >= 1 points per pair.
+    tolerance: m, novelty at or below which a point adds nothing (the solver's
+        linear slop is a natural choice).
+    """
+    keep = np.zeros(len(depth), np.bool_)
+    _reduce(np.ascontiguousarray(pair_start, dtype=np.int64),
+            np.ascontiguousarray(point, dtype=np.float64),
+            np.ascontiguousarray(depth, dtype=np.float64), int(max(budget, 1)),
+            float(tolerance), keep)
+    return keep
