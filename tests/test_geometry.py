@@ -11,10 +11,22 @@ import time
 from fractions import Fraction
 
 import numpy as np
+import pymunk
 import pytest
 
+from sdfphys import geometry
 from sdfphys.errors import SpecError
-from sdfphys.geometry import _orient, triangulate, validate_polygon
+from sdfphys.geometry import (
+    _cell_moments,
+    _orient,
+    circle_mass_properties,
+    field_mass_properties,
+    polygon_bounds,
+    polygon_mass_properties,
+    triangulate,
+    validate_polygon,
+)
+from sdfphys.sdf import Field, field
 
 # --------------------------------------------------------------------------------------
 # Test polygons
@@ -47,7 +59,7 @@ def spiral(turns: float = 2.5, n: int = 200, width: float = 0.3) -> np.ndarray:
     r = 0.5 + 1.0 * t / (2.0 * np.pi)
     outer = np.column_stack([r * np.cos(t), r * np.sin(t)])
     inner = np.column_stack([(r - width) * np.cos(t), (r - width) * np.sin(t)])
-    return np.vstack([outer, inner[::-1]])[::-1]
+    return np.vstack([outer, inner[::-1]])
 
 
 def collinear_rich() -> np.ndarray:
@@ -180,6 +192,7 @@ def test_validate_keeps_collinear_vertices():
     ([[0, 0], [1, 0], [1]], "points[2]", "must be a pair [x, y]"),
     ([[0, 0], [1, float("nan")], [0, 1]], "points[1][1]", "must be finite"),
     (np.array([[0, 0], [1, 0], [np.inf, 1]]), "points[2]", "must be finite"),
+    ([[0, 0], [1, 0], [0, 1e120]], "points[2]", "coordinates beyond 1e+100 m"),
     ([[0, 0], [1, 0], [1, 0], [0, 1]], "points[2]", "repeats points[1]"),
     ([[0, 0], [1, 0], [0, 0]], "points", "fewer than 3 distinct points"),
     ([[0, 0], [1, 1], [3, 3]], "points", "all points are collinear (zero area)"),
@@ -298,3 +311,255 @@ def test_large_star_polygons_are_fast(rng):
         assert elapsed < 0.25, f"2,000-vertex triangulation took {elapsed:.3f} s"
         check_triangulation(p)
         assert tri.shape == (1998, 3)
+
+
+def test_spiral_and_comb_of_about_2000_vertices_are_fast():
+    triangulate(spiral())
+    for p in (spiral(turns=6.0, n=1000), comb(650)):
+        start = time.perf_counter()
+        tri = triangulate(p)
+        elapsed = time.perf_counter() - start
+        assert elapsed < 0.25, f"{len(p)}-vertex triangulation took {elapsed:.3f} s"
+        assert tri.shape == (len(p) - 2, 3)
+        assert np.all(signed_areas(validate_polygon(p), tri) > 0.0)
+
+
+def test_triangulate_reports_errors_under_the_callers_path():
+    with pytest.raises(SpecError, match=r"^body\[1\]\.shape\.points: edges 0 and 2 cross"):
+        triangulate([[0, 0], [1, 1], [1, 0], [0, 1]], path="body[1].shape.points")
+
+
+# --------------------------------------------------------------------------------------
+# polygon_mass_properties, circle_mass_properties, polygon_bounds
+# --------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("w, h, x0, y0", [(1.0, 1.0, 0.0, 0.0), (2.0, 0.5, 3.0, -1.0),
+                                          (0.1, 7.0, -2.5, 4.0)])
+def test_rectangle_mass_properties_closed_form(w, h, x0, y0):
+    rect = np.array([[-w / 2, -h / 2], [w / 2, -h / 2], [w / 2, h / 2], [-w / 2, h / 2]])
+    for poly in (rect + [x0, y0], (rect + [x0, y0])[::-1]):
+        area, centroid, second_moment = polygon_mass_properties(poly)
+        assert area == pytest.approx(w * h, rel=1e-14)
+        np.testing.assert_allclose(centroid, [x0, y0], rtol=0, atol=1e-14 * (w + h))
+        assert second_moment == pytest.approx(w * h * (w * w + h * h) / 12.0, rel=1e-13)
+
+
+@pytest.mark.parametrize("n", [3, 5, 64, 4096])
+def test_regular_polygon_second_moment_closed_form(n):
+    # n isosceles triangles of apex angle q = 2 pi / n and legs R about the centre:
+    # J = n R^4 sin(q) (2 + cos q) / 12, tending to the disk's pi R^4 / 2.
+    radius, angle = 1.7, 2.0 * np.pi / n
+    t = np.arange(n) * angle + 0.3
+    poly = radius * np.column_stack([np.cos(t), np.sin(t)]) + [0.4, -0.9]
+    area, centroid, second_moment = polygon_mass_properties(poly)
+    assert area == pytest.approx(0.5 * n * radius ** 2 * np.sin(angle), rel=1e-13)
+    np.testing.assert_allclose(centroid, [0.4, -0.9], atol=1e-13)
+    assert second_moment == pytest.approx(
+        n * radius ** 4 * np.sin(angle) * (2.0 + np.cos(angle)) / 12.0, rel=1e-12)
+    if n == 4096:
+        assert second_moment == pytest.approx(np.pi * radius ** 4 / 2.0, rel=1e-6)
+
+
+@pytest.mark.parametrize("name, poly", [("L", L_SHAPE), ("U", U_SHAPE), ("comb", comb(5)),
+                                        ("spiral", spiral()),
+                                        ("star", star(300, np.random.default_rng(3)))])
+def test_polygon_mass_properties_match_pymunk(name, poly):
+    poly = np.asarray(poly, dtype=float) * 0.7 + [1.5, -2.0]
+    assert shoelace(poly) > 0.0  # pymunk's area is signed, positive counter-clockwise
+    area, centroid, second_moment = polygon_mass_properties(poly[::-1])
+    assert area == pytest.approx(pymunk.area_for_poly(poly.tolist()), rel=1e-12)
+    centred = (poly - centroid).tolist()
+    # pymunk: moment of a body of `mass` about the origin of the vertices' frame.
+    assert second_moment == pytest.approx(pymunk.moment_for_poly(area, centred, (0, 0)),
+                                          rel=1e-11)
+    # The centroid is where the first moment vanishes: pymunk's moment about any
+    # other point is larger by area * distance^2 (parallel axes).
+    shifted = pymunk.moment_for_poly(area, (poly - centroid - [0.3, 0.2]).tolist(), (0, 0))
+    assert shifted == pytest.approx(second_moment + area * 0.13, rel=1e-11)
+
+
+def test_polygon_mass_properties_far_from_origin_and_rotated():
+    base = np.asarray(U_SHAPE, dtype=float)
+    area0, centroid0, j0 = polygon_mass_properties(base)
+    angle = 0.7
+    rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    far = base @ rot.T + [1e6, -3e6]
+    area, centroid, j = polygon_mass_properties(far)
+    assert area == pytest.approx(area0, rel=1e-9)
+    np.testing.assert_allclose(centroid, rot @ centroid0 + [1e6, -3e6], rtol=0, atol=1e-8)
+    assert j == pytest.approx(j0, rel=1e-9)
+
+
+def test_polygon_mass_properties_validates():
+    with pytest.raises(SpecError, match="collinear"):
+        polygon_mass_properties([[0, 0], [1, 1], [2, 2]])
+
+
+@pytest.mark.parametrize("radius", [0.05, 1.0, 3.5])
+def test_circle_mass_properties_match_pymunk(radius):
+    area, centroid, second_moment = circle_mass_properties(radius)
+    assert area == pytest.approx(pymunk.area_for_circle(0.0, radius), rel=1e-15)
+    np.testing.assert_array_equal(centroid, [0.0, 0.0])
+    assert second_moment == pytest.approx(np.pi * radius ** 4 / 2.0, rel=1e-15)
+    assert second_moment == pytest.approx(pymunk.moment_for_circle(area, 0.0, radius),
+                                          rel=1e-14)
+
+
+@pytest.mark.parametrize("radius", [0.0, -1.0, float("nan"), "1"])
+def test_circle_mass_properties_rejects_bad_radius(radius):
+    with pytest.raises(SpecError) as err:
+        circle_mass_properties(radius, path="body[0].shape.radius")
+    assert err.value.path == "body[0].shape.radius"
+
+
+def test_polygon_bounds():
+    np.testing.assert_array_equal(polygon_bounds(U_SHAPE), [0, 0, 3, 3])
+    np.testing.assert_array_equal(polygon_bounds([[1.5, -2.0]]), [1.5, -2.0, 1.5, -2.0])
+    with pytest.raises(ValueError, match="shape"):
+        polygon_bounds([1.0, 2.0, 3.0])
+
+
+# --------------------------------------------------------------------------------------
+# field_mass_properties
+# --------------------------------------------------------------------------------------
+
+class ExactPolygonField(Field):
+    """Exact SDF of a simple polygon, brute force over edges (a reference for tests)."""
+
+    def __init__(self, vertices: np.ndarray):
+        self.vertices = np.asarray(vertices, dtype=float)
+
+    def evaluate(self, points):
+        p = self.vertices
+        a = p[None, :, :]
+        e = np.roll(p, -1, axis=0)[None, :, :] - a
+        t = np.clip(((points[:, None, :] - a) * e).sum(-1) / (e * e).sum(-1), 0.0, 1.0)
+        offset = points[:, None, :] - a - t[..., None] * e
+        length = np.hypot(offset[..., 0], offset[..., 1])
+        nearest = length.argmin(axis=1)
+        rows = np.arange(len(points))
+        distance = length[rows, nearest]
+        sign = np.where(inside(p, points), -1.0, 1.0)
+        gradient = sign[:, None] * offset[rows, nearest] / np.maximum(distance, 1e-300)[:, None]
+        return sign * distance, gradient
+
+    def bounds(self):
+        return polygon_bounds(self.vertices)
+
+
+class HalfPlane(Field):
+    """y <= 0: unbounded."""
+
+    def evaluate(self, points):
+        return points[:, 1].copy(), np.tile([0.0, 1.0], (len(points), 1))
+
+    def bounds(self):
+        return np.array([-np.inf, -np.inf, np.inf, 0.0])
+
+
+class Nowhere(Field):
+    """f = 1 everywhere, with finite (loose) bounds: an empty region."""
+
+    def evaluate(self, points):
+        return np.ones(len(points)), np.tile([1.0, 0.0], (len(points), 1))
+
+    def bounds(self):
+        return np.array([-1.0, -1.0, 1.0, 1.0])
+
+
+def clipped_square(n: np.ndarray, d: float) -> np.ndarray:
+    """Part of the unit cell [-1/2, 1/2]^2 with n.u <= -d (Sutherland-Hodgman, one plane)."""
+    square = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    out = []
+    for i in range(4):
+        p, q = square[i], square[(i + 1) % 4]
+        sp, sq = p @ n + d, q @ n + d
+        if sp <= 0:
+            out.append(p)
+        if sp * sq < 0:
+            out.append(p + (q - p) * sp / (sp - sq))
+    return np.array(out)
+
+
+def test_cell_moments_are_exact_for_a_half_plane(rng):
+    for _ in range(400):
+        angle = rng.uniform(0.0, 2.0 * np.pi)
+        if rng.random() < 0.2:
+            angle = rng.integers(0, 8) * np.pi / 4  # axis-aligned and diagonal normals
+        n = np.array([np.cos(angle), np.sin(angle)])
+        d = rng.uniform(-0.8, 0.8)
+        scale = rng.uniform(0.5, 2.0)  # |grad f| != 1: d = f / |grad f|
+        w, m, normal = _cell_moments(np.array([d * scale]), scale * n[None, :], 1.0)
+        part = clipped_square(n, d)
+        if len(part) < 3:
+            assert w[0] == pytest.approx(0.0, abs=1e-15) and m[0] == pytest.approx(0, abs=1e-15)
+            continue
+        q = np.roll(part, -1, axis=0)
+        cross = part[:, 0] * q[:, 1] - part[:, 1] * q[:, 0]
+        area = 0.5 * cross.sum()
+        first = (cross[:, None] * (part + q)).sum(axis=0) / 6.0
+        assert w[0] == pytest.approx(area, abs=1e-14)
+        np.testing.assert_allclose(normal[0], n, atol=1e-15)
+        assert m[0] == pytest.approx(first @ n, abs=1e-14)
+
+
+def random_shapes(rng: np.random.Generator, count: int):
+    """(name, field, (area, centroid, second moment)) for disks, rotated boxes, rotated Ls."""
+    ell = np.array(L_SHAPE, dtype=float)
+    for _ in range(count):
+        r = rng.uniform(0.5, 1.5)
+        c = rng.uniform(-1.0, 1.0, 2)
+        yield ("disk", field({"type": "circle", "radius": r, "offset": c.tolist()}),
+               (np.pi * r * r, c, np.pi * r ** 4 / 2.0))
+        w, h = rng.uniform(1.5, 2.5), rng.uniform(0.8, 1.2)
+        c = rng.uniform(-1.0, 1.0, 2)
+        box = field({"type": "box", "size": [w, h], "offset": c.tolist(),
+                     "angle": rng.uniform(0.0, np.pi / 2)})
+        yield "box", box, (w * h, c, w * h * (w * w + h * h) / 12.0)
+        angle = rng.uniform(0.0, np.pi / 2)
+        rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+        poly = ell @ rot.T * rng.uniform(0.8, 1.2) + rng.uniform(-1.0, 1.0, 2)
+        yield "L", ExactPolygonField(poly), polygon_mass_properties(poly)
+
+
+def test_field_mass_properties_are_second_order_within_the_stated_bounds(rng):
+    """Relative area error < (h/D)^2, second moment < 2 (h/D)^2, centroid < 0.3 h^2/D."""
+    worst: dict[tuple[str, int], np.ndarray] = {}
+    for name, f, (area, centroid, second_moment) in random_shapes(rng, 4):
+        size = np.sqrt(area)
+        for k, h in enumerate((size / 10.0, size / 20.0)):
+            a, c, j = field_mass_properties(f, h)
+            errors = np.array([abs(a - area) / area, abs(j - second_moment) / second_moment,
+                               np.linalg.norm(c - centroid) / size])
+            coefficients = errors / (h / size) ** 2
+            assert coefficients[0] < 1.0, (name, h, coefficients)
+            assert coefficients[1] < 2.0, (name, h, coefficients)
+            assert coefficients[2] < 0.3, (name, h, coefficients)
+            worst[name, k] = np.maximum(worst.get((name, k), 0.0), errors)
+    # Halving the cell: on the smooth disk, where the error is the h^2 bias alone, the
+    # area and second-moment errors drop by 4; with corners the O(h^2) corner terms
+    # change sign with the grid offset, and the worst of four drops by 2 to 6.
+    ratio = {name: worst[name, 1] / worst[name, 0] for name in ("disk", "box", "L")}
+    np.testing.assert_allclose(ratio["disk"][:2], 0.25, atol=0.03)
+    assert np.all(ratio["box"][:2] < 0.7) and np.all(ratio["L"][:2] < 0.7), ratio
+
+
+def test_field_mass_properties_do_not_depend_on_chunking(monkeypatch):
+    f = field({"type": "circle", "radius": 1.0, "offset": [0.2, 0.1]})
+    whole = field_mass_properties(f, 0.02)
+    monkeypatch.setattr(geometry, "_CHUNK_POINTS", 1000)
+    chunked = field_mass_properties(f, 0.02)
+    assert chunked[0] == pytest.approx(whole[0], rel=1e-12)
+    np.testing.assert_allclose(chunked[1], whole[1], atol=1e-12)
+    assert chunked[2] == pytest.approx(whole[2], rel=1e-12)
+
+
+def test_field_mass_properties_rejects_unbounded_empty_and_bad_cell():
+    with pytest.raises(SpecError, match=r"^body\[3\]\.shape\.field: is unbounded"):
+        field_mass_properties(HalfPlane(), 0.1, path="body[3].shape.field")
+    with pytest.raises(SpecError, match="has no inside"):
+        field_mass_properties(Nowhere(), 0.1)
+    for cell in (0.0, -0.1, float("nan")):
+        with pytest.raises(SpecError) as err:
+            field_mass_properties(field({"type": "circle", "radius": 1.0}), cell)
+        assert err.value.path == "cell"
