@@ -1,0 +1,201 @@
+"""Narrowphase, reduction and find_contacts: analytic answers, instancing, keys, speed."""
+
+import itertools
+import math
+import time
+
+import numpy as np
+import pytest
+
+from sdfphys.collide import collide, find_contacts
+from sdfphys.collide.narrowphase import KIND_ORDER, PAIR_FUNCTIONS
+from sdfphys.collide.reduce import reduce_contacts
+from sdfphys.sdf import Field, field
+from sdfphys.settings import Settings
+from sdfphys.shapes import SdfShape, shape_from_spec
+
+BALL = {"type": "circle", "radius": 0.5}
+
+
+class Counting(Field):
+    """A field that counts its evaluate / distance calls (instancing checks)."""
+
+    def __init__(self, of: Field):
+        self.of = of
+        self.exact = of.exact
+        self.calls = 0
+
+    def evaluate(self, points):
+        self.calls += 1
+        return self.of.evaluate(points)
+
+    def distance(self, points):
+        self.calls += 1
+        return self.of.distance(points)
+
+    def bounds(self):
+        return self.of.bounds()
+
+
+def test_dispatch_table_covers_every_kind_pair_lower_kind_first():
+    expected = {(a, b) for i, a in enumerate(KIND_ORDER) for b in KIND_ORDER[i:]}
+    assert set(PAIR_FUNCTIONS) == expected
+
+
+def test_circle_against_sdf_circle_equals_circle_circle(rng):
+    sdf_ball = {"type": "sdf", "field": {"type": "circle", "radius": 0.8,
+                                         "offset": [0.3, -0.2]}}
+    shape = shape_from_spec(sdf_ball)
+    for _ in range(50):
+        pa = np.r_[rng.uniform(-1, 1, 2), rng.uniform(-3, 3)]
+        pb = np.r_[rng.uniform(-1, 1, 2), rng.uniform(-3, 3)]
+        got = collide(BALL, pa, sdf_ball, pb, margin=10.0)
+        centre_b = pb[:2] - np.array([[math.cos(pb[2]), -math.sin(pb[2])],
+                                      [math.sin(pb[2]), math.cos(pb[2])]]) @ shape.origin
+        expected = collide(BALL, pa, {"type": "circle", "radius": 0.8}, (*centre_b, 0.0),
+                           margin=10.0)
+        # the sdf circle's centre of mass comes from quadrature (1e-4 relative)
+        np.testing.assert_allclose(got.depth, expected.depth, atol=1e-4)
+        np.testing.assert_allclose(got.normal, expected.normal, atol=1e-4)
+        np.testing.assert_allclose(got.point, expected.point, atol=1e-4)
+
+
+def test_circle_against_half_plane_ground():
+    class Ground(Field):
+        def evaluate(self, points):
+            p = np.asarray(points, float).reshape(-1, 2)
+            return p[:, 1].copy(), np.tile([0.0, 1.0], (len(p), 1))
+
+        def bounds(self):
+            return np.array([-np.inf, -np.inf, np.inf, 0.0])
+
+    ground = SdfShape(Ground())
+    ball = shape_from_spec(BALL)
+    x = np.linspace(-100, 100, 7)
+    position = np.concatenate([np.stack([x, np.full(7, 0.49)], axis=1), [[0.0, 0.0]]])
+    c = find_contacts([ball, ground], np.r_[np.zeros(7, int), 1], position, np.zeros(8),
+                      np.r_[np.ones(7, bool), False], Settings())
+    np.testing.assert_array_equal(c.body_a, np.arange(7))
+    np.testing.assert_array_equal(c.body_b, np.full(7, 7))
+    np.testing.assert_allclose(c.depth, 0.01, atol=1e-12)
+    np.testing.assert_allclose(c.normal, np.tile([0.0, -1.0], (7, 1)))
+    np.testing.assert_allclose(c.point, np.stack([x, np.full(7, -0.005)], axis=1), atol=1e-12)
+
+
+def test_instancing_one_field_evaluation_per_pair_group(rng):
+    """100 balls on 100 sdf bodies sharing one shape: one evaluate for the whole group."""
+    counting = Counting(field({"type": "box", "size": [1.0, 1.0]}))
+    block = SdfShape(counting)
+    _ = block.field, block.radius                       # mass properties (quadrature) first
+    ball = shape_from_spec(BALL)
+    n = 100
+    base = np.stack([np.arange(n) * 5.0, np.zeros(n)], axis=1)
+    position = np.concatenate([base, base + [0.0, 0.95]])
+    angle = np.r_[rng.uniform(-0.1, 0.1, n), rng.uniform(-3, 3, n)]
+    counting.calls = 0
+    c = find_contacts([block, ball], np.r_[np.zeros(n, int), np.ones(n, int)], position,
+                      angle, np.ones(2 * n, bool), Settings())
+    assert counting.calls == 1
+    assert len(c) == n
+    np.testing.assert_array_equal(c.body_a, np.arange(n))
+    np.testing.assert_array_equal(c.body_b, np.arange(n) + n)
+    np.testing.assert_array_less(0.0, c.depth)
+
+
+def test_find_contacts_contract(rng):
+    """Sorted, body_a < body_b, a movable body in each pair, depth > -speculative."""
+    ball, small = shape_from_spec(BALL), shape_from_spec({"type": "circle", "radius": 0.3})
+    floor = shape_from_spec({"type": "box", "size": [20.0, 1.0]})
+    n = 400
+    position = np.concatenate([rng.uniform([-9, 0], [9, 6], (n, 2)), [[0.0, -0.5]],
+                               [[0.0, 0.1]]])
+    shape_id = np.r_[rng.integers(0, 2, n), 2, 1]
+    movable = np.r_[np.ones(n, bool), False, False]
+    settings = Settings()
+    c = find_contacts([ball, small, floor], shape_id, position, np.zeros(n + 2), movable,
+                      settings)
+    assert np.all(c.body_a < c.body_b)
+    assert np.all(movable[c.body_a] | movable[c.body_b])
+    assert not np.any((c.body_a == n) & (c.body_b == n + 1))        # two static bodies
+    assert np.all(c.depth > -settings.speculative_distance)
+    order = np.lexsort((c.feature, c.body_b, c.body_a))
+    np.testing.assert_array_equal(order, np.arange(len(c)))
+    np.testing.assert_allclose(np.linalg.norm(c.normal, axis=1), 1.0)
+    # brute force over all circle pairs
+    radius = np.array([0.5, 0.3, np.nan])[shape_id]
+    i, j = np.triu_indices(n, 1)
+    gap = np.linalg.norm(position[i] - position[j], axis=1) - radius[i] - radius[j]
+    near = gap < settings.speculative_distance
+    circles = c.body_b < n
+    np.testing.assert_array_equal(np.stack([c.body_a[circles], c.body_b[circles]], axis=1),
+                                  np.stack([i[near], j[near]], axis=1))
+    np.testing.assert_allclose(c.depth[circles], -gap[near], atol=1e-12)
+
+
+def test_reduction_keeps_the_ends_of_a_flat_patch():
+    x = np.linspace(-1.0, 1.0, 21)
+    point = np.stack([x, np.zeros(21)], axis=1)
+    depth = np.full(21, 0.01)
+    order = np.argsort(np.abs(x), kind="stable")           # a middle point comes first
+    keep = reduce_contacts(np.array([0, 21]), point[order], depth[order], 4, 0.005)
+    np.testing.assert_array_equal(np.sort(x[order][keep]), [-1.0, 1.0])
+
+
+def test_reduction_keeps_a_deeper_middle_and_two_faces():
+    # a flat patch whose middle is deeper than its ends: the middle stays
+    point = np.array([[0.0, 0.0], [-1.0, 0.0], [1.0, 0.0], [0.5, 0.0]])
+    depth = np.array([0.03, 0.01, 0.01, 0.01])
+    keep = reduce_contacts(np.array([0, 4]), point, depth, 4, 0.005)
+    np.testing.assert_array_equal(keep, [True, True, True, False])
+    # a box in a V groove: two points on each wall, budget 4, then budget 2
+    point = np.array([[-1.0, 1.0], [-0.5, 0.5], [0.5, 0.5], [1.0, 1.0], [-0.75, 0.75]])
+    depth = np.array([0.02, 0.02, 0.02, 0.02, 0.02])
+    keep = reduce_contacts(np.array([0, 5]), point, depth, 4, 0.005)
+    np.testing.assert_array_equal(keep, [True, True, True, True, False])
+    keep = reduce_contacts(np.array([0, 5]), point, depth, 2, 0.005)
+    assert keep.sum() == 2 and keep[0] and keep[3]
+
+
+def test_reduction_per_pair_and_budget(rng):
+    sizes = rng.integers(1, 30, 200)
+    start = np.r_[0, np.cumsum(sizes)]
+    point = rng.uniform(-1, 1, (start[-1], 2))
+    depth = rng.uniform(-0.02, 0.05, start[-1])
+    for s, e in itertools.pairwise(start):
+        order = np.argsort(-depth[s:e], kind="stable") + s
+        depth[s:e], point[s:e] = depth[order], point[order]
+    keep = reduce_contacts(start, point, depth, 4, 0.005)
+    kept_per_pair = np.add.reduceat(keep.astype(int), start[:-1])
+    assert np.all(kept_per_pair >= 1) and np.all(kept_per_pair <= 4)
+    assert np.all(keep[start[:-1]] | (kept_per_pair > 1))
+    np.testing.assert_array_equal(keep, reduce_contacts(start, point, depth, 4, 0.005))
+
+
+def test_two_thousand_circles_in_a_box_in_a_few_ms(rng):
+    n, cols = 2000, 50
+    ball = shape_from_spec(BALL)
+    floor = shape_from_spec({"type": "box", "size": [52.0, 1.0]})
+    wall = shape_from_spec({"type": "box", "size": [1.0, 60.0]})
+    grid = np.stack(np.divmod(np.arange(n), cols), axis=1)[:, ::-1]
+    position = grid * 0.99 + 0.5 + rng.uniform(-0.01, 0.01, (n, 2))
+    position = np.concatenate([position, [[24.75, -0.49], [-0.49, 30.0], [49.99, 30.0]]])
+    shape_id = np.r_[np.zeros(n, int), 1, 2, 2]
+    angle = np.zeros(n + 3)
+    movable = np.r_[np.ones(n, bool), np.zeros(3, bool)]
+    settings = Settings()
+    c = find_contacts([ball, floor, wall], shape_id, position, angle, movable, settings)
+    best = np.inf
+    for _ in range(10):
+        t0 = time.perf_counter()
+        c = find_contacts([ball, floor, wall], shape_id, position, angle, movable, settings)
+        best = min(best, time.perf_counter() - t0)
+    print(f"\n2,000 circles in a box: {len(c)} contacts in {best * 1e3:.2f} ms")
+    assert len(c) == 49 * 40 + 50 * 39 + 50 + 2 * 40       # neighbours, floor, walls
+    assert np.sum(c.body_b == n) == cols                    # the bottom row on the floor
+    assert best < 0.015
+
+
+@pytest.mark.parametrize("margin", [0.0, 0.02])
+def test_collide_margin(margin):
+    c = collide(BALL, (0.0, 0.0, 0.0), BALL, (1.01, 0.0, 0.0), margin=margin)
+    assert len(c) == (1 if margin > 0.01 else 0)
