@@ -49,9 +49,10 @@ SHAPE_TYPES: dict[str, tuple[str, ...]] = {
 
 #: SdfShape's default quadrature cell is sqrt(area) / SDF_CELLS_PER_ROOT_AREA, the area
 #: coming from a coarse first pass (cell = smaller side of the bounds / 20).
-#: geometry.field_mass_properties errs by about c (h / sqrt(area))^2 relative, with c
-#: <= 0.5 for smooth shapes and c ~ 1 measured for a rotated box (corners), so 150
-#: gives ~4e-5, under the 1e-4 target; a disc costs ~3e4 field evaluations.
+#: geometry.field_mass_properties bounds its relative errors by 1.0 (h / sqrt(area))^2
+#: for the area and 2 (h / sqrt(area))^2 for the second moment (measured on discs,
+#: boxes and L shapes), so 150 keeps both under 9e-5 (target 1e-4); a disc then
+#: costs ~3e4 field evaluations.
 SDF_CELLS_PER_ROOT_AREA = 150
 #: Upper bound on the default quadrature grid (points), which coarsens the cell of
 #: very thin or hollow shapes (whose accuracy is then below the target).
@@ -210,7 +211,7 @@ class SdfShape(Shape):
     and ``area`` / ``second_moment`` raise SpecError. A bounded field is moved so
     that its centroid (``geometry.field_mass_properties`` with grid spacing ``cell``,
     m) is the body origin. The default cell (see SDF_CELLS_PER_ROOT_AREA) keeps the
-    relative error of area and second moment near 4e-5 (target 1e-4).
+    relative error of area and second moment under 1e-4.
     """
 
     kind = "sdf"
