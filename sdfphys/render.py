@@ -158,12 +158,12 @@ class BodyFrames:
 
 def body_frames(world: Any) -> BodyFrames:
     """The body frames of ``world`` (a ``sdfphys.world.World`` or an object with the same
-    attributes): the centre of mass is ``world.com_position`` when the world has it,
+    attributes): the centre of mass is ``world.center_of_mass`` when the world has it,
     otherwise ``position - R(angle) @ shape.origin``."""
     angle = np.asarray(world.angle, dtype=np.float64).reshape(-1)
     shape_id = np.asarray(world.shape_id, dtype=np.int64).reshape(-1)
     shapes = list(world.shapes)
-    com = getattr(world, "com_position", None)
+    com = getattr(world, "center_of_mass", None)
     if com is None:
         origin = np.array([np.asarray(s.origin, dtype=np.float64) for s in shapes]).reshape(-1, 2)
         o = origin[shape_id] if len(shape_id) else np.zeros((0, 2))

@@ -193,12 +193,12 @@ def test_static_and_kinematic_bodies_have_their_own_colours():
     assert len(set(got)) == 3
 
 
-def test_body_frames_use_shape_origin_when_world_has_no_com_position():
+def test_body_frames_use_shape_origin_when_world_has_no_center_of_mass():
     shape = box_shape(1.0, 1.0)
     shape.origin = np.array([0.5, 0.0])       # user origin 0.5 m right of the centre of mass
     world = make_world([(shape, (2.0, 1.0), np.pi / 2, "dynamic")])
     np.testing.assert_allclose(body_frames(world).com, [[2.0, 0.5]], atol=1e-12)
-    world.com_position = np.array([[7.0, 7.0]])
+    world.center_of_mass = np.array([[7.0, 7.0]])
     np.testing.assert_allclose(body_frames(world).com, [[7.0, 7.0]])
 
 

@@ -1,0 +1,334 @@
+"""The interactive window: ``play(world_factory, render_settings)``.
+
+Keys: P pause / resume, O one step (while paused), R reset (a new world from the
+factory), S screenshot (PNG in the current directory, its name printed), C contacts
+overlay, F field overlay, B bounds overlay, Esc or closing the window quits.
+Mouse: press the left button on a dynamic body and drag; the grabbed point is
+pulled toward the pointer by a soft spring (``DragSpring``).
+
+The top line shows frames per second, simulation steps per second, the simulated
+time and the state (paused, overlays).
+
+Without a display, ``play`` prints one line saying so and returns 2 (the exit status
+for ``sdfphys play``). SDL may silently fall back to its ``offscreen`` or ``dummy``
+driver, so the driver in use is checked; tests pass ``allow_headless=True`` together
+with a scripted ``events`` source and ``max_frames``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+import pygame
+
+from .render import DYNAMIC, Camera, Overlays, Palette, Renderer, body_frames
+
+__all__ = [
+    "HEADLESS_DRIVERS",
+    "DragSpring",
+    "RenderSettings",
+    "apply_drag",
+    "pick_body",
+    "play",
+]
+
+#: SDL video drivers that have no window a person could see.
+HEADLESS_DRIVERS = ("offscreen", "dummy")
+
+CAPTION = ("sdfphys   P pause   O step   R reset   S screenshot   C contacts   F field   "
+           "B bounds   Esc quit")
+
+
+class RenderSettings(Protocol):
+    """What ``play`` reads from the scene's ``[render]`` table (``scene.RenderSpec``)."""
+
+    size: tuple[int, int]          # window (width, height), px
+    center: tuple[float, float]    # world point at the window centre, m
+    scale: float                   # px per metre
+    fps: int                       # frames per second
+
+
+@dataclass(frozen=True)
+class DragSpring:
+    """The mouse spring, applied to the grabbed body's velocity before every step.
+
+    The grabbed point p (velocity v_p) is pulled toward the pointer m like a unit
+    mass on a damped spring of natural frequency ``hertz`` and damping ratio
+    ``damping_ratio`` (so the response does not depend on the body's mass),
+    integrated implicitly over the step dt (stable for any stiffness):
+
+        v_p' = (v_p + dt w^2 (m - p)) / (1 + 2 zeta w dt + w^2 dt^2),   w = 2 pi hertz
+
+    The change v_p' - v_p, capped at ``max_acceleration`` * dt, is applied as the
+    impulse at p that produces it (through the body's 2x2 effective mass at p), so a
+    body grabbed off-centre also turns.
+    """
+
+    hertz: float = 5.0
+    """Natural frequency of the pull, Hz (higher: stiffer)."""
+    damping_ratio: float = 0.7
+    """1 is critical damping; below 1 the body overshoots the pointer."""
+    max_acceleration: float = 500.0
+    """Cap on the grabbed point's acceleration from the spring, m/s^2."""
+
+
+def pick_body(world: Any, point: np.ndarray, tolerance: float = 0.0) -> int | None:
+    """The dynamic body under world ``point`` (2,) m: the one whose field is smallest
+    there, if that value is <= ``tolerance`` m; None if there is none."""
+    frames = body_frames(world)
+    radius = np.array([float(s.radius) for s in frames.shapes])[frames.shape_id]
+    gap = np.hypot(*(frames.com - point).T)
+    candidates = np.flatnonzero((frames.motion == DYNAMIC) & (gap <= radius + tolerance))
+    best, best_d = None, tolerance
+    for b in candidates.tolist():
+        c, s = math.cos(frames.angle[b]), math.sin(frames.angle[b])
+        dx, dy = point - frames.com[b]
+        local = np.array([[c * dx + s * dy, -s * dx + c * dy]])
+        d = float(frames.shapes[frames.shape_id[b]].field.distance(local)[0])
+        if d <= best_d:
+            best, best_d = b, d
+    return best
+
+
+def apply_drag(world: Any, body: int, anchor: np.ndarray, target: np.ndarray, dt: float,
+               spring: DragSpring = DragSpring()) -> None:
+    """Pull body ``body``'s point ``anchor`` (2,) (body frame, m, from the centre of mass)
+    toward world point ``target`` (2,) m over one step of ``dt`` s (see DragSpring)."""
+    com, angle = world.center_of_mass[body], float(world.angle[body])
+    c, s = math.cos(angle), math.sin(angle)
+    r = np.array([c * anchor[0] - s * anchor[1], s * anchor[0] + c * anchor[1]])
+    v, w = world.velocity[body], float(world.angular_velocity[body])
+    inv_m, inv_i = 1.0 / float(world.mass[body]), 1.0 / float(world.inertia[body])
+    v_point = v + w * np.array([-r[1], r[0]])
+    omega = 2.0 * math.pi * spring.hertz
+    wanted = (v_point + dt * omega ** 2 * (target - com - r)) / (
+        1.0 + 2.0 * spring.damping_ratio * omega * dt + (omega * dt) ** 2)
+    change = wanted - v_point
+    cap = spring.max_acceleration * dt
+    size = float(np.hypot(*change))
+    if size > cap:
+        change *= cap / size
+    # Effective mass at the point: K = inv_m I + inv_i (perp r)(perp r)^T.
+    k = np.array([[inv_m + inv_i * r[1] ** 2, -inv_i * r[0] * r[1]],
+                  [-inv_i * r[0] * r[1], inv_m + inv_i * r[0] ** 2]])
+    impulse = np.linalg.solve(k, change)
+    world.set_state(body, velocity=v + inv_m * impulse,
+                    angular_velocity=w + inv_i * (r[0] * impulse[1] - r[1] * impulse[0]))
+
+
+@dataclass
+class _Grab:
+    body: int
+    anchor: np.ndarray    # body frame, m
+    target: np.ndarray    # world, m
+
+
+class _Session:
+    """The state of one interactive session (world, toggles, grab, counters)."""
+
+    def __init__(self, world_factory: Callable[[], Any], settings: RenderSettings,
+                 spring: DragSpring):
+        self.factory = world_factory
+        self.camera = Camera(settings.center, settings.scale, settings.size)
+        self.renderer = Renderer(self.camera)
+        self.fps = int(settings.fps)
+        self.spring = spring
+        self.world = world_factory()
+        self.paused = False
+        self.step_once = False
+        self.screenshot = False
+        self.running = True
+        self.overlays = Overlays()
+        self.grab: _Grab | None = None
+        self.steps = 0
+        self.rate_steps, self.rate_time, self.steps_per_second = 0, time.perf_counter(), 0.0
+
+    @property
+    def dt(self) -> float:
+        return float(self.world.settings.dt)
+
+    def handle(self, event: pygame.event.Event) -> None:
+        if event.type == pygame.QUIT:
+            self.running = False
+        elif event.type == pygame.KEYDOWN:
+            self._key(event.key)
+        elif event.type == pygame.MOUSEBUTTONDOWN and event.button == 1:
+            point = self.camera.screen_to_world([event.pos])[0]
+            body = pick_body(self.world, point, tolerance=3.0 / self.camera.scale)
+            if body is not None:
+                frames = body_frames(self.world)
+                c, s = math.cos(frames.angle[body]), math.sin(frames.angle[body])
+                dx, dy = point - frames.com[body]
+                self.grab = _Grab(body, np.array([c * dx + s * dy, -s * dx + c * dy]), point)
+        elif event.type == pygame.MOUSEMOTION and self.grab is not None:
+            self.grab.target = self.camera.screen_to_world([event.pos])[0]
+        elif event.type == pygame.MOUSEBUTTONUP and event.button == 1:
+            self.grab = None
+
+    def _key(self, key: int) -> None:
+        if key == pygame.K_ESCAPE:
+            self.running = False
+        elif key == pygame.K_p:
+            self.paused = not self.paused
+        elif key == pygame.K_o and self.paused:
+            self.step_once = True
+        elif key == pygame.K_r:
+            self.world = self.factory()
+            self.grab = None
+        elif key == pygame.K_s:
+            self.screenshot = True
+        elif key == pygame.K_c:
+            self.overlays = _toggled(self.overlays, contacts=not self.overlays.contacts)
+        elif key == pygame.K_f:
+            self.overlays = _toggled(self.overlays, field=not self.overlays.field)
+        elif key == pygame.K_b:
+            self.overlays = _toggled(self.overlays, bounds=not self.overlays.bounds)
+
+    def advance(self) -> None:
+        """Run this frame's steps: enough to keep pace with ``fps`` (at least one),
+        none while paused unless one step was asked for."""
+        if self.paused:
+            count = 1 if self.step_once else 0
+        else:
+            count = max(1, round(1.0 / (self.fps * self.dt)))
+        self.step_once = False
+        for _ in range(count):
+            if self.grab is not None:
+                apply_drag(self.world, self.grab.body, self.grab.anchor, self.grab.target,
+                           self.dt, self.spring)
+            self.world.step()
+        self.steps += count
+        self.rate_steps += count
+        now = time.perf_counter()
+        if now - self.rate_time >= 0.5:
+            self.steps_per_second = self.rate_steps / (now - self.rate_time)
+            self.rate_steps, self.rate_time = 0, now
+
+    def draw(self, screen: pygame.Surface, font: pygame.font.Font, frame_rate: float) -> None:
+        self.renderer.draw(screen, self.world, self.overlays)
+        palette: Palette = self.renderer.palette
+        if self.grab is not None:
+            frames = body_frames(self.world)
+            b = self.grab.body
+            c, s = math.cos(frames.angle[b]), math.sin(frames.angle[b])
+            a = self.grab.anchor
+            point = frames.com[b] + np.array([c * a[0] - s * a[1], s * a[0] + c * a[1]])
+            ends = self.camera.world_to_screen(np.array([point, self.grab.target])) - 0.5
+            pygame.draw.aaline(screen, palette.mark, ends[0], ends[1])
+            pygame.draw.circle(screen, palette.mark, ends[0], 3)
+        flags = [name for name, on in (("PAUSED", self.paused),
+                                       ("contacts", self.overlays.contacts),
+                                       ("field", self.overlays.field),
+                                       ("bounds", self.overlays.bounds)) if on]
+        line = (f"{frame_rate:5.1f} frames/s   {self.steps_per_second:6.1f} steps/s   "
+                f"t = {float(self.world.time):7.3f} s   {len(self.world.shape_id)} bodies   "
+                + "  ".join(flags))
+        screen.blit(font.render(line, True, palette.text), (8, 6))
+
+    def save_screenshot(self, screen: pygame.Surface, frame: int) -> Path:
+        stem = f"sdfphys-{time.strftime('%Y%m%d-%H%M%S')}-{frame:05d}"
+        path, k = Path(f"{stem}.png"), 1
+        while path.exists():
+            path, k = Path(f"{stem}-{k}.png"), k + 1
+        pygame.image.save(screen, str(path))
+        print(f"screenshot: {path}", flush=True)
+        return path
+
+
+def _toggled(overlays: Overlays, **change: bool) -> Overlays:
+    values = {name: getattr(overlays, name) for name in overlays.__dataclass_fields__}
+    values.update(change)
+    return Overlays(**values)
+
+
+def play(world_factory: Callable[[], Any], render_settings: RenderSettings, *,
+         allow_headless: bool = False,
+         events: Iterable[Sequence[pygame.event.Event]] | None = None,
+         max_frames: int | None = None, spring: DragSpring = DragSpring()) -> int:
+    """Run the interactive window until the user quits; return the exit status.
+
+    world_factory: builds a fresh World (called at start and on R), e.g. ``Scene.build``.
+    render_settings: window size (px), view centre (m), scale (px/m) and fps.
+    allow_headless: accept SDL's offscreen/dummy drivers (tests); otherwise, without a
+        display, print one line on stderr and return 2.
+    events: a script, one sequence of pygame events per frame, read instead of the
+        event queue (tests); the session ends when it runs out. Frames are then not
+        paced to ``fps``.
+    max_frames: stop after this many frames.
+    Returns 0 when the session ends normally, 2 when there is no display.
+    """
+    if not allow_headless and _no_window_system():
+        return _no_display("neither DISPLAY nor WAYLAND_DISPLAY is set")
+    try:
+        pygame.display.init()
+    except pygame.error as err:
+        return _no_display(str(err))
+    driver = pygame.display.get_driver()
+    if driver in HEADLESS_DRIVERS and not allow_headless:
+        pygame.display.quit()
+        return _no_display(f"SDL video driver is {driver!r}")
+    try:
+        return _run(world_factory, render_settings, events, max_frames, spring)
+    finally:
+        pygame.display.quit()
+
+
+def _no_window_system() -> bool:
+    """True on X11/Wayland systems (not Windows or macOS) with neither server named in
+    the environment and no SDL driver chosen: checked before SDL starts, whose
+    fallback probes print their own noise."""
+    if sys.platform.startswith(("win", "darwin", "emscripten")):
+        return False
+    return not any(os.environ.get(name) for name in ("DISPLAY", "WAYLAND_DISPLAY",
+                                                       "SDL_VIDEODRIVER"))
+
+
+def _no_display(reason: str) -> int:
+    print(f"sdfphys play: no display available ({reason}); "
+          "render to a file instead: sdfphys run SCENE -o out.mp4", file=sys.stderr)
+    return 2
+
+
+def _run(world_factory: Callable[[], Any], settings: RenderSettings,
+         events: Iterable[Sequence[pygame.event.Event]] | None, max_frames: int | None,
+         spring: DragSpring) -> int:
+    session = _Session(world_factory, settings, spring)
+    screen = pygame.display.set_mode(session.camera.size)
+    pygame.display.set_caption(CAPTION)
+    pygame.font.init()
+    font = pygame.font.Font(None, 22)
+    clock = pygame.time.Clock()
+    script: Iterator[Sequence[pygame.event.Event]] | None = (
+        iter(events) if events is not None else None)
+    frame = 0
+    while session.running and (max_frames is None or frame < max_frames):
+        if script is None:
+            batch: Sequence[pygame.event.Event] = pygame.event.get()
+        else:
+            batch = next(script, None)
+            if batch is None:
+                break
+            pygame.event.pump()
+        for event in batch:
+            session.handle(event)
+        if not session.running:
+            break
+        session.advance()
+        session.draw(screen, font, clock.get_fps())
+        if session.screenshot:
+            session.save_screenshot(screen, frame)
+            session.screenshot = False
+        pygame.display.flip()
+        clock.tick(session.fps if script is None else 0)
+        frame += 1
+    return 0
