@@ -21,6 +21,8 @@ class Settings:
     """Solver substeps per step (h = dt / substeps). More: stiffer, more accurate contacts."""
     relax_passes: int = 1
     """Rigid (bias-free) velocity passes per substep after the biased solve."""
+    warm_starting: bool = True
+    """Start each step from last step's contact impulses (matched by feature key)."""
     contact_hertz: float = 30.0
     """Soft contact stiffness, Hz (capped at 0.25 x substep rate; doubled against static)."""
     contact_damping_ratio: float = 10.0
@@ -28,7 +30,8 @@ class Settings:
     max_push_out: float = 3.0
     """Cap on the speed at which overlap is removed, m/s."""
     linear_slop: float = 0.005
-    """Allowed overlap, m (contacts keep this much penetration to stay in touch)."""
+    """Length tolerance, m: contact reduction's merge distance; time of impact stops a fast
+    body between 1 and 2 slop short of the obstacle. (The soft solver pushes out to s = 0.)"""
     speculative_distance: float = 0.02
     """Contacts are kept while separation < this, m (4 x slop)."""
     restitution_threshold: float = 1.0

@@ -1,0 +1,682 @@
+"""The soft-step contact solver: Box2D v3's design (SOLVER.md), one numba sweep per phase.
+
+One step, as ``World.step`` runs it:
+
+1. collide once (``sdfphys.collide.find_contacts``);
+2. ``prepare_contacts``: anchors, base separations, effective masses, the approach speed
+   for restitution and last step's impulses matched by feature key (warm start);
+3. ``solve_substeps``: for each substep h = dt / substeps, integrate velocities, warm
+   start, solve with soft bias, integrate positions, relax without bias;
+4. ``apply_restitution``: velocity passes that target vn' = -e vn;
+5. ``store_impulses``: the impulses, keyed for the next step's warm start.
+
+References: E. Catto, Box2D v3 (``contact_solver.c``, ``solver.c``: ``b2MakeSoft``,
+prepare / warm start / solve / relax / restitution / store), the "Solver2D" post
+(soft step versus PGS and TGS) and "SIMD Matters" (substepping with relax);
+E. Catto, "Soft Constraints", GDC 2011.
+
+Conventions: SI units; a contact's normal n is a unit vector from body a to body b;
+separation s < 0 when overlapping; the tangent is t = (n_y, -n_x) (n turned clockwise);
+an impulse lambda along n pushes b by +lambda n and a by -lambda n. Accumulated
+impulses are per substep (N s): the warm start applies them once per substep.
+
+The sweeps are sequential Gauss-Seidel loops over the contacts in their given order
+(sorted by (body_a, body_b, feature): deterministic), compiled with numba
+(``cache=True``); SOLVER.md measures why this beats coloured numpy batches. Static and
+kinematic bodies take part through their zero inverse mass and inertia: impulses leave
+them unchanged.
+
+Anchors. Box2D v3 keeps each contact's anchors ra, rb (the contact point relative to
+each centre of mass, in world orientation) fixed over the step, which is right for the
+body the contact point travels with (a circle rolling on the ground keeps its contact
+under its centre) but lets an impulse pair act at two world points that drift apart by
+the bodies' relative displacement D = dp_b - dp_a, changing the total angular momentum
+by D x P per impulse. Here, after each position update, the anchors are re-based to
+one common world point, p = x_a + ra0 + mb / (ma + mb) D (ma, mb inverse masses): every
+impulse pair is then equal, opposite and collinear, so linear and angular momentum are
+conserved to round-off. Against a static or kinematic body (ma = 0) the movable body
+keeps Box2D's fixed anchor exactly (the immovable arm does no work); between two
+dynamic bodies the lighter keeps its anchor best, and the effective masses follow the
+anchors. The separation is measured as SOLVER.md says, from the anchors carried by the
+bodies' rotations and translations.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from .collide.contacts import Contacts
+from .settings import Settings
+
+__all__ = [
+    "BodyState",
+    "ContactConstraints",
+    "ImpulseCache",
+    "Softness",
+    "apply_restitution",
+    "contact_softness",
+    "prepare_contacts",
+    "soft_coefficients",
+    "solve_substeps",
+    "store_impulses",
+]
+
+
+# --------------------------------------------------------------------------------------
+# Soft constraint coefficients (Catto, "Soft Constraints" GDC 2011; Box2D v3 b2MakeSoft).
+#
+# Treat a constraint C (here the separation s) as a spring-damper of the effective mass
+# m: stiffness k = m w^2, damping c = 2 m z w, w = 2 pi f. One implicit Euler substep h,
+# with C2 = C1 + h v2 and impulse lambda = m (v2 - v1):
+#     m (v2 - v1) = -h k (C1 + h v2) - h c v2.
+# Divide by m, write a1 = 2 z + h w and a2 = h w a1 = 2 h z w + h^2 w^2:
+#     (v2 - v1) (1 + a2) = -a2 v1 - h w^2 C1
+#     v2 - v1 = -(a2 / (1 + a2)) (v1 + (w / a1) C1).
+# So with bias_rate = w / a1, mass_scale = a2 a3 and a3 = 1 / (1 + a2):
+#     lambda = -m mass_scale (v1 + bias_rate C1).
+# In an iterative solver v is the velocity that already contains the accumulated
+# impulse lambda_0 of this row; the free velocity is v - lambda_0 / m, and the increment
+# that makes the total equal the formula above is
+#     d_lambda = -m mass_scale (vn + bias_rate C) - (1 - mass_scale) lambda_0,
+# where 1 - mass_scale = a3 = impulse_scale. As in Box2D the position part is capped:
+#     bias = max(mass_scale bias_rate s, -max_push_out),
+#     d_lambda = -m (mass_scale vn + bias) - impulse_scale lambda_0.
+# Unit values (SOLVER.md): f=30, z=10, h=1/240 -> 9.069 /s, 0.9423, 0.0577.
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Softness:
+    """Coefficients of a soft constraint for one substep (see the derivation above).
+
+    bias_rate: 1/s, the fraction of the separation removed per second of velocity bias.
+    mass_scale, impulse_scale: dimensionless, mass_scale + impulse_scale = 1.
+    """
+
+    bias_rate: float
+    mass_scale: float
+    impulse_scale: float
+
+
+def soft_coefficients(hertz: float, damping_ratio: float, h: float) -> Softness:
+    """The soft constraint of stiffness ``hertz`` (Hz) and ``damping_ratio`` for substep ``h`` (s).
+
+    ``hertz == 0`` gives a rigid constraint (no bias, mass_scale 1, impulse_scale 0).
+    """
+    if hertz == 0.0:
+        return Softness(0.0, 1.0, 0.0)
+    omega = 2.0 * math.pi * hertz
+    a1 = 2.0 * damping_ratio + h * omega
+    a2 = h * omega * a1
+    a3 = 1.0 / (1.0 + a2)
+    return Softness(omega / a1, a2 * a3, a3)
+
+
+def contact_softness(settings: Settings) -> tuple[Softness, Softness]:
+    """(between two movable bodies, against a static or kinematic body) for ``settings``.
+
+    The contact hertz is capped at 0.25 x the substep rate (a stiffer spring than the
+    substep can resolve would ring); contacts against an infinite mass use twice the
+    capped hertz, so that piles are not pushed into the ground (Box2D v3).
+    """
+    h = settings.dt / settings.substeps
+    hertz = min(settings.contact_hertz, 0.25 / h)
+    return (soft_coefficients(hertz, settings.contact_damping_ratio, h),
+            soft_coefficients(2.0 * hertz, settings.contact_damping_ratio, h))
+
+
+@dataclass
+class BodyState:
+    """The solver's view of the bodies (B rows; arrays are updated in place).
+
+    com: (B, 2) centre-of-mass world positions, m.  angle: (B,) rad, counter-clockwise.
+    velocity: (B, 2) centre-of-mass velocity, m/s.  angular_velocity: (B,) rad/s.
+    inv_mass: (B,) 1/kg, inv_inertia: (B,) 1/(kg m^2); both 0 for static and kinematic
+    bodies, which therefore never receive impulses or gravity.
+    linear_damping, angular_damping: (B,) 1/s; velocities are divided by (1 + h c)
+    each substep.
+    """
+
+    com: np.ndarray
+    angle: np.ndarray
+    velocity: np.ndarray
+    angular_velocity: np.ndarray
+    inv_mass: np.ndarray
+    inv_inertia: np.ndarray
+    linear_damping: np.ndarray
+    angular_damping: np.ndarray
+
+
+@dataclass
+class ImpulseCache:
+    """Accumulated impulses of the last step, keyed by (body_a, body_b, feature); (K,) each.
+
+    normal_impulse, tangent_impulse: N s per substep (what the warm start applies).
+    """
+
+    body_a: np.ndarray
+    body_b: np.ndarray
+    feature: np.ndarray
+    normal_impulse: np.ndarray
+    tangent_impulse: np.ndarray
+
+    @classmethod
+    def empty(cls) -> ImpulseCache:
+        return cls(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64),
+                   np.zeros(0), np.zeros(0))
+
+    def __len__(self) -> int:
+        return len(self.feature)
+
+    def without_body(self, index: int) -> ImpulseCache:
+        """The cache after body ``index`` is removed: its rows dropped, later bodies renumbered."""
+        keep = (self.body_a != index) & (self.body_b != index)
+        a, b = self.body_a[keep], self.body_b[keep]
+        return ImpulseCache(a - (a > index), b - (b > index), self.feature[keep],
+                            self.normal_impulse[keep], self.tangent_impulse[keep])
+
+    def match(self, body_a: np.ndarray, body_b: np.ndarray,
+              feature: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Normal and tangent impulses (K,) for the given keys; 0 where there is no match.
+
+        Vectorized: the features of both sets are ranked together (np.unique), each
+        key (a, b, feature) becomes one int64 ((a * nb + b) * nf + rank), and the new
+        keys are looked up in the sorted old ones with searchsorted. Valid while
+        nb^2 nf < 2^63 (nb bodies, nf distinct features), e.g. 10^5 bodies and 10^8
+        contacts.
+        """
+        k = len(feature)
+        normal, tangent = np.zeros(k), np.zeros(k)
+        if k == 0 or len(self) == 0:
+            return normal, tangent
+        nb = int(max(self.body_b.max(), body_b.max(), self.body_a.max(), body_a.max())) + 1
+        ranks = np.unique(np.concatenate([self.feature, feature]), return_inverse=True)[1]
+        nf = int(ranks.max()) + 1
+        old_key = (self.body_a * nb + self.body_b) * nf + ranks[:len(self)]
+        new_key = (body_a * nb + body_b) * nf + ranks[len(self):]
+        order = np.argsort(old_key, kind="stable")
+        sorted_key = old_key[order]
+        where = np.minimum(np.searchsorted(sorted_key, new_key), len(sorted_key) - 1)
+        hit = sorted_key[where] == new_key
+        source = order[where[hit]]
+        normal[hit] = self.normal_impulse[source]
+        tangent[hit] = self.tangent_impulse[source]
+        return normal, tangent
+
+
+@dataclass
+class ContactConstraints:
+    """The prepared contact rows of one step (K rows, P pairs).
+
+    body_a, body_b, feature: (K,) int64, from the Contacts (body_a < body_b).
+    normal: (K, 2) unit, a -> b.  separation: (K,) m, current s (< 0 overlapping).
+    anchor_a0, anchor_b0: (K, 2) m, the contact point relative to each centre of mass
+        at the start of the step (material anchors, rotated with the bodies).
+    anchor_a, anchor_b: (K, 2) m, current anchors (to one common world point).
+    base_separation: (K,) m, s0 - n.(anchor_b0 - anchor_a0).
+    normal_mass, tangent_mass: (K,) kg, effective masses (0 if both bodies are fixed).
+    friction, restitution: (K,) mixed coefficients (sqrt(a b), max(a, b)).
+    relative_velocity: (K,) m/s, n.(v_b - v_a) at the point at the start of the step.
+    stiff: (K,) int64, 1 if a body is static or kinematic (stiffer softness), else 0.
+    normal_impulse, tangent_impulse: (K,) N s, accumulated per substep.
+    total_normal_impulse: (K,) N s, sum of the normal impulses applied this step.
+    pair_start: (P + 1,) int64, rows pair_start[p]:pair_start[p+1] share one body pair.
+    """
+
+    body_a: np.ndarray
+    body_b: np.ndarray
+    feature: np.ndarray
+    normal: np.ndarray
+    separation: np.ndarray
+    anchor_a0: np.ndarray
+    anchor_b0: np.ndarray
+    anchor_a: np.ndarray
+    anchor_b: np.ndarray
+    base_separation: np.ndarray
+    normal_mass: np.ndarray
+    tangent_mass: np.ndarray
+    friction: np.ndarray
+    restitution: np.ndarray
+    relative_velocity: np.ndarray
+    stiff: np.ndarray
+    normal_impulse: np.ndarray
+    tangent_impulse: np.ndarray
+    total_normal_impulse: np.ndarray
+    pair_start: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.feature)
+
+
+# --------------------------------------------------------------------------------------
+# Prepare (once per step).
+# --------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _effective_mass(ma: float, ia: float, mb: float, ib: float, rax: float, ray: float,
+                    rbx: float, rby: float, dx: float, dy: float) -> float:
+    """1 / (ma + mb + ia (ra x d)^2 + ib (rb x d)^2), or 0 when both bodies are fixed."""
+    rna = rax * dy - ray * dx
+    rnb = rbx * dy - rby * dx
+    k = ma + mb + ia * rna * rna + ib * rnb * rnb
+    return 1.0 / k if k > 0.0 else 0.0
+
+
+@njit(cache=True)
+def _prepare_kernel(com, velocity, angular_velocity, inv_mass, inv_inertia, body_friction,
+                    body_restitution, body_a, body_b, point, normal, depth,
+                    anchor_a, anchor_b, base_separation, normal_mass, tangent_mass, friction,
+                    restitution, relative_velocity, stiff, pair_start):
+    """Fill the per-contact arrays (see ContactConstraints); returns the number of pairs."""
+    n_pairs = 0
+    for k in range(depth.shape[0]):
+        a = body_a[k]
+        b = body_b[k]
+        if k == 0 or a != body_a[k - 1] or b != body_b[k - 1]:
+            pair_start[n_pairs] = k
+            n_pairs += 1
+        nx = normal[k, 0]
+        ny = normal[k, 1]
+        rax = point[k, 0] - com[a, 0]
+        ray = point[k, 1] - com[a, 1]
+        rbx = point[k, 0] - com[b, 0]
+        rby = point[k, 1] - com[b, 1]
+        anchor_a[k, 0] = rax
+        anchor_a[k, 1] = ray
+        anchor_b[k, 0] = rbx
+        anchor_b[k, 1] = rby
+        base_separation[k] = -depth[k] - ((rbx - rax) * nx + (rby - ray) * ny)
+        ma = inv_mass[a]
+        mb = inv_mass[b]
+        ia = inv_inertia[a]
+        ib = inv_inertia[b]
+        normal_mass[k] = _effective_mass(ma, ia, mb, ib, rax, ray, rbx, rby, nx, ny)
+        tangent_mass[k] = _effective_mass(ma, ia, mb, ib, rax, ray, rbx, rby, ny, -nx)
+        friction[k] = math.sqrt(body_friction[a] * body_friction[b])
+        restitution[k] = max(body_restitution[a], body_restitution[b])
+        wa = angular_velocity[a]
+        wb = angular_velocity[b]
+        dvx = velocity[b, 0] - wb * rby - velocity[a, 0] + wa * ray
+        dvy = velocity[b, 1] + wb * rbx - velocity[a, 1] - wa * rax
+        relative_velocity[k] = dvx * nx + dvy * ny
+        stiff[k] = 1 if (ma == 0.0 or mb == 0.0) else 0
+    pair_start[n_pairs] = depth.shape[0]
+    return n_pairs
+
+
+def prepare_contacts(contacts: Contacts, bodies: BodyState, friction: np.ndarray,
+                     restitution: np.ndarray, cache: ImpulseCache,
+                     warm_starting: bool) -> ContactConstraints:
+    """Contact rows for this step from ``contacts`` and the bodies at the start of the step.
+
+    friction, restitution: (B,) per-body coefficients, mixed per contact as
+    sqrt(f_a f_b) and max(e_a, e_b). ``cache``: last step's impulses, applied again
+    where (body_a, body_b, feature) matches if ``warm_starting``.
+    """
+    k = len(contacts)
+    anchor_a, anchor_b = np.empty((k, 2)), np.empty((k, 2))
+    base_separation, normal_mass, tangent_mass = np.empty(k), np.empty(k), np.empty(k)
+    mixed_friction, mixed_restitution, relative_velocity = np.empty(k), np.empty(k), np.empty(k)
+    stiff = np.empty(k, np.int64)
+    pair_start = np.empty(k + 1, np.int64)
+    normal = np.ascontiguousarray(contacts.normal, dtype=np.float64)
+    n_pairs = _prepare_kernel(
+        bodies.com, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
+        bodies.inv_inertia, friction, restitution, contacts.body_a, contacts.body_b,
+        np.ascontiguousarray(contacts.point, dtype=np.float64), normal,
+        np.ascontiguousarray(contacts.depth, dtype=np.float64),
+        anchor_a, anchor_b, base_separation, normal_mass, tangent_mass, mixed_friction,
+        mixed_restitution, relative_velocity, stiff, pair_start)
+    if warm_starting:
+        normal_impulse, tangent_impulse = cache.match(contacts.body_a, contacts.body_b,
+                                                      contacts.feature)
+    else:
+        normal_impulse, tangent_impulse = np.zeros(k), np.zeros(k)
+    return ContactConstraints(
+        body_a=contacts.body_a, body_b=contacts.body_b, feature=contacts.feature,
+        normal=normal, separation=-np.asarray(contacts.depth, dtype=np.float64),
+        anchor_a0=anchor_a, anchor_b0=anchor_b,
+        anchor_a=anchor_a.copy(), anchor_b=anchor_b.copy(), base_separation=base_separation,
+        normal_mass=normal_mass, tangent_mass=tangent_mass, friction=mixed_friction,
+        restitution=mixed_restitution, relative_velocity=relative_velocity, stiff=stiff,
+        normal_impulse=normal_impulse, tangent_impulse=tangent_impulse,
+        total_normal_impulse=np.zeros(k), pair_start=pair_start[:n_pairs + 1])
+
+
+# --------------------------------------------------------------------------------------
+# Substeps (one compiled call per step).
+# --------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
+                          angular_damping, gravity, h):
+    """v <- v / (1 + h c) + h g for dynamic bodies (Box2D v3 order); others untouched."""
+    for i in range(inv_mass.shape[0]):
+        if inv_mass[i] == 0.0:
+            continue
+        lin = 1.0 / (1.0 + h * linear_damping[i])
+        velocity[i, 0] = velocity[i, 0] * lin + h * gravity[0]
+        velocity[i, 1] = velocity[i, 1] * lin + h * gravity[1]
+        angular_velocity[i] = angular_velocity[i] / (1.0 + h * angular_damping[i])
+
+
+@njit(cache=True)
+def _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h):
+    """x <- x + h v, angle <- angle + h w (semi-implicit Euler); |v| clamped to max_speed."""
+    limit = max_speed * max_speed
+    for i in range(angle.shape[0]):
+        vx = velocity[i, 0]
+        vy = velocity[i, 1]
+        speed2 = vx * vx + vy * vy
+        if speed2 > limit:
+            scale = max_speed / math.sqrt(speed2)
+            vx *= scale
+            vy *= scale
+            velocity[i, 0] = vx
+            velocity[i, 1] = vy
+        com[i, 0] += h * vx
+        com[i, 1] += h * vy
+        angle[i] += h * angular_velocity[i]
+
+
+@njit(cache=True)
+def _update_anchors(com, com0, angle, angle0, inv_mass, inv_inertia, body_a, body_b, normal,
+                    anchor_a0, anchor_b0, base_separation, anchor_a, anchor_b, separation,
+                    normal_mass, tangent_mass):
+    """Re-measure every separation from the accumulated moves; re-base the anchors.
+
+    s = base + n.(dp_b + R(dq_b) rb0 - dp_a - R(dq_a) ra0), no collision query.
+    Anchors: with D = dp_b - dp_a and inverse masses ma, mb, ra = ra0 + mb / (ma + mb) D
+    and rb = rb0 - ma / (ma + mb) D, so x_a + ra = x_b + rb (one common point; module
+    docstring). Against a static or kinematic body the movable body keeps its anchor.
+    """
+    cos_d = np.cos(angle - angle0)
+    sin_d = np.sin(angle - angle0)
+    for k in range(body_a.shape[0]):
+        a = body_a[k]
+        b = body_b[k]
+        ra0x = anchor_a0[k, 0]
+        ra0y = anchor_a0[k, 1]
+        rb0x = anchor_b0[k, 0]
+        rb0y = anchor_b0[k, 1]
+        rax = cos_d[a] * ra0x - sin_d[a] * ra0y
+        ray = sin_d[a] * ra0x + cos_d[a] * ra0y
+        rbx = cos_d[b] * rb0x - sin_d[b] * rb0y
+        rby = sin_d[b] * rb0x + cos_d[b] * rb0y
+        nx = normal[k, 0]
+        ny = normal[k, 1]
+        dx = (com[b, 0] - com0[b, 0]) - (com[a, 0] - com0[a, 0])
+        dy = (com[b, 1] - com0[b, 1]) - (com[a, 1] - com0[a, 1])
+        separation[k] = base_separation[k] + (dx + rbx - rax) * nx + (dy + rby - ray) * ny
+        ma = inv_mass[a]
+        mb = inv_mass[b]
+        share_b = mb / (ma + mb)
+        share_a = 1.0 - share_b
+        anchor_a[k, 0] = ra0x + share_b * dx
+        anchor_a[k, 1] = ra0y + share_b * dy
+        anchor_b[k, 0] = rb0x - share_a * dx
+        anchor_b[k, 1] = rb0y - share_a * dy
+        if ma > 0.0 and mb > 0.0:
+            normal_mass[k] = _effective_mass(ma, inv_inertia[a], mb, inv_inertia[b],
+                                             anchor_a[k, 0], anchor_a[k, 1], anchor_b[k, 0],
+                                             anchor_b[k, 1], nx, ny)
+            tangent_mass[k] = _effective_mass(ma, inv_inertia[a], mb, inv_inertia[b],
+                                              anchor_a[k, 0], anchor_a[k, 1], anchor_b[k, 0],
+                                              anchor_b[k, 1], ny, -nx)
+
+
+@njit(cache=True)
+def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, normal,
+                anchor_a, anchor_b, normal_impulse, tangent_impulse, total_normal_impulse):
+    """Apply the accumulated impulses P = l_n n + l_t t at the current anchors."""
+    for k in range(body_a.shape[0]):
+        a = body_a[k]
+        b = body_b[k]
+        nx = normal[k, 0]
+        ny = normal[k, 1]
+        px = normal_impulse[k] * nx + tangent_impulse[k] * ny
+        py = normal_impulse[k] * ny - tangent_impulse[k] * nx
+        total_normal_impulse[k] += normal_impulse[k]
+        ma = inv_mass[a]
+        mb = inv_mass[b]
+        velocity[a, 0] -= ma * px
+        velocity[a, 1] -= ma * py
+        angular_velocity[a] -= inv_inertia[a] * (anchor_a[k, 0] * py - anchor_a[k, 1] * px)
+        velocity[b, 0] += mb * px
+        velocity[b, 1] += mb * py
+        angular_velocity[b] += inv_inertia[b] * (anchor_b[k, 0] * py - anchor_b[k, 1] * px)
+
+
+@njit(cache=True)
+def _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pair_start,
+           normal, anchor_a, anchor_b, separation, normal_mass, tangent_mass, friction, stiff,
+           bias_rate, mass_scale, impulse_scale, normal_impulse, tangent_impulse,
+           total_normal_impulse, inv_h, max_push_out, use_bias, use_friction):
+    """One Gauss-Seidel pass over the pairs: normal rows of the pair, then its friction rows.
+
+    Normal row: s > 0 (speculative): bias = s / h, rigid (the gap may close, no more);
+    else with ``use_bias`` soft: bias = max(mass_scale bias_rate s, -max_push_out),
+    d_l = -m_n (mass_scale vn + bias) - impulse_scale l; without it rigid, bias 0.
+    Accumulated l_n >= 0. Friction row: d_l = -m_t vt, accumulated |l_t| <= mu l_n.
+    """
+    for p in range(pair_start.shape[0] - 1):
+        first = pair_start[p]
+        last = pair_start[p + 1]
+        a = body_a[first]
+        b = body_b[first]
+        ma = inv_mass[a]
+        mb = inv_mass[b]
+        ia = inv_inertia[a]
+        ib = inv_inertia[b]
+        vax = velocity[a, 0]
+        vay = velocity[a, 1]
+        wa = angular_velocity[a]
+        vbx = velocity[b, 0]
+        vby = velocity[b, 1]
+        wb = angular_velocity[b]
+        for k in range(first, last):
+            nx = normal[k, 0]
+            ny = normal[k, 1]
+            s = separation[k]
+            bias = 0.0
+            m_scale = 1.0
+            i_scale = 0.0
+            if s > 0.0:
+                bias = s * inv_h
+            elif use_bias:
+                j = stiff[k]
+                bias = max(mass_scale[j] * bias_rate[j] * s, -max_push_out)
+                m_scale = mass_scale[j]
+                i_scale = impulse_scale[j]
+            rax = anchor_a[k, 0]
+            ray = anchor_a[k, 1]
+            rbx = anchor_b[k, 0]
+            rby = anchor_b[k, 1]
+            dvx = vbx - wb * rby - vax + wa * ray
+            dvy = vby + wb * rbx - vay - wa * rax
+            vn = dvx * nx + dvy * ny
+            impulse = -normal_mass[k] * (m_scale * vn + bias) - i_scale * normal_impulse[k]
+            accumulated = max(normal_impulse[k] + impulse, 0.0)
+            impulse = accumulated - normal_impulse[k]
+            normal_impulse[k] = accumulated
+            total_normal_impulse[k] += impulse
+            px = impulse * nx
+            py = impulse * ny
+            vax -= ma * px
+            vay -= ma * py
+            wa -= ia * (rax * py - ray * px)
+            vbx += mb * px
+            vby += mb * py
+            wb += ib * (rbx * py - rby * px)
+        if use_friction:
+            for k in range(first, last):
+                mu = friction[k]
+                if mu == 0.0:
+                    continue
+                tx = normal[k, 1]
+                ty = -normal[k, 0]
+                rax = anchor_a[k, 0]
+                ray = anchor_a[k, 1]
+                rbx = anchor_b[k, 0]
+                rby = anchor_b[k, 1]
+                dvx = vbx - wb * rby - vax + wa * ray
+                dvy = vby + wb * rbx - vay - wa * rax
+                vt = dvx * tx + dvy * ty
+                limit = mu * normal_impulse[k]
+                accumulated = min(max(tangent_impulse[k] - tangent_mass[k] * vt, -limit), limit)
+                impulse = accumulated - tangent_impulse[k]
+                tangent_impulse[k] = accumulated
+                px = impulse * tx
+                py = impulse * ty
+                vax -= ma * px
+                vay -= ma * py
+                wa -= ia * (rax * py - ray * px)
+                vbx += mb * px
+                vby += mb * py
+                wb += ib * (rbx * py - rby * px)
+        velocity[a, 0] = vax
+        velocity[a, 1] = vay
+        angular_velocity[a] = wa
+        velocity[b, 0] = vbx
+        velocity[b, 1] = vby
+        angular_velocity[b] = wb
+
+
+@njit(cache=True)
+def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
+                     linear_damping, angular_damping, gravity, body_a, body_b, pair_start,
+                     normal, anchor_a0, anchor_b0, anchor_a, anchor_b, base_separation,
+                     separation, normal_mass, tangent_mass, friction, stiff, bias_rate,
+                     mass_scale, impulse_scale, normal_impulse, tangent_impulse,
+                     total_normal_impulse, h, substeps, relax_passes, max_push_out, max_speed,
+                     use_friction):
+    """All substeps of one step: integrate v, warm start, solve, integrate x, relax."""
+    com0 = com.copy()
+    angle0 = angle.copy()
+    inv_h = 1.0 / h
+    has_contacts = body_a.shape[0] > 0
+    for _ in range(substeps):
+        _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
+                              angular_damping, gravity, h)
+        if has_contacts:
+            _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
+                        normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
+                        total_normal_impulse)
+            _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
+                   pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
+                   tangent_mass, friction, stiff, bias_rate, mass_scale, impulse_scale,
+                   normal_impulse, tangent_impulse, total_normal_impulse, inv_h,
+                   max_push_out, True, use_friction)
+        _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h)
+        if has_contacts:
+            _update_anchors(com, com0, angle, angle0, inv_mass, inv_inertia, body_a, body_b,
+                            normal, anchor_a0, anchor_b0, base_separation, anchor_a, anchor_b,
+                            separation, normal_mass, tangent_mass)
+            for _ in range(relax_passes):
+                _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
+                       pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
+                       tangent_mass, friction, stiff, bias_rate, mass_scale, impulse_scale,
+                       normal_impulse, tangent_impulse, total_normal_impulse, inv_h,
+                       max_push_out, False, use_friction)
+
+
+def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: np.ndarray,
+                   settings: Settings, use_friction: bool) -> None:
+    """Run every substep of one step in place (one compiled call).
+
+    gravity: (2,) m/s^2, applied to dynamic bodies. ``use_friction`` False skips the
+    friction rows (the caller passes False when every contact's friction is 0).
+    """
+    soft, stiff = contact_softness(settings)
+    c = constraints
+    _substeps_kernel(
+        bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
+        bodies.inv_inertia, bodies.linear_damping, bodies.angular_damping,
+        np.asarray(gravity, dtype=np.float64), c.body_a, c.body_b, c.pair_start, c.normal,
+        c.anchor_a0, c.anchor_b0, c.anchor_a, c.anchor_b, c.base_separation, c.separation,
+        c.normal_mass, c.tangent_mass, c.friction, c.stiff,
+        np.array([soft.bias_rate, stiff.bias_rate]),
+        np.array([soft.mass_scale, stiff.mass_scale]),
+        np.array([soft.impulse_scale, stiff.impulse_scale]),
+        c.normal_impulse, c.tangent_impulse, c.total_normal_impulse,
+        settings.dt / settings.substeps, settings.substeps, settings.relax_passes,
+        settings.max_push_out, settings.max_linear_speed, use_friction)
+
+
+# --------------------------------------------------------------------------------------
+# Restitution (after the substeps) and storage.
+# --------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _restitution_kernel(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
+                        pair_start, normal, anchor_a, anchor_b, normal_mass, restitution,
+                        relative_velocity, normal_impulse, total_normal_impulse, threshold,
+                        passes):
+    """Velocity passes toward vn' = -e vn0 for points that approached and carried impulse.
+
+    A point takes part if it approached faster than ``threshold`` at the start of the
+    step (vn0 < -threshold) and received normal impulse during the step (a speculative
+    point that never touched did not collide). d_l = -m_n (vn + e vn0), l_n >= 0.
+    """
+    for _ in range(passes):
+        for p in range(pair_start.shape[0] - 1):
+            first = pair_start[p]
+            last = pair_start[p + 1]
+            a = body_a[first]
+            b = body_b[first]
+            ma = inv_mass[a]
+            mb = inv_mass[b]
+            ia = inv_inertia[a]
+            ib = inv_inertia[b]
+            for k in range(first, last):
+                e = restitution[k]
+                if e == 0.0 or relative_velocity[k] > -threshold or total_normal_impulse[k] == 0.0:
+                    continue
+                nx = normal[k, 0]
+                ny = normal[k, 1]
+                rax = anchor_a[k, 0]
+                ray = anchor_a[k, 1]
+                rbx = anchor_b[k, 0]
+                rby = anchor_b[k, 1]
+                dvx = (velocity[b, 0] - angular_velocity[b] * rby
+                       - velocity[a, 0] + angular_velocity[a] * ray)
+                dvy = (velocity[b, 1] + angular_velocity[b] * rbx
+                       - velocity[a, 1] - angular_velocity[a] * rax)
+                vn = dvx * nx + dvy * ny
+                impulse = -normal_mass[k] * (vn + e * relative_velocity[k])
+                accumulated = max(normal_impulse[k] + impulse, 0.0)
+                impulse = accumulated - normal_impulse[k]
+                normal_impulse[k] = accumulated
+                total_normal_impulse[k] += impulse
+                px = impulse * nx
+                py = impulse * ny
+                velocity[a, 0] -= ma * px
+                velocity[a, 1] -= ma * py
+                angular_velocity[a] -= ia * (rax * py - ray * px)
+                velocity[b, 0] += mb * px
+                velocity[b, 1] += mb * py
+                angular_velocity[b] += ib * (rbx * py - rby * px)
+
+
+def apply_restitution(bodies: BodyState, constraints: ContactConstraints,
+                      settings: Settings) -> None:
+    """``settings.restitution_passes`` restitution passes in place (one compiled call)."""
+    c = constraints
+    _restitution_kernel(
+        bodies.velocity, bodies.angular_velocity, bodies.inv_mass, bodies.inv_inertia,
+        c.body_a, c.body_b, c.pair_start, c.normal, c.anchor_a, c.anchor_b, c.normal_mass,
+        c.restitution, c.relative_velocity, c.normal_impulse, c.total_normal_impulse,
+        settings.restitution_threshold, settings.restitution_passes)
+
+
+def store_impulses(constraints: ContactConstraints) -> ImpulseCache:
+    """The accumulated impulses of this step, keyed for the next step's warm start."""
+    c = constraints
+    return ImpulseCache(c.body_a, c.body_b, c.feature, c.normal_impulse, c.tangent_impulse)

@@ -1,0 +1,291 @@
+"""The soft-step solver core against exact answers, with hand-made contacts.
+
+Every test here drives ``sdfphys.solver`` directly (no collision detection): bodies
+as a BodyState, contacts built by hand, so each answer is the solver's own closed
+form and the tolerances are round-off.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from sdfphys.collide.contacts import Contacts
+from sdfphys.settings import Settings
+from sdfphys.solver import (
+    BodyState,
+    ImpulseCache,
+    apply_restitution,
+    contact_softness,
+    prepare_contacts,
+    soft_coefficients,
+    solve_substeps,
+    store_impulses,
+)
+
+G = np.array([0.0, -9.81])
+
+
+def bodies(com, velocity=None, inv_mass=None, inv_inertia=None, angle=None,
+           angular_velocity=None) -> BodyState:
+    com = np.array(com, dtype=np.float64).reshape(-1, 2)
+    n = len(com)
+    return BodyState(
+        com=com,
+        angle=np.zeros(n) if angle is None else np.array(angle, dtype=np.float64),
+        velocity=np.zeros((n, 2)) if velocity is None else np.array(velocity, np.float64),
+        angular_velocity=(np.zeros(n) if angular_velocity is None
+                          else np.array(angular_velocity, np.float64)),
+        inv_mass=np.ones(n) if inv_mass is None else np.array(inv_mass, np.float64),
+        inv_inertia=np.ones(n) if inv_inertia is None else np.array(inv_inertia, np.float64),
+        linear_damping=np.zeros(n), angular_damping=np.zeros(n))
+
+
+def contact(a, b, point, normal, depth, feature=0) -> Contacts:
+    return Contacts(np.array([a], np.int64), np.array([b], np.int64),
+                    np.array([point], np.float64), np.array([normal], np.float64),
+                    np.array([depth], np.float64), np.array([feature], np.int64))
+
+
+def step(state: BodyState, contacts: Contacts, settings: Settings, gravity=G,
+         friction=None, restitution=None, cache=None) -> ImpulseCache:
+    """One step of the solver stages as World.step runs them (collision given)."""
+    n = len(state.inv_mass)
+    friction = np.zeros(n) if friction is None else np.asarray(friction, np.float64)
+    restitution = np.zeros(n) if restitution is None else np.asarray(restitution, np.float64)
+    c = prepare_contacts(contacts, state, friction, restitution,
+                         cache if cache is not None else ImpulseCache.empty(),
+                         settings.warm_starting)
+    solve_substeps(state, c, np.asarray(gravity, np.float64), settings,
+                   bool(np.any(c.friction > 0)))
+    apply_restitution(state, c, settings)
+    return store_impulses(c)
+
+
+# ---------------------------------------------------------------------------------------
+# Soft constraint coefficients (SOLVER.md unit values, given to 4 significant digits).
+# ---------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("hertz, expected", [
+    (30.0, (9.069, 0.9423, 0.0577)),
+    (60.0, (17.477, 0.9713, 0.0287)),
+])
+def test_soft_coefficients_match_solver_md(hertz, expected):
+    s = soft_coefficients(hertz, 10.0, 1.0 / 240.0)
+    assert s.bias_rate == pytest.approx(expected[0], abs=5e-4)
+    assert s.mass_scale == pytest.approx(expected[1], abs=5e-5)
+    assert s.impulse_scale == pytest.approx(expected[2], abs=5e-5)
+    assert s.mass_scale + s.impulse_scale == pytest.approx(1.0, abs=1e-15)
+
+
+def test_soft_coefficients_closed_form_and_rigid_limit():
+    f, z, h = 12.5, 0.7, 1.0 / 120.0
+    w = 2 * math.pi * f
+    s = soft_coefficients(f, z, h)
+    a2 = h * w * (2 * z + h * w)
+    assert s.bias_rate == pytest.approx(w / (2 * z + h * w), rel=1e-15)
+    assert s.mass_scale == pytest.approx(a2 / (1 + a2), rel=1e-15)
+    rigid = soft_coefficients(0.0, z, h)
+    assert (rigid.bias_rate, rigid.mass_scale, rigid.impulse_scale) == (0.0, 1.0, 0.0)
+
+
+def test_contact_hertz_capped_at_quarter_substep_rate_and_doubled_against_static():
+    movable, fixed = contact_softness(Settings())
+    assert movable == soft_coefficients(30.0, 10.0, 1 / 240)
+    assert fixed == soft_coefficients(60.0, 10.0, 1 / 240)
+    # One substep at 60 Hz: the rate is 60 /s, so 30 Hz is capped to 15 Hz (static 30 Hz).
+    movable, fixed = contact_softness(Settings(substeps=1))
+    assert movable == soft_coefficients(15.0, 10.0, 1 / 60)
+    assert fixed == soft_coefficients(30.0, 10.0, 1 / 60)
+
+
+# ---------------------------------------------------------------------------------------
+# Integration: semi-implicit Euler, substepped.
+# ---------------------------------------------------------------------------------------
+
+
+def test_free_fall_matches_substepped_semi_implicit_euler_closed_form():
+    """v_k = v0 + k h g, x_k = x0 + k h v0 + h^2 g k (k + 1) / 2 after k substeps.
+
+    Body 0 dynamic, body 1 static, body 2 kinematic (moves with its velocity, no
+    gravity). Tolerance: round-off (1e-12 relative to the distances covered).
+    """
+    settings = Settings()
+    h = settings.dt / settings.substeps
+    v0 = np.array([[1.5, 4.0], [0.0, 0.0], [-2.0, 0.5]])
+    x0 = np.array([[0.0, 10.0], [3.0, -1.0], [5.0, 5.0]])
+    state = bodies(x0, velocity=v0, inv_mass=[0.5, 0.0, 0.0], inv_inertia=[2.0, 0.0, 0.0],
+                   angular_velocity=[3.0, 0.0, -1.0])
+    steps = 90
+    for _ in range(steps):
+        step(state, Contacts.empty(), settings)
+    k = steps * settings.substeps
+    expected = x0 + k * h * v0
+    expected[0] += h * h * G * k * (k + 1) / 2
+    np.testing.assert_allclose(state.com, expected, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(state.velocity[0], v0[0] + k * h * G, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(state.velocity[1:], v0[1:])
+    np.testing.assert_allclose(state.angle, k * h * np.array([3.0, 0.0, -1.0]), atol=1e-12)
+
+
+def test_damping_divides_velocity_each_substep():
+    settings = Settings()
+    h = settings.dt / settings.substeps
+    state = bodies([[0.0, 0.0]], velocity=[[2.0, 0.0]], angular_velocity=[1.0])
+    state.linear_damping[:] = 0.5
+    state.angular_damping[:] = 2.0
+    step(state, Contacts.empty(), settings, gravity=[0.0, 0.0])
+    k = settings.substeps
+    assert state.velocity[0, 0] == pytest.approx(2.0 / (1 + 0.5 * h) ** k, rel=1e-14)
+    assert state.angular_velocity[0] == pytest.approx(1.0 / (1 + 2.0 * h) ** k, rel=1e-14)
+
+
+def test_speed_clamped_in_position_integration():
+    settings = Settings(max_linear_speed=10.0)
+    state = bodies([[0.0, 0.0]], velocity=[[30.0, 40.0]])
+    step(state, Contacts.empty(), settings, gravity=[0.0, 0.0])
+    np.testing.assert_allclose(state.velocity[0], [6.0, 8.0], rtol=1e-14)
+    np.testing.assert_allclose(state.com[0], [0.1, 0.4 / 3], rtol=1e-14)
+
+
+# ---------------------------------------------------------------------------------------
+# Contact rows.
+# ---------------------------------------------------------------------------------------
+
+
+def test_speculative_contact_closes_the_gap_exactly_without_impact():
+    """A body 1 cm above a static one, approaching at 2 m/s, no gravity: the speculative
+    row (bias = s / h) lets it travel exactly the gap and stop: s = 0 and v = 0 after
+    the step (round-off)."""
+    state = bodies([[0.0, -1.0], [0.0, 0.51]], velocity=[[0, 0], [0, -2.0]],
+                   inv_mass=[0.0, 1.0], inv_inertia=[0.0, 4.0])
+    c = contact(0, 1, [0.0, 0.005], [0.0, 1.0], -0.01)
+    step(state, c, Settings(), gravity=[0.0, 0.0])
+    assert state.com[1, 1] == pytest.approx(0.50, abs=1e-12)
+    np.testing.assert_allclose(state.velocity[1], [0.0, 0.0], atol=1e-12)
+
+
+def test_coulomb_friction_decelerates_a_sliding_body_by_mu_g():
+    """A body resting on static ground (s = 0), sliding at 3 m/s, rotation locked: each
+    substep the normal impulse is m g h and friction its mu-multiple, so the speed
+    drops by mu g per second exactly while it slides."""
+    settings = Settings()
+    state = bodies([[0.0, -1.0], [0.0, 0.5]], velocity=[[0, 0], [3.0, 0.0]],
+                   inv_mass=[0.0, 0.5], inv_inertia=[0.0, 0.0])
+    mu = 0.4
+    cache = ImpulseCache.empty()
+    steps = 30
+    for _ in range(steps):
+        point = [state.com[1, 0], 0.0]
+        c = contact(0, 1, point, [0.0, 1.0], -(state.com[1, 1] - 0.5))
+        cache = step(state, c, settings, friction=[mu, mu], cache=cache)
+    expected = 3.0 - mu * 9.81 * steps * settings.dt
+    assert state.velocity[1, 0] == pytest.approx(expected, abs=1e-12)
+    assert abs(state.velocity[1, 1]) < 1e-12
+
+
+def test_friction_holds_below_the_cone():
+    """A tangential push smaller than mu times the normal load is cancelled entirely."""
+    settings = Settings()
+    state = bodies([[0.0, -1.0], [0.0, 0.5]], inv_mass=[0.0, 1.0], inv_inertia=[0.0, 0.0])
+    gravity = [0.3 * 9.81, -9.81]   # tan(slope) = 0.3 < mu = 0.5
+    cache = ImpulseCache.empty()
+    for _ in range(60):
+        c = contact(0, 1, [state.com[1, 0], 0.0], [0.0, 1.0], -(state.com[1, 1] - 0.5))
+        cache = step(state, c, settings, gravity=gravity, friction=[0.5, 0.5], cache=cache)
+    assert abs(state.com[1, 0]) < 1e-12
+    assert abs(state.velocity[1, 0]) < 1e-12
+
+
+@pytest.mark.parametrize("approach, e, expected", [
+    (-5.0, 0.5, 2.5),     # above the threshold: vn' = -e vn
+    (-5.0, 1.0, 5.0),
+    (-0.5, 0.8, 0.0),     # below the 1 m/s threshold: no bounce
+])
+def test_restitution_against_static(approach, e, expected):
+    state = bodies([[0.0, -1.0], [0.0, 0.505]], velocity=[[0, 0], [0.0, approach]],
+                   inv_mass=[0.0, 1.0], inv_inertia=[0.0, 4.0])
+    c = contact(0, 1, [0.0, 0.0025], [0.0, 1.0], -0.005)
+    step(state, c, Settings(), gravity=[0.0, 0.0], restitution=[0.0, e])
+    assert state.velocity[1, 1] == pytest.approx(expected, abs=1e-12)
+
+
+@pytest.mark.parametrize("e", [0.0, 0.6, 1.0])
+def test_two_body_collision_closed_form(e):
+    """Head-on, m1 = 1, m2 = 3, v1 = 2, v2 = -1, no gravity, touching:
+    v1' = (m1 v1 + m2 v2 + m2 e (v2 - v1)) / (m1 + m2), v2' likewise (round-off)."""
+    m1, m2, v1, v2 = 1.0, 3.0, 2.0, -1.0
+    state = bodies([[0.0, 0.0], [1.0, 0.0]], velocity=[[v1, 0], [v2, 0]],
+                   inv_mass=[1 / m1, 1 / m2], inv_inertia=[1.0, 1.0])
+    c = contact(0, 1, [0.5, 0.0], [1.0, 0.0], 0.0)
+    step(state, c, Settings(), gravity=[0.0, 0.0], restitution=[e, e])
+    p = m1 * v1 + m2 * v2
+    np.testing.assert_allclose(state.velocity[:, 0],
+                               [(p + m2 * e * (v2 - v1)) / (m1 + m2),
+                                (p + m1 * e * (v1 - v2)) / (m1 + m2)], rtol=0, atol=1e-12)
+
+
+def test_impulses_conserve_linear_and_angular_momentum():
+    """Two free bodies hit off-centre with friction while sliding: every impulse pair
+    acts at one common point, so momentum and angular momentum about the origin are
+    unchanged to round-off even though the bodies move and spin during the step."""
+    state = bodies([[0.0, 0.0], [0.3, 0.9]], velocity=[[1.0, 0.5], [-2.0, -3.0]],
+                   inv_mass=[1.0, 0.5], inv_inertia=[3.0, 1.0],
+                   angular_velocity=[2.0, -1.0])
+    mass, inertia = 1 / state.inv_mass, 1 / state.inv_inertia
+
+    def momenta():
+        p = mass @ state.velocity
+        cross = state.com[:, 0] * state.velocity[:, 1] - state.com[:, 1] * state.velocity[:, 0]
+        return p, float(mass @ cross + inertia @ state.angular_velocity)
+
+    p0, l0 = momenta()
+    n = np.array([0.6, 0.8])
+    c = Contacts(np.array([0, 0]), np.array([1, 1]), np.array([[0.1, 0.5], [0.3, 0.4]]),
+                 np.array([n, n]), np.array([0.01, 0.004]), np.array([0, 1]))
+    v_before = state.velocity.copy()
+    step(state, c, Settings(), gravity=[0.0, 0.0], friction=[0.8, 0.8], restitution=[0.5, 0.5])
+    dv = state.velocity - v_before
+    assert dv[1] @ n > 1.0 and abs(dv[1] @ [-n[1], n[0]]) > 0.1   # a hit, with friction
+    p1, l1 = momenta()
+    np.testing.assert_allclose(p1, p0, rtol=0, atol=1e-13)
+    assert l1 == pytest.approx(l0, abs=1e-13)
+
+
+# ---------------------------------------------------------------------------------------
+# Warm starting.
+# ---------------------------------------------------------------------------------------
+
+
+def test_impulse_cache_matches_by_body_pair_and_feature():
+    big = (3 << 56) | (7 << 8) | 2
+    old = ImpulseCache(np.array([0, 0, 2, 5]), np.array([1, 1, 3, 9]),
+                       np.array([big, 4, 4, -1]), np.array([1.0, 2.0, 3.0, 4.0]),
+                       np.array([-1.0, -2.0, -3.0, -4.0]))
+    normal, tangent = old.match(np.array([2, 0, 0, 5, 0]), np.array([3, 1, 1, 9, 2]),
+                                np.array([4, 4, big, 7, 4]))
+    np.testing.assert_array_equal(normal, [3.0, 2.0, 1.0, 0.0, 0.0])
+    np.testing.assert_array_equal(tangent, [-3.0, -2.0, -1.0, 0.0, 0.0])
+
+
+def test_impulse_cache_renumbers_after_removal():
+    old = ImpulseCache(np.array([0, 1, 2]), np.array([1, 3, 3]), np.array([5, 6, 7]),
+                       np.array([1.0, 2.0, 3.0]), np.zeros(3))
+    new = old.without_body(1)
+    np.testing.assert_array_equal(new.body_a, [1])
+    np.testing.assert_array_equal(new.body_b, [2])
+    np.testing.assert_array_equal(new.feature, [7])
+
+
+def test_warm_start_reapplies_last_impulses_only_when_enabled():
+    """A resting body: with warm starting the stored impulse (m g h per substep) comes
+    back on the next step; without it the next step starts from zero."""
+    for warm, expected in [(True, 9.81 / 240), (False, 0.0)]:
+        settings = Settings(warm_starting=warm)
+        state = bodies([[0.0, -1.0], [0.0, 0.5]], inv_mass=[0.0, 1.0], inv_inertia=[0, 0])
+        c = contact(0, 1, [0.0, 0.0], [0.0, 1.0], 0.0)
+        cache = step(state, c, settings)
+        assert cache.normal_impulse[0] == pytest.approx(9.81 / 240, rel=1e-9)
+        prepared = prepare_contacts(c, state, np.zeros(2), np.zeros(2), cache, warm)
+        assert prepared.normal_impulse[0] == pytest.approx(expected, rel=1e-9)
