@@ -347,3 +347,41 @@ def test_distance_map_union_is_the_minimum_over_bodies(rng):
 def test_import_sdfphys_does_not_import_pygame():
     code = "import sys, sdfphys; assert 'pygame' not in sys.modules, 'pygame imported'"
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+# ------------------------------------------------------------------------------------------
+# The real shapes (sdfphys.shapes): origins, meshes, fields built from scene specs
+# ------------------------------------------------------------------------------------------
+
+def test_real_sdf_shapes_cover_their_area():
+    from sdfphys.shapes import shape_from_spec
+
+    cam = Camera((0.0, 0.0), 50.0, (300, 300))
+    specs = [
+        {"op": "smooth_union", "k": 0.2,
+         "of": [{"type": "circle", "radius": 0.6, "offset": [-0.5, 0.0]},
+                {"type": "box", "size": [1.2, 0.5], "offset": [0.4, 0.3]}]},
+        {"op": "onion", "thickness": 0.15, "of": {"type": "circle", "radius": 0.9}},
+    ]
+    for spec in specs:
+        shape = shape_from_spec({"type": "sdf", "field": spec})
+        world = make_world([(shape, (0.2, -0.1), 0.6, "dynamic")])
+        image = render(world, cam, PLAIN)[:, :, 0].astype(float) / 255.0
+        pixel_area = 1.0 / cam.scale ** 2
+        assert abs(np.count_nonzero(image >= 0.5) * pixel_area - shape.area) < 0.01 * shape.area
+        assert abs(image.sum() * pixel_area - shape.area) < 0.01 * shape.area
+
+
+def test_real_polygon_is_placed_by_its_user_origin():
+    from sdfphys.shapes import shape_from_spec
+
+    cam = Camera((0.0, 0.0), 50.0, (300, 300))
+    # Concave, with the user origin at a corner (not the centroid).
+    points = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 0.4], [0.0, 1.0]]
+    shape = shape_from_spec({"type": "polygon", "points": points})
+    world = make_world([(shape, (-1.0, -0.5), 0.0, "dynamic")])
+    image = render(world, cam, PLAIN)
+    expected = expected_box(cam, np.array([[-1.0, -0.5], [1.0, 0.5]]))
+    np.testing.assert_allclose(painted_box(image, BLACK), expected, atol=1.0)
+    notch = cam.world_to_screen([[0.0, 0.3]]).astype(int)[0]            # above the dent
+    assert tuple(image[notch[0], notch[1]]) == BLACK
