@@ -199,3 +199,148 @@ def test_two_thousand_circles_in_a_box_in_a_few_ms(rng):
 def test_collide_margin(margin):
     c = collide(BALL, (0.0, 0.0, 0.0), BALL, (1.01, 0.0, 0.0), margin=margin)
     assert len(c) == (1 if margin > 0.01 else 0)
+
+
+def test_reduction_drops_points_shadowed_by_a_deeper_one():
+    # a corner 0.02 deep, and the other direction's view of it (shallower, 7 mm away)
+    point = np.array([[0.0, -0.01], [0.006, -0.005], [0.03, -0.004]])
+    depth = np.array([0.02, 0.014, 0.001])
+    keep = reduce_contacts(np.array([0, 3]), point, depth, 4, 0.005)
+    np.testing.assert_array_equal(keep, [True, False, True])
+
+
+# --------------------------------------------------------------------------------------
+# Mesh pairs (triangles of one body in the other's exact polygon field)
+# --------------------------------------------------------------------------------------
+
+GROUND = {"type": "box", "size": [4.0, 1.0]}           # top face at y = 0.5
+TOP = {"type": "box", "size": [1.0, 0.5]}
+L_SHAPE = {"type": "polygon", "points": [[0, 0], [3, 0], [3, 1], [1, 1], [1, 2], [0, 2]]}
+TABLE = {"type": "polygon", "points": [[0, 0], [0.5, 0], [0.5, 1], [2.5, 1], [2.5, 0],
+                                       [3, 0], [3, 1.5], [0, 1.5]]}
+
+
+def rotation(theta):
+    return np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
+
+
+def moved(pose, theta, shift):
+    """A user pose (x, y, a) after the rigid motion: rotate by theta about 0, then shift."""
+    return (*(rotation(theta) @ pose[:2] + shift), pose[2] + theta)
+
+
+def sorted_rows(c):
+    order = np.lexsort((c.point[:, 1], c.point[:, 0]))
+    return c.point[order], c.normal[order], c.depth[order]
+
+
+def test_box_resting_flat_on_a_box_two_corner_contacts(rng):
+    """Overlap 0.01: the two corners of the top box's bottom face, normal (0, +-1)."""
+    top = (0.3, 0.5 + 0.25 - 0.01, 0.0)
+    expected_point = np.array([[-0.2, 0.495], [0.8, 0.495]])
+    for theta, shift in [(0.0, np.zeros(2))] + [(rng.uniform(-4, 4), rng.uniform(-5, 5, 2))
+                                                  for _ in range(5)]:
+        pa, pb = moved((0.0, 0.0, 0.0), theta, shift), moved(top, theta, shift)
+        for first, second, sign in [((GROUND, pa), (TOP, pb), 1.0),
+                                    ((TOP, pb), (GROUND, pa), -1.0)]:
+            c = collide(first[0], first[1], second[0], second[1])
+            point, normal, depth = sorted_rows(c)
+            world = expected_point @ rotation(theta).T + shift
+            world = world[np.lexsort((world[:, 1], world[:, 0]))]
+            np.testing.assert_allclose(point, world, atol=1e-9)
+            np.testing.assert_allclose(depth, [0.01, 0.01], atol=1e-9)
+            np.testing.assert_allclose(normal, np.tile(sign * rotation(theta)[:, 1], (2, 1)),
+                                       atol=1e-9)
+
+
+def test_box_overhanging_a_box_edge():
+    """Overlap interval [1.8, 2.0]: one corner from each box."""
+    c = collide(GROUND, (0.0, 0.0, 0.0), TOP, (2.3, 0.74, 0.0))
+    point, normal, depth = sorted_rows(c)
+    np.testing.assert_allclose(point, [[1.8, 0.495], [2.0, 0.495]], atol=1e-9)
+    np.testing.assert_allclose(normal, [[0.0, 1.0], [0.0, 1.0]], atol=1e-9)
+    np.testing.assert_allclose(depth, [0.01, 0.01], atol=1e-9)
+
+
+def test_rotated_box_corner_pressing_into_a_face(rng):
+    """A tilted box's lowest corner depth d into the ground: one contact at that corner."""
+    half = np.array([0.5, 0.25])
+    for _ in range(20):
+        angle = rng.uniform(0.15, math.pi / 2 - 0.15)
+        d = rng.uniform(0.002, 0.05)
+        corners = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * half @ rotation(angle).T
+        low = corners[np.argmin(corners[:, 1])]
+        x = rng.uniform(-1.0, 1.0)
+        pose = (x, 0.5 - d - low[1], angle)
+        c = collide(GROUND, (0.0, 0.0, 0.0), TOP, pose)
+        assert len(c) == 1
+        np.testing.assert_allclose(c.depth, [d], atol=1e-9)
+        np.testing.assert_allclose(c.normal, [[0.0, 1.0]], atol=1e-9)
+        np.testing.assert_allclose(c.point, [[x + low[0], 0.5 - d / 2]], atol=1e-9)
+
+
+def test_concave_table_on_its_two_legs():
+    """Four leg corners touch, colinear: the reduction keeps the two outer ones."""
+    c = collide({"type": "box", "size": [10.0, 1.0]}, (0.0, -0.49, 0.0), TABLE, (-1.0, 0.0, 0.0))
+    point, normal, depth = sorted_rows(c)
+    np.testing.assert_allclose(point, [[-1.0, 0.005], [2.0, 0.005]], atol=1e-9)
+    np.testing.assert_allclose(normal, [[0.0, 1.0], [0.0, 1.0]], atol=1e-9)
+    np.testing.assert_allclose(depth, [0.01, 0.01], atol=1e-9)
+
+
+def test_box_in_the_notch_of_an_l():
+    """A box pressed 0.02 into the L's arm and 0.01 into its wall, corner in the notch.
+
+    Its bottom-left corner (0.99, 0.98) is nearest the re-entrant vertex (1, 1):
+    depth |(0.01, 0.02)|, normal along it; bottom-right (1.79, 0.98) is 0.02 under
+    the arm, normal (0, 1); top-left (0.99, 1.58) is 0.01 inside the wall, (1, 0).
+    """
+    c = collide(L_SHAPE, (0.0, 0.0, 0.0), {"type": "box", "size": [0.8, 0.6]},
+                (1.39, 1.28, 0.0))
+    point, normal, depth = sorted_rows(c)
+    corner = math.hypot(0.01, 0.02)
+    np.testing.assert_allclose(depth, [corner, 0.01, 0.02], atol=1e-9)
+    np.testing.assert_allclose(normal, [[1 / math.sqrt(5), 2 / math.sqrt(5)], [1.0, 0.0],
+                                        [0.0, 1.0]], atol=1e-9)
+    np.testing.assert_allclose(point, [[0.99 + 0.005, 0.98 + 0.01], [0.995, 1.58],
+                                       [1.79, 0.99]], atol=1e-9)
+
+
+@pytest.mark.parametrize("shift", [(1e-4, 0.0), (0.0, 1e-4), (-1e-4, 1e-4)])
+def test_feature_keys_survive_a_small_motion(shift):
+    cases = [(GROUND, (0.0, 0.0, 0.0), TOP, (0.3, 0.74, 0.0)),
+             (GROUND, (0.0, 0.0, 0.0), TOP, (2.3, 0.74, 0.0)),
+             (GROUND, (0.0, 0.0, 0.0), TOP, (0.1, 0.9, 0.6)),
+             (L_SHAPE, (0.0, 0.0, 0.0), {"type": "box", "size": [0.8, 0.6]}, (1.39, 1.28, 0.0)),
+             ({"type": "box", "size": [10.0, 1.0]}, (0.0, -0.49, 0.0), TABLE, (-1.0, 0.0, 0.0)),
+             (BALL, (0.0, 0.0, 0.0), TOP, (0.3, 0.7, 0.2))]
+    for shape_a, pose_a, shape_b, pose_b in cases:
+        before = collide(shape_a, pose_a, shape_b, pose_b)
+        after = collide(shape_a, pose_a, shape_b, np.add(pose_b, (*shift, 0.0)))
+        assert len(before) > 0
+        np.testing.assert_array_equal(after.feature, before.feature)
+        assert len(np.unique(before.feature)) == len(before)
+
+
+def test_mesh_instancing_field_calls_do_not_grow_with_bodies(rng):
+    """Boxes sharing one shape on an sdf ground: field calls bounded whatever the count.
+
+    One call for the cull, one for the descent starts, one per descent iteration (all
+    triangles of all pairs at once), one for the gradients at the minima.
+    """
+    counting = Counting(field({"type": "box", "size": [400.0, 1.0]}))
+    ground = SdfShape(counting)
+    _ = ground.field, ground.radius
+    box = shape_from_spec(TOP)
+    calls = []
+    for n in (10, 100):
+        x = np.arange(n) * 2.0 - 100.0
+        position = np.concatenate([[[0.0, 0.0]], np.stack([x, np.full(n, 0.74)], axis=1)])
+        angle = np.r_[0.0, rng.uniform(-0.01, 0.01, n)]
+        counting.calls = 0
+        settings = Settings()
+        c = find_contacts([ground, box], np.r_[0, np.ones(n, int)], position, angle,
+                          np.r_[False, np.ones(n, bool)], settings)
+        calls.append(counting.calls)
+        assert set(c.body_b) == set(range(1, n + 1))
+    assert max(calls) <= settings.descent_iterations + 3

@@ -63,6 +63,10 @@ PairFunction = Callable[[Shape, Shape, np.ndarray, np.ndarray, np.ndarray, np.nd
 
 SOURCE_ANALYTIC, SOURCE_A_IN_B, SOURCE_B_IN_A, SOURCE_FIELDS = 0, 1, 2, 3
 
+#: Descent starts of one triangle ending closer than this (m) are one minimum (the
+#: lowest start id is kept, a stable key); far below any physical length.
+_MERGE_RADIUS = 1e-6
+
 
 def feature_key(source: int, element: np.ndarray | int, start: np.ndarray | int) -> np.ndarray:
     """Feature keys (int64) ``source << 56 | element << 8 | start`` (see the module doc)."""
@@ -137,7 +141,8 @@ def _mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other:
     pair (relative angle a_m - a_o, offset R_o^T (x_m - x_o)), giving n T triangles;
     ``descent.triangle_cull`` drops those that cannot reach depth > -margin, and
     ``descent.triangle_deepest`` finds the local minima of f over each remaining
-    triangle from its starts. One more evaluation gives the gradient there.
+    triangle from its starts, ``descent.merge_minima`` keeps one start per distinct
+    minimum. One more evaluation gives the gradient there.
 
     Returns pair index (C,), midway point (C, 2) world, outward normal of other
     (C, 2) world (pointing from other toward the mesh), depth (C,) = -f, triangle
@@ -157,7 +162,8 @@ def _mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other:
     kept = np.nonzero(descent.triangle_cull(other.field, local, margin))[0]
     point, value = descent.triangle_deepest(other.field, local[kept],
                                             iterations=settings.descent_iterations)
-    hit_tri, start = np.nonzero(value < margin)
+    distinct = descent.merge_minima(point, _MERGE_RADIUS)
+    hit_tri, start = np.nonzero(distinct & (value < margin))
     flat = kept[hit_tri]
     p = point[hit_tri, start]
     depth = -value[hit_tri, start]

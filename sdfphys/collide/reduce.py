@@ -25,6 +25,13 @@ two end points hold in between. Step 3 lets the end points of a flat patch
 replace a deepest point that happened to lie in its middle (equal depths), so a
 box resting flat on a box keeps exactly its two corners.
 
+Shadowing: a candidate within distance d_q of a kept point q of depth d_q (and
+not deeper than it) has novelty 0. Such points describe the same feature seen at
+the scale of the penetration: typically the other direction's view of a vertex
+pressing into a face (the face's points inside the vertex's wedge, whose depth
+and normal the field underestimates, see ``narrowphase``), or a point at the end
+of a flat patch where the field's nearest face switches to the side face.
+
 Everything runs in one numba function over all pairs (no Python loop over pairs or
 contacts); the input order fixes every tie, so the result is deterministic.
 """
@@ -40,7 +47,11 @@ __all__ = ["reduce_contacts"]
 @njit(cache=True)
 def _element_novelty(px: float, py: float, d: float, ax: float, ay: float, da: float,
                      bx: float, by: float, db: float) -> float:
-    """max(distance, depth excess) of (p, d) to the segment a-b (a point if a == b)."""
+    """max(distance, depth excess) of (p, d) to the segment a-b (a point if a == b).
+
+    A point element a (a == b) shadows (p, d) within its depth: 0 when
+    |p - a| <= da and d <= da.
+    """
     ex = bx - ax
     ey = by - ay
     length2 = ex * ex + ey * ey
@@ -52,6 +63,8 @@ def _element_novelty(px: float, py: float, d: float, ax: float, ay: float, da: f
     qy = ay + t * ey - py
     distance = np.sqrt(qx * qx + qy * qy)
     excess = d - (da + t * (db - da))
+    if length2 == 0.0 and distance <= da and excess <= 0.0:
+        return 0.0
     return max(distance, excess)
 
 
