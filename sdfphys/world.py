@@ -1,0 +1,417 @@
+"""World: body state as arrays, bodies added and removed, and ``step()``.
+
+Body state is a struct of arrays, split hot and cold as in Box2D v3: the solver reads
+and writes the centre-of-mass position, angle, velocities and inverse masses; shapes,
+materials, kinds and names are bookkeeping. Arrays grow by doubling, so adding B bodies
+costs O(B). Body indices are the order of ``add_body`` calls (scene order);
+``remove_body(i)`` shifts the later bodies down by one.
+
+Frames: a body's frame has its origin at the centre of mass; the shape's ``origin`` is
+where the user's frame origin (a scene's ``position``) sits in it, so the centre of
+mass of a body at user pose (p, a) is com = p - R(a) origin, and ``position`` reports
+p = com + R(a) origin. ``velocity`` is the centre of mass's (as pymunk's
+``Body.velocity``), ``angular_velocity`` is counter-clockwise, rad/s.
+
+Kinds: ``dynamic`` bodies have mass and feel gravity and contacts; ``static`` bodies
+never move; ``kinematic`` bodies move with their velocity and are pushed by nothing.
+Static and kinematic bodies have zero inverse mass and inertia (``mass`` reports inf).
+Materials mix per contact: friction sqrt(f_a f_b), restitution max(e_a, e_b).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from .collide import Contacts, find_contacts
+from .settings import Settings
+from .shapes import Shape, shape_from_spec
+from .solver import (
+    BodyState,
+    ContactConstraints,
+    ImpulseCache,
+    apply_restitution,
+    prepare_contacts,
+    solve_substeps,
+    store_impulses,
+)
+from .toi import fast_bodies, time_of_impact
+
+__all__ = ["KINDS", "STAGES", "World"]
+
+#: Body kinds, in the order of their integer codes.
+KINDS = ("dynamic", "static", "kinematic")
+_DYNAMIC, _STATIC, _KINEMATIC = range(3)
+
+#: The stages of ``World.step``, as counted in ``World.stage_counts``.
+STAGES = ("collide", "prepare", "integrate_velocities", "warm_start", "solve",
+          "integrate_positions", "relax", "friction", "restitution", "time_of_impact",
+          "store_impulses")
+
+# Per-body arrays: name -> (trailing shape, dtype). Capacity grows by doubling.
+_ARRAYS: dict[str, tuple[tuple[int, ...], Any]] = {
+    "com": ((2,), np.float64),
+    "angle": ((), np.float64),
+    "velocity": ((2,), np.float64),
+    "angular_velocity": ((), np.float64),
+    "inv_mass": ((), np.float64),
+    "inv_inertia": ((), np.float64),
+    "linear_damping": ((), np.float64),
+    "angular_damping": ((), np.float64),
+    "mass": ((), np.float64),
+    "inertia": ((), np.float64),
+    "friction": ((), np.float64),
+    "restitution": ((), np.float64),
+    "origin": ((2,), np.float64),
+    "radius": ((), np.float64),
+    "core_radius": ((), np.float64),
+    "shape_id": ((), np.int64),
+    "kind": ((), np.int8),
+}
+
+
+def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rows of ``v`` (N, 2) rotated counter-clockwise by ``angle`` (N,) rad."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.column_stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]])
+
+
+class World:
+    """A 2D rigid-body world: bodies as arrays, ``step()`` advances ``settings.dt``.
+
+    gravity: (2,) m/s^2 (settable attribute). settings: every knob (Settings).
+    ``stage_counts``: how many times each stage of ``step()`` ran (STAGES); a stage
+    with nothing to do (no contacts, no friction, no restitution, no fast body) is
+    skipped and not counted.
+    """
+
+    def __init__(self, gravity: Any = (0.0, -9.81), settings: Settings | None = None):
+        self.gravity = np.array(gravity, dtype=np.float64).reshape(2)
+        self.settings = settings if settings is not None else Settings()
+        self.time = 0.0
+        self.step_count = 0
+        self.stage_counts = dict.fromkeys(STAGES, 0)
+        self._n = 0
+        self._data = {name: np.zeros((16,) + shape, dtype)
+                      for name, (shape, dtype) in _ARRAYS.items()}
+        self._shapes: list[Shape] = []
+        self._shape_index: dict[int, int] = {}
+        self._names: list[str] = []
+        self._created = 0
+        self._contacts = Contacts.empty()
+        self._impulses = ImpulseCache.empty()
+
+    # ----------------------------------------------------------------------------------
+    # Bodies
+    # ----------------------------------------------------------------------------------
+
+    def add_body(self, shape: Shape | Mapping, position: Any = (0.0, 0.0), angle: float = 0.0,
+                 velocity: Any = (0.0, 0.0), angular_velocity: float = 0.0,
+                 density: float = 1.0, mass: float | None = None, friction: float = 0.5,
+                 restitution: float = 0.0, kind: str = "dynamic", name: str | None = None,
+                 linear_damping: float = 0.0, angular_damping: float = 0.0) -> int:
+        """Add a body and return its index.
+
+        shape: a Shape or a scene shape dict (``{"type": "circle", "radius": 0.5}``).
+        position: (2,) m, where the user frame origin goes; angle: rad.
+        velocity: (2,) m/s of the centre of mass; angular_velocity: rad/s.
+        density: kg/m^2, or ``mass`` (kg) which overrides it; inertia follows the shape.
+        friction >= 0, restitution in [0, 1]. kind: dynamic | static | kinematic.
+        name: unique; default ``body<k>`` with k counting every body ever added.
+        linear_damping, angular_damping: 1/s (v / (1 + h c) per substep).
+        """
+        shape = shape_from_spec(shape)
+        if kind not in KINDS:
+            raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
+        code = KINDS.index(kind)
+        velocity = np.array(velocity, dtype=np.float64).reshape(2)
+        if code == _STATIC and (np.any(velocity != 0.0) or angular_velocity != 0.0):
+            raise ValueError("a static body cannot move; use kind='kinematic'")
+        if not density > 0.0 or (mass is not None and not mass > 0.0):
+            raise ValueError(f"density and mass must be > 0, got {density}, {mass}")
+        if friction < 0.0 or not 0.0 <= restitution <= 1.0:
+            raise ValueError(f"need friction >= 0 and 0 <= restitution <= 1, got "
+                             f"{friction}, {restitution}")
+        if name is None:
+            name = f"body{self._created}"
+        if name in self._names:
+            raise ValueError(f"duplicate body name {name!r}")
+        if code == _DYNAMIC:
+            if not math.isfinite(shape.radius):
+                raise ValueError("an unbounded shape can only be static")
+            m = mass if mass is not None else density * shape.area
+            inertia = m / shape.area * shape.second_moment
+        else:
+            m = inertia = math.inf
+
+        i = self._n
+        self._reserve(i + 1)
+        self._n = i + 1
+        d = self._data
+        origin = np.asarray(shape.origin, dtype=np.float64)
+        d["com"][i] = np.asarray(position, dtype=np.float64) - _rotate(origin[None],
+                                                                     np.array([angle]))[0]
+        d["angle"][i] = angle
+        d["velocity"][i] = velocity
+        d["angular_velocity"][i] = angular_velocity
+        d["mass"][i] = m
+        d["inertia"][i] = inertia
+        d["inv_mass"][i] = 1.0 / m
+        d["inv_inertia"][i] = 1.0 / inertia if inertia > 0.0 else 0.0
+        d["linear_damping"][i] = linear_damping
+        d["angular_damping"][i] = angular_damping
+        d["friction"][i] = friction
+        d["restitution"][i] = restitution
+        d["origin"][i] = origin
+        d["radius"][i] = shape.radius
+        d["core_radius"][i] = -float(shape.field.distance(np.zeros((1, 2)))[0])
+        d["shape_id"][i] = self._shape_number(shape)
+        d["kind"][i] = code
+        self._names.append(name)
+        self._created += 1
+        return i
+
+    def remove_body(self, index: int) -> None:
+        """Remove body ``index``; later bodies move down one index (their contacts too)."""
+        i = self._check(index)
+        n = self._n
+        for array in self._data.values():
+            array[i:n - 1] = array[i + 1:n]
+        self._n = n - 1
+        del self._names[i]
+        self._impulses = self._impulses.without_body(i)
+        c = self._contacts
+        keep = (c.body_a != i) & (c.body_b != i)
+        self._contacts = c.take(keep)
+        self._contacts.body_a -= self._contacts.body_a > i
+        self._contacts.body_b -= self._contacts.body_b > i
+
+    def set_state(self, index: int, *, position: Any = None, angle: float | None = None,
+                  velocity: Any = None, angular_velocity: float | None = None) -> None:
+        """Set a body's pose (user frame origin, m; rad) and/or velocities (m/s, rad/s).
+
+        Changing only the angle turns the body about its user origin. Static bodies
+        may be moved but not given a velocity.
+        """
+        i = self._check(index)
+        d = self._data
+        if self._data["kind"][i] == _STATIC and (
+                (velocity is not None and np.any(np.asarray(velocity) != 0.0))
+                or (angular_velocity is not None and angular_velocity != 0.0)):
+            raise ValueError("a static body cannot move; use kind='kinematic'")
+        if position is not None or angle is not None:
+            user = self.position[i] if position is None else np.asarray(position, np.float64)
+            if angle is not None:
+                d["angle"][i] = angle
+            d["com"][i] = user - _rotate(d["origin"][i:i + 1], d["angle"][i:i + 1])[0]
+        if velocity is not None:
+            d["velocity"][i] = np.asarray(velocity, dtype=np.float64).reshape(2)
+        if angular_velocity is not None:
+            d["angular_velocity"][i] = angular_velocity
+
+    def _shape_number(self, shape: Shape) -> int:
+        number = self._shape_index.get(id(shape))
+        if number is None:
+            number = len(self._shapes)
+            self._shapes.append(shape)
+            self._shape_index[id(shape)] = number
+        return number
+
+    def _reserve(self, count: int) -> None:
+        capacity = len(self._data["angle"])
+        if count <= capacity:
+            return
+        while capacity < count:
+            capacity *= 2
+        for name, array in self._data.items():
+            grown = np.zeros((capacity,) + array.shape[1:], array.dtype)
+            grown[:self._n] = array[:self._n]
+            self._data[name] = grown
+
+    def _check(self, index: int) -> int:
+        if not -self._n <= index < self._n:
+            raise IndexError(f"body index {index} out of range ({self._n} bodies)")
+        return index % self._n
+
+    def _view(self, name: str) -> np.ndarray:
+        return self._data[name][:self._n]
+
+    # ----------------------------------------------------------------------------------
+    # Step
+    # ----------------------------------------------------------------------------------
+
+    def step(self) -> None:
+        """Advance the world by ``settings.dt`` (SOLVER.md, "One step")."""
+        bodies = self._body_state()
+        start_com, start_angle = bodies.com.copy(), bodies.angle.copy()
+        contacts = self._collide(bodies)
+        constraints = self._prepare(contacts, bodies)
+        self._substeps(constraints, bodies)
+        self._restitution(constraints, bodies)
+        self._time_of_impact(bodies, start_com, start_angle)
+        self._store_impulses(constraints)
+        self.time += self.settings.dt
+        self.step_count += 1
+
+    def _body_state(self) -> BodyState:
+        v = self._view
+        return BodyState(v("com"), v("angle"), v("velocity"), v("angular_velocity"),
+                         v("inv_mass"), v("inv_inertia"), v("linear_damping"),
+                         v("angular_damping"))
+
+    def _collide(self, bodies: BodyState) -> Contacts:
+        """Stage 1: every contact closer than the speculative distance, once per step."""
+        self._contacts = find_contacts(self._shapes, self._view("shape_id"), bodies.com,
+                                       bodies.angle, self._view("kind") == _DYNAMIC,
+                                       self.settings)
+        self.stage_counts["collide"] += 1
+        return self._contacts
+
+    def _prepare(self, contacts: Contacts, bodies: BodyState) -> ContactConstraints:
+        """Stage 2: anchors, masses, base separations, warm-start impulses."""
+        constraints = prepare_contacts(contacts, bodies, self._view("friction"),
+                                       self._view("restitution"), self._impulses,
+                                       self.settings.warm_starting)
+        if len(constraints):
+            self.stage_counts["prepare"] += 1
+        return constraints
+
+    def _substeps(self, constraints: ContactConstraints, bodies: BodyState) -> None:
+        """Stage 3: per substep integrate v, warm start, solve, integrate x, relax."""
+        s = self.settings
+        use_friction = bool(np.any(constraints.friction > 0.0))
+        solve_substeps(bodies, constraints, self.gravity, s, use_friction)
+        counts = self.stage_counts
+        counts["integrate_velocities"] += s.substeps
+        counts["integrate_positions"] += s.substeps
+        if len(constraints):
+            counts["warm_start"] += s.substeps
+            counts["solve"] += s.substeps
+            counts["relax"] += s.substeps * s.relax_passes
+        if use_friction:
+            counts["friction"] += s.substeps * (1 + s.relax_passes)
+
+    def _restitution(self, constraints: ContactConstraints, bodies: BodyState) -> None:
+        """Stage 4: restitution passes, if some contact has restitution and approached fast."""
+        needed = (constraints.restitution > 0.0) & (
+            constraints.relative_velocity < -self.settings.restitution_threshold)
+        if np.any(needed):
+            apply_restitution(bodies, constraints, self.settings)
+            self.stage_counts["restitution"] += self.settings.restitution_passes
+
+    def _time_of_impact(self, bodies: BodyState, start_com: np.ndarray,
+                        start_angle: np.ndarray) -> None:
+        """Stage 5: fast bodies stopped at their time of impact (``sdfphys.toi``)."""
+        s = self.settings
+        if not s.time_of_impact:
+            return
+        core = np.maximum(self._view("core_radius"), s.speculative_distance)
+        fast = fast_bodies(start_com, bodies.com, core, self._view("kind") == _DYNAMIC)
+        if len(fast) == 0:
+            return
+        fraction = time_of_impact([shape.field for shape in self._shapes],
+                                  self._view("shape_id"), start_com, bodies.com, bodies.angle,
+                                  self._view("radius"), core, fast, s.linear_slop)
+        t = fraction[:, None]
+        bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])
+        bodies.angle[fast] = start_angle[fast] + fraction * (bodies.angle[fast]
+                                                             - start_angle[fast])
+        self.stage_counts["time_of_impact"] += 1
+
+    def _store_impulses(self, constraints: ContactConstraints) -> None:
+        """Stage 6: keep this step's impulses for the next step's warm start."""
+        self._impulses = store_impulses(constraints)
+        self.stage_counts["store_impulses"] += 1
+
+    # ----------------------------------------------------------------------------------
+    # State (copies; scene order)
+    # ----------------------------------------------------------------------------------
+
+    def __len__(self) -> int:
+        return self._n
+
+    @property
+    def position(self) -> np.ndarray:
+        """(B, 2) m, world position of each body's user frame origin."""
+        return self._view("com") + _rotate(self._view("origin"), self._view("angle"))
+
+    @property
+    def center_of_mass(self) -> np.ndarray:
+        """(B, 2) m, world position of each body's centre of mass."""
+        return self._view("com").copy()
+
+    @property
+    def angle(self) -> np.ndarray:
+        """(B,) rad, counter-clockwise."""
+        return self._view("angle").copy()
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """(B, 2) m/s, velocity of each centre of mass."""
+        return self._view("velocity").copy()
+
+    @property
+    def angular_velocity(self) -> np.ndarray:
+        """(B,) rad/s, counter-clockwise."""
+        return self._view("angular_velocity").copy()
+
+    @property
+    def contacts(self) -> Contacts:
+        """The contacts found at the start of the last step (empty before the first)."""
+        return self._contacts
+
+    @property
+    def shapes(self) -> list[Shape]:
+        """Distinct Shape objects; ``shape_id`` indexes into this list."""
+        return list(self._shapes)
+
+    @property
+    def shape_id(self) -> np.ndarray:
+        """(B,) int64, each body's index into ``shapes``."""
+        return self._view("shape_id").copy()
+
+    @property
+    def names(self) -> list[str]:
+        return list(self._names)
+
+    @property
+    def mass(self) -> np.ndarray:
+        """(B,) kg (inf for static and kinematic bodies)."""
+        return self._view("mass").copy()
+
+    @property
+    def inertia(self) -> np.ndarray:
+        """(B,) kg m^2 about the centre of mass (inf for static and kinematic bodies)."""
+        return self._view("inertia").copy()
+
+    @property
+    def kind(self) -> np.ndarray:
+        """(B,) str: dynamic | static | kinematic."""
+        return np.array(KINDS)[self._view("kind")]
+
+    @property
+    def friction(self) -> np.ndarray:
+        """(B,) friction coefficients."""
+        return self._view("friction").copy()
+
+    @property
+    def restitution(self) -> np.ndarray:
+        """(B,) restitution coefficients."""
+        return self._view("restitution").copy()
+
+    def kinetic_energy(self) -> float:
+        """J: sum over dynamic bodies of m |v|^2 / 2 + I w^2 / 2."""
+        dynamic = self._view("kind") == _DYNAMIC
+        v, w = self._view("velocity")[dynamic], self._view("angular_velocity")[dynamic]
+        return float(0.5 * np.sum(self._view("mass")[dynamic] * np.sum(v * v, axis=1))
+                     + 0.5 * np.sum(self._view("inertia")[dynamic] * w * w))
+
+    def potential_energy(self) -> float:
+        """J: sum over dynamic bodies of -m g.com (zero at the origin, so at y = 0 for
+        vertical gravity)."""
+        dynamic = self._view("kind") == _DYNAMIC
+        return float(-np.sum(self._view("mass")[dynamic]
+                             * (self._view("com")[dynamic] @ self.gravity)))
