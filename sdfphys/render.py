@@ -11,8 +11,10 @@ Frames and units:
   the body's screen bounding box in one numpy batch, with a one-pixel
   antialiased edge taken from the distance value (coverage ``0.5 - f * scale``
   clipped to ``[0, 1]``). Unbounded fields (a half-plane ground) are evaluated
-  over the visible screen. Sprites of bodies that did not move since the last
-  frame (static bodies, bodies at rest) are reused.
+  over the visible screen, bounded ones with a narrow band (see
+  ``Renderer._field_pixels``). Sprites of bodies that moved less than
+  ``SPRITE_TOLERANCE`` px since the last frame (static bodies, bodies at rest) are
+  reused.
 - Overlays (``Overlays``): contact points and normals, the SDF distance map
   with iso-lines (one body's field or the union of all), body bounds.
 """
@@ -29,7 +31,7 @@ import numpy as np
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import pygame
 
-__all__ = ["DYNAMIC", "KINEMATIC", "STATIC", "BodyFrames", "Camera", "Overlays", "Palette",
+__all__ = ["DYNAMIC", "KINEMATIC", "SPRITE_TOLERANCE", "STATIC", "BodyFrames", "Camera", "Overlays", "Palette",
            "Renderer", "body_frames"]
 
 Color = tuple[int, int, int]
@@ -179,6 +181,30 @@ def body_frames(world: Any) -> BodyFrames:
     return BodyFrames(com, angle, motion, shape_id, shapes)
 
 
+#: Narrow-band block size (px) of SDF rasterization, and the largest distance from a
+#: block's centre to one of its pixel centres (px).
+_BLOCK = 4
+_BLOCK_REACH = (_BLOCK - 1) / 2 * math.sqrt(2.0)
+
+
+#: How far (px) an SDF body may move, at its centre of mass and at its bounding radius
+#: by rotation, before its sprite is rasterized again.
+SPRITE_TOLERANCE = 0.125
+
+
+def _close(centre0: np.ndarray, centre1: np.ndarray, angle0: float, angle1: float,
+           radius_px: float) -> bool:
+    """Two poses (screen centre px, angle rad) of a body of bounding radius ``radius_px``
+    are within ``SPRITE_TOLERANCE`` (an unbounded body: only the same angle)."""
+    if abs(centre1[0] - centre0[0]) > SPRITE_TOLERANCE:
+        return False
+    if abs(centre1[1] - centre0[1]) > SPRITE_TOLERANCE:
+        return False
+    if angle0 == angle1:
+        return True
+    return math.isfinite(radius_px) and abs(angle1 - angle0) * radius_px <= SPRITE_TOLERANCE
+
+
 def _draw_coords(camera: Camera, points: np.ndarray) -> np.ndarray:
     """``pygame.draw`` coordinates (N, 2) (float) of world ``points``: pygame puts
     integer coordinates at pixel centres, the camera at pixel corners."""
@@ -210,14 +236,14 @@ class Renderer:
 
     ``draw(surface, world, overlays)`` clears ``surface`` (which should have the
     camera's size) and draws every body and the requested overlays. The renderer
-    keeps the SDF sprites of the last frame to reuse those of bodies that did not
-    move; it holds no other state.
+    keeps the SDF sprites of the last frame, by body index, to reuse those of bodies
+    that did not move (see ``SPRITE_TOLERANCE``); it holds no other state.
     """
 
     def __init__(self, camera: Camera, palette: Palette = Palette()):
         self.camera = camera
         self.palette = palette
-        self._sprites: dict[tuple, tuple] = {}
+        self._sprites: dict[int, tuple] = {}
 
     def draw(self, surface: pygame.Surface, world: Any, overlays: Overlays = Overlays()) -> None:
         """Clear ``surface`` and draw ``world`` (bodies, then the chosen ``overlays``)."""
@@ -288,19 +314,42 @@ class Renderer:
 
     def _draw_sdf_bodies(self, surface: pygame.Surface, frames: BodyFrames,
                          index: np.ndarray) -> None:
-        sprites: dict[tuple, tuple] = {}
-        for b in index.tolist():
+        """Blit the sprite of every SDF body of ``index``.
+
+        A body's sprite from the last frame is reused while the body has the same shape,
+        colour and camera and has moved less than ``SPRITE_TOLERANCE`` px (centre of
+        mass, and rotation at its bounding radius), so bodies at rest cost one blit.
+        The others are rasterized with one batch of field evaluations per shape for all
+        the bodies that share it (instancing).
+        """
+        cam = self.camera
+        centre = cam.world_to_screen(frames.com[index]) if len(index) else np.zeros((0, 2))
+        sprites: dict[int, tuple] = {}
+        missing: dict[int, list[int]] = {}
+        for k, b in enumerate(index.tolist()):
             shape = frames.shapes[frames.shape_id[b]]
-            motion = int(frames.motion[b])
-            key = (id(shape), frames.com[b].tobytes(), float(frames.angle[b]), motion,
-                   self.camera, self.palette)
-            entry = self._sprites.get(key)
-            if entry is None:
-                entry = (shape, *self._sdf_sprite(shape, frames.com[b], float(frames.angle[b]),
-                                                  motion))
-            sprites[key] = entry
-            if entry[1] is not None:
-                surface.blit(entry[1], entry[2])
+            motion, angle = int(frames.motion[b]), float(frames.angle[b])
+            old = self._sprites.get(b)
+            if (old is not None and old[0] is shape and old[1] == (motion, cam, self.palette)
+                    and _close(old[2], centre[k], old[3], angle, float(shape.radius) * cam.scale)):
+                sprites[b] = old
+            else:
+                missing.setdefault(int(frames.shape_id[b]), []).append(b)
+        for shape_id, bodies in missing.items():
+            shape = frames.shapes[shape_id]
+            rects = [self._screen_rect(shape, frames.com[b], float(frames.angle[b]))
+                     for b in bodies]
+            fields = self._field_pixels(shape.field, frames.com[bodies], frames.angle[bodies],
+                                        rects)
+            for b, rect, d_px in zip(bodies, rects, fields):
+                motion = int(frames.motion[b])
+                sprites[b] = (shape, (motion, cam, self.palette),
+                              cam.world_to_screen(frames.com[b])[0], float(frames.angle[b]),
+                              *self._sprite(d_px, rect, motion))
+        for b in index.tolist():
+            sprite, place = sprites[b][4:]
+            if sprite is not None:
+                surface.blit(sprite, place)
         self._sprites = sprites
 
     def _screen_rect(self, shape: Any, com: np.ndarray, angle: float) -> pygame.Rect:
@@ -318,26 +367,23 @@ class Renderer:
         x1, y1 = np.ceil(px.max(axis=0)) + 1
         return pygame.Rect(int(x0), int(y0), int(x1 - x0), int(y1 - y0)).clip(frame)
 
-    def _sdf_sprite(self, shape: Any, com: np.ndarray, angle: float,
-                    motion: int) -> tuple[pygame.Surface | None, tuple[int, int]]:
-        """An RGBA sprite of the region f <= 0 and its screen position.
+    def _sprite(self, d_px: np.ndarray | None, rect: pygame.Rect,
+                motion: int) -> tuple[pygame.Surface | None, tuple[int, int]]:
+        """An RGBA sprite of the region f <= 0 from the field ``d_px`` (w, h) (px) at the
+        pixel centres of ``rect``, and its screen position.
 
-        Coverage of a pixel is ``clip(0.5 - f * scale, 0, 1)`` (f at the pixel centre,
-        the one-pixel antialiased edge); pixels within 1.5 px inside the surface blend
-        to the edge colour. The sprite is cropped to its non-transparent pixels.
+        Coverage of a pixel is ``clip(0.5 - f * scale, 0, 1)`` (the one-pixel
+        antialiased edge); pixels within 1.5 px inside the surface blend to the edge
+        colour. The sprite is cropped to its non-transparent pixels.
         """
-        rect = self._screen_rect(shape, com, angle)
-        if rect.width == 0 or rect.height == 0:
+        if d_px is None:
             return None, (0, 0)
-        centres = self.camera.pixel_centers(rect.x, rect.y, rect.width, rect.height)
-        d = shape.field.distance(_to_body(centres, com, angle))
-        d_px = d.reshape(rect.width, rect.height) * self.camera.scale
         coverage = np.clip(0.5 - d_px, 0.0, 1.0)
-        inside = np.flatnonzero(coverage.any(axis=1))
+        columns = np.flatnonzero(coverage.any(axis=1))
         rows = np.flatnonzero(coverage.any(axis=0))
-        if not len(inside):
+        if not len(columns):
             return None, (0, 0)
-        i0, i1, j0, j1 = inside[0], inside[-1] + 1, rows[0], rows[-1] + 1
+        i0, i1, j0, j1 = columns[0], columns[-1] + 1, rows[0], rows[-1] + 1
         coverage, d_px = coverage[i0:i1, j0:j1], d_px[i0:i1, j0:j1]
         edge_weight = np.clip(d_px + 1.5, 0.0, 1.0)[:, :, None]
         fill = np.array(self.palette.fill(motion), dtype=np.float64)
@@ -350,6 +396,61 @@ class Renderer:
         alpha[...] = (coverage * 255.0 + 0.5).astype(np.uint8)
         del alpha
         return sprite, (rect.x + int(i0), rect.y + int(j0))
+
+    def _field_pixels(self, field: Any, com: np.ndarray, angle: np.ndarray,
+                      rects: list[pygame.Rect]) -> list[np.ndarray | None]:
+        """For each body (centre of mass ``com`` (n, 2), ``angle`` (n,)) of one shape, its
+        ``field`` in pixels (w, h) at the pixel centres of its screen rectangle (None if
+        the rectangle is empty): exact where the sprite needs it (|f| < 1.5 px).
+
+        Narrow band: the field is first evaluated at the centres of 4 x 4 pixel blocks.
+        The pixel centres of a block lie within 1.5 sqrt(2) px of its centre, and |f|
+        never exceeds the distance to the surface (exact fields and bounds alike), so a
+        block whose |f| exceeds that reach + 1.5 px is uniformly far inside or outside
+        and takes its centre's value. Only the other blocks are evaluated per pixel, so
+        the cost grows with the perimeter, not the area. Each pass is one field call
+        for all the bodies.
+        """
+        cam, step = self.camera, _BLOCK
+        live = [k for k, r in enumerate(rects) if r.width > 0 and r.height > 0]
+        out: list[np.ndarray | None] = [None] * len(rects)
+        if not live:
+            return out
+        blocks = [(-(-rects[k].width // step), -(-rects[k].height // step)) for k in live]
+        coarse = [cam.pixel_centers(rects[k].x, rects[k].y, cw, ch, step).reshape(-1, 2)
+                  for k, (cw, ch) in zip(live, blocks)]
+        d_coarse = self._evaluate(field, com[live], angle[live], coarse)
+        band_points, band_index = [], []
+        for k, (cw, ch), d in zip(live, blocks, d_coarse):
+            rect = rects[k]
+            d_block = d.reshape(cw, ch)
+            near = np.abs(d_block) <= _BLOCK_REACH + 1.5
+            d_px = np.repeat(np.repeat(d_block, step, axis=0), step, axis=1)
+            out[k] = d_px[:rect.width, :rect.height]
+            i, j = np.nonzero(np.repeat(np.repeat(near, step, axis=0), step,
+                                        axis=1)[:rect.width, :rect.height])
+            points = np.empty((len(i), 2))
+            points[:, 0] = cam.center[0] + (rect.x + i + 0.5 - 0.5 * cam.size[0]) / cam.scale
+            points[:, 1] = cam.center[1] - (rect.y + j + 0.5 - 0.5 * cam.size[1]) / cam.scale
+            band_points.append(points)
+            band_index.append((i, j))
+        d_band = self._evaluate(field, com[live], angle[live], band_points)
+        for k, (i, j), d in zip(live, band_index, d_band):
+            out[k][i, j] = d
+        return out
+
+    def _evaluate(self, field: Any, com: np.ndarray, angle: np.ndarray,
+                  points: list[np.ndarray]) -> list[np.ndarray]:
+        """``field`` in pixels at each body's world ``points`` (n_k, 2): one call for all."""
+        counts = [len(p) for p in points]
+        if sum(counts) == 0:
+            return [np.zeros(0) for _ in points]
+        owner = np.repeat(np.arange(len(points)), counts)
+        gap = np.concatenate(points) - com[owner]
+        c, s = np.cos(angle)[owner], np.sin(angle)[owner]
+        local = np.stack([c * gap[:, 0] + s * gap[:, 1], -s * gap[:, 0] + c * gap[:, 1]], 1)
+        d = field.distance(local) * self.camera.scale
+        return np.split(d, np.cumsum(counts)[:-1])
 
     # ----------------------------------------------------------------------------------
     # Overlays

@@ -15,6 +15,7 @@ import pygame
 from sdfphys import sdf
 from sdfphys.collide.contacts import Contacts
 from sdfphys.render import (
+    SPRITE_TOLERANCE,
     Camera,
     Overlays,
     Palette,
@@ -264,6 +265,29 @@ def test_sdf_sprite_follows_the_body_when_it_moves():
     renderer.draw(surface, world)
     moved = painted_box(pygame.surfarray.array3d(surface), BLACK)
     np.testing.assert_array_equal(np.subtract(moved, first), [100, -25, 100, -25])
+
+
+def test_sdf_sprite_is_reused_only_within_the_tolerance():
+    cam = Camera((0.0, 0.0), 50.0, (200, 200))
+    world = make_world([(sdf_shape(sdf.field({"type": "box", "size": [1.0, 0.6]}), 0.6),
+                         (0.013, 0.0), 0.0, "dynamic")])
+    renderer = Renderer(cam, PLAIN)
+    surface = pygame.Surface(cam.size)
+
+    def image():
+        renderer.draw(surface, world)
+        return pygame.surfarray.array3d(surface)
+
+    first = image()
+    world.position[0, 0] += 0.5 * SPRITE_TOLERANCE / cam.scale          # a jitter
+    world.angle[0] += 0.5 * SPRITE_TOLERANCE / (0.6 * cam.scale)
+    np.testing.assert_array_equal(image(), first)
+    world.angle[0] += 4 * SPRITE_TOLERANCE / (0.6 * cam.scale)          # a real turn
+    turned = image()
+    assert np.any(turned != first)
+    fresh = pygame.Surface(cam.size)
+    Renderer(cam, PLAIN).draw(fresh, world)
+    np.testing.assert_array_equal(turned, pygame.surfarray.array3d(fresh))
 
 
 def test_bodies_off_screen_draw_nothing():

@@ -1,0 +1,213 @@
+"""The interactive window under SDL's dummy driver, driven by scripted events."""
+
+import os
+import sys
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+import pygame
+
+from sdfphys.play import DragSpring, apply_drag, pick_body, play
+from sdfphys.render import Camera, Palette
+from sdfphys.world import World
+
+SETTINGS = SimpleNamespace(size=(320, 240), center=(0.0, 2.0), scale=50.0, fps=60)
+CAMERA = Camera(SETTINGS.center, SETTINGS.scale, SETTINGS.size)
+
+
+@pytest.fixture(autouse=True)
+def dummy_video(monkeypatch):
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+
+
+def key(k):
+    return pygame.event.Event(pygame.KEYDOWN, key=k, mod=0, unicode="", scancode=0)
+
+
+def mouse(kind, world_point, button=1):
+    pos = tuple(int(v) for v in CAMERA.world_to_screen([world_point])[0])
+    if kind == pygame.MOUSEMOTION:
+        return pygame.event.Event(kind, pos=pos, rel=(0, 0), buttons=(1, 0, 0))
+    return pygame.event.Event(kind, pos=pos, button=button)
+
+
+def ball_world(gravity=(0.0, 0.0), overlap=False):
+    world = World(gravity=gravity)
+    world.add_body({"type": "circle", "radius": 0.4}, position=(-1.0, 2.0), name="ball")
+    world.add_body({"type": "circle", "radius": 0.5},
+                   position=(-0.2 if overlap else 2.0, 2.0), kind="static", name="post")
+    return world
+
+
+class Factory:
+    """Builds worlds and remembers them, so tests can look at what play did."""
+
+    def __init__(self, **options):
+        self.options = options
+        self.worlds = []
+
+    def __call__(self):
+        self.worlds.append(ball_world(**self.options))
+        return self.worlds[-1]
+
+
+def run(script, factory=None, **options):
+    factory = factory or Factory()
+    status = play(factory, SETTINGS, allow_headless=True, events=script, **options)
+    assert status == 0
+    return factory
+
+
+def test_without_a_display_says_so_in_one_line_and_returns_2(capsys):
+    factory = Factory()
+    assert play(factory, SETTINGS) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "no display" in err and "dummy" in err
+    assert factory.worlds == []
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="X11/Wayland check")
+def test_without_any_window_system_says_so_before_sdl_starts(monkeypatch, capfd):
+    for name in ("SDL_VIDEODRIVER", "DISPLAY", "WAYLAND_DISPLAY"):
+        monkeypatch.delenv(name, raising=False)
+    assert play(Factory(), SETTINGS) == 2
+    err = capfd.readouterr().err                   # file descriptors: SDL's own noise too
+    assert err.count("\n") == 1 and "no display" in err
+
+
+def test_steps_one_per_frame_at_matching_fps():
+    factory = run([[]] * 5)
+    assert factory.worlds[0].step_count == 5
+
+
+def test_pause_and_single_step():
+    p, o = key(pygame.K_p), key(pygame.K_o)
+    # frames: run, run, pause, -, step, -, step, resume, run  ->  1+1+0+0+1+0+1+1+1
+    factory = run([[], [], [p], [], [o], [], [o], [p], []])
+    assert factory.worlds[0].step_count == 6
+
+
+def test_single_step_is_ignored_while_running():
+    factory = run([[], [key(pygame.K_o)], []])
+    assert factory.worlds[0].step_count == 3
+
+
+def test_reset_builds_a_new_world():
+    factory = run([[], [], [key(pygame.K_r)], []])
+    assert len(factory.worlds) == 2
+    assert factory.worlds[0].step_count == 2
+    assert factory.worlds[1].step_count == 2
+
+
+@pytest.mark.parametrize("event", [key(pygame.K_ESCAPE), pygame.event.Event(pygame.QUIT)])
+def test_escape_or_close_quits(event):
+    factory = run([[], [event], [], [], []])
+    assert factory.worlds[0].step_count == 1
+
+
+def test_max_frames_stops_the_session():
+    factory = Factory()
+    assert play(factory, SETTINGS, allow_headless=True, events=iter(list, None),
+                max_frames=4) == 0
+    assert factory.worlds[0].step_count == 4
+
+
+def test_drag_pulls_the_body_to_the_pointer():
+    target = (1.0, 3.0)
+    script = ([[mouse(pygame.MOUSEBUTTONDOWN, (-1.0, 2.0))],
+               [mouse(pygame.MOUSEMOTION, target)]] + [[]] * 90)
+    world = run(script).worlds[0]
+    np.testing.assert_allclose(world.position[0], target, atol=0.05)
+    np.testing.assert_allclose(world.position[1], (2.0, 2.0))        # the static post
+
+
+def test_release_lets_go_and_empty_space_grabs_nothing():
+    script = [[mouse(pygame.MOUSEBUTTONDOWN, (-1.0, 0.5))],            # nothing there
+              [mouse(pygame.MOUSEMOTION, (1.0, 0.5))]] + [[]] * 10
+    world = run(script).worlds[0]
+    np.testing.assert_allclose(world.position[0], (-1.0, 2.0))
+    script = [[mouse(pygame.MOUSEBUTTONDOWN, (-1.0, 2.0))],
+              [mouse(pygame.MOUSEMOTION, (-1.0, 3.5))], [], [],
+              [mouse(pygame.MOUSEBUTTONUP, (-1.0, 3.5))]] + [[]] * 5
+    world = run(script).worlds[0]
+    velocity = world.velocity[0].copy()
+    assert velocity[1] > 0.5                       # thrown upward, then free flight
+    world.step()
+    np.testing.assert_allclose(world.velocity[0], velocity)
+
+
+def test_screenshot_is_written_and_named(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    run([[], [key(pygame.K_s)]])
+    shots = sorted(tmp_path.glob("*.png"))
+    assert len(shots) == 1
+    assert f"screenshot: {shots[0].name}" in capsys.readouterr().out
+    image = pygame.image.load(str(shots[0]))
+    assert image.get_size() == SETTINGS.size
+    hud = pygame.surfarray.array3d(image)[:200, :20]
+    assert np.any(np.all(hud == np.array(Palette().text), axis=2))    # the heads-up line
+
+
+def shots(tmp_path, script, factory=None):
+    run(script, factory)
+    return [pygame.surfarray.array3d(pygame.image.load(str(p)))
+            for p in sorted(tmp_path.glob("*.png"), key=lambda p: p.stat().st_mtime_ns)]
+
+
+def test_field_toggle_shades_the_screen(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    s = key(pygame.K_s)
+    plain, field, off = shots(tmp_path, [[s], [key(pygame.K_f), s], [key(pygame.K_f), s]])
+    background = np.all(plain == np.array(Palette().background), axis=2)
+    assert np.mean(np.all(field == np.array(Palette().background), axis=2)) < 0.01
+    assert np.mean(background) > 0.5
+    np.testing.assert_array_equal(off[:, 40:], plain[:, 40:])     # below the heads-up line
+
+
+def test_contacts_toggle_draws_contacts(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    s = key(pygame.K_s)
+    plain, marked = shots(tmp_path, [[s], [key(pygame.K_c), s]], Factory(overlap=True))
+    colour = np.array(Palette().contact)
+    assert not np.any(np.all(plain == colour, axis=2))
+    assert np.any(np.all(marked == colour, axis=2))
+
+
+def test_apply_drag_is_mass_independent_and_moves_the_grabbed_point():
+    world = World(gravity=(0.0, 0.0))
+    world.add_body({"type": "circle", "radius": 0.5}, density=1.0)
+    world.add_body({"type": "circle", "radius": 0.5}, position=(5.0, 0.0), density=50.0)
+    spring, dt = DragSpring(hertz=2.0, damping_ratio=1.0), 1 / 60
+    apply_drag(world, 0, np.zeros(2), np.array([1.0, 0.0]), dt, spring)
+    apply_drag(world, 1, np.zeros(2), np.array([6.0, 0.0]), dt, spring)
+    w = 2 * np.pi * 2.0
+    expected = dt * w ** 2 * 1.0 / (1 + 2 * w * dt + (w * dt) ** 2)
+    np.testing.assert_allclose(world.velocity[:, 0], [expected, expected])
+    # Off-centre grab: the grabbed point gets the velocity change, and the body turns.
+    anchor = np.array([0.0, 0.4])
+    apply_drag(world, 0, anchor, np.array([1.0, 0.4]), dt, spring)
+    v, omega = world.velocity[0], world.angular_velocity[0]
+    point_velocity = v + omega * np.array([-anchor[1], anchor[0]])
+    wanted = (np.array([expected, 0.0]) + dt * w ** 2 * np.array([1.0, 0.0])) / (
+        1 + 2 * w * dt + (w * dt) ** 2)
+    np.testing.assert_allclose(point_velocity, wanted, atol=1e-12)
+    assert omega < 0                          # pulled right above the centre: clockwise
+
+
+def test_apply_drag_caps_the_acceleration():
+    world = World(gravity=(0.0, 0.0))
+    world.add_body({"type": "circle", "radius": 0.5})
+    spring = DragSpring(hertz=50.0, max_acceleration=60.0)
+    apply_drag(world, 0, np.zeros(2), np.array([100.0, 0.0]), 0.01, spring)
+    np.testing.assert_allclose(world.velocity[0], [0.6, 0.0])
+
+
+def test_pick_body_finds_dynamic_bodies_only():
+    world = ball_world()
+    assert pick_body(world, np.array([-1.0, 2.3])) == 0
+    assert pick_body(world, np.array([2.0, 2.0])) is None              # static post
+    assert pick_body(world, np.array([0.0, 0.0])) is None
+    assert pick_body(world, np.array([-1.0, 2.45]), tolerance=0.1) == 0
