@@ -10,7 +10,8 @@ rotate) and uniform scale keep an exact operand exact. Every other operator here
 marked ``exact = False`` because, for exact operands, it is exact on one side only
 and a bound on the other: union and xor outside, intersection and difference
 inside; round and onion away from the operand's medial axis (see their docstrings
-for counter-examples); the smooth blends nowhere in the blend zone. All of them are
+for counter-examples); the smooth blends as their hard counterparts outside the
+blend zone, and nowhere inside it. All of them are
 1-Lipschitz when their operands are (the smooth blend weights are convex), and a
 1-Lipschitz function with the right sign never exceeds the distance to its own zero
 set, so every result is a valid bound (a safe sphere-tracing step).
@@ -435,9 +436,9 @@ class _Smooth(Field):
 class SmoothUnion(_Smooth):
     """Smooth union: f = smin(a, b) (see ``smooth_min``); more operands fold from the left.
 
-    Equals the union wherever |a - b| >= k (compact kernels); in the blend zone it
-    lies below min(a, b) by at most ``dip`` = k w(1) (k/4 polynomial, k/6 cubic,
-    0.293 k circular, k/4 exponential), so the shape grows there. Gradient:
+    Equals the union wherever |a - b| >= k (compact kernels); in the blend zone each
+    fold lies below min(a, b) by at most ``dip`` = k w(1) (k/4 polynomial, k/6
+    cubic, 0.293 k circular, k/4 exponential), so the shape grows there. Gradient:
     (1 - m) grad a + m grad b. A bound (``exact = False``). Bounds: smin <= t
     implies min(a, b) <= t + dip, so each fold grows the hull by ``dip``.
     """
