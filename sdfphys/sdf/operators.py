@@ -11,7 +11,7 @@ marked ``exact = False`` because, for exact operands, it is exact on one side on
 and a bound on the other: union and xor outside, intersection and difference
 inside; round and onion away from the operand's medial axis (see their docstrings
 for counter-examples); the smooth blends as their hard counterparts outside the
-blend zone, and nowhere inside it. All of them are
+blend zone (compact kernels), and nowhere inside it. All of them are
 1-Lipschitz when their operands are (the smooth blend weights are convex), and a
 1-Lipschitz function with the right sign never exceeds the distance to its own zero
 set, so every result is a valid bound (a safe sphere-tracing step).
