@@ -1,0 +1,305 @@
+"""Scene files (TOML, ``version = 1``) and dicts of the same shape -> validated Scene -> World.
+
+The format is the DESIGN.md contract::
+
+    version = 1
+    [world]   gravity = [0.0, -9.81]
+    [sim]     quality = "balanced", duration = 5.0, and any Settings knob by name
+    [render]  size = [960, 540], center = [0.0, 4.0], scale = 50.0, fps = 60
+    [[body]]  name, shape, position, angle, velocity, angular_velocity,
+              density | mass, friction, restitution, static, kinematic
+
+Every problem raises one ``SpecError`` naming the file and the key path
+(``scenes/x.toml: body[2].shape.radius: must be > 0, got -1``), with the nearest
+known key suggested for a typo. Reading a scene never runs code: TOML is parsed
+by ``tomllib`` and every value is checked against a fixed table of keys.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+from .errors import SpecError, check_int, check_number, check_vec2
+from .sdf.build import suggest
+from .settings import Settings, preset
+
+__all__ = ["Scene", "BodySpec", "RenderSpec", "read_scene", "load_scene", "apply_overrides"]
+
+TOP_KEYS = ("version", "world", "sim", "render", "body")
+WORLD_KEYS = ("gravity",)
+RENDER_KEYS = ("size", "center", "scale", "fps")
+BODY_KEYS = ("name", "shape", "position", "angle", "velocity", "angular_velocity",
+             "density", "mass", "friction", "restitution", "static", "kinematic")
+SIM_EXTRA_KEYS = ("quality", "duration")
+
+
+@dataclass(frozen=True)
+class RenderSpec:
+    """Frame size (px, even), world point at the frame centre (m), px per metre, frames/s."""
+
+    size: tuple[int, int] = (960, 540)
+    center: tuple[float, float] = (0.0, 4.0)
+    scale: float = 50.0
+    fps: int = 60
+
+
+@dataclass(frozen=True)
+class BodySpec:
+    """One validated ``[[body]]`` entry (SI units; ``shape`` is the scene shape dict)."""
+
+    name: str
+    shape: Any
+    position: tuple[float, float] = (0.0, 0.0)
+    angle: float = 0.0
+    velocity: tuple[float, float] = (0.0, 0.0)
+    angular_velocity: float = 0.0
+    density: float = 1.0
+    mass: float | None = None
+    friction: float = 0.5
+    restitution: float = 0.0
+    kind: str = "dynamic"
+
+
+@dataclass
+class Scene:
+    """A validated scene: what ``build()`` turns into a World, plus run and render settings."""
+
+    source: str
+    gravity: tuple[float, float]
+    quality: str
+    settings: Settings
+    duration: float
+    render: RenderSpec
+    bodies: list[BodySpec]
+    digest: str = field(default="")
+    """SHA-256 of the scene's canonical JSON form (trajectory files record it)."""
+
+    def build(self):
+        """A fresh World with every body added in scene order."""
+        from .world import World
+
+        world = World(gravity=self.gravity, settings=self.settings)
+        for b in self.bodies:
+            world.add_body(b.shape, position=b.position, angle=b.angle, velocity=b.velocity,
+                           angular_velocity=b.angular_velocity, density=b.density,
+                           mass=b.mass, friction=b.friction, restitution=b.restitution,
+                           kind=b.kind, name=b.name)
+        world.scene = self
+        return world
+
+
+def load_scene(scene: str | Path | Mapping, overrides: Sequence[str] = ()):
+    """The World of a scene file or dict (DESIGN.md's ``sdfphys.load_scene``)."""
+    return read_scene(scene, overrides).build()
+
+
+def read_scene(scene: str | Path | Mapping, overrides: Sequence[str] = (),
+               quality: str | None = None) -> Scene:
+    """Parse and validate a scene file or dict; ``overrides`` are ``KEY=VALUE`` strings
+    (e.g. ``sim.substeps=8``) applied before validation; ``quality`` overrides the preset."""
+    if isinstance(scene, Mapping):
+        source, data = "<scene>", _deep_copy(scene)
+    else:
+        source = str(scene)
+        try:
+            with open(scene, "rb") as handle:
+                data = tomllib.load(handle)
+        except FileNotFoundError:
+            raise SpecError("", "no such scene file", source) from None
+        except IsADirectoryError:
+            raise SpecError("", "is a directory, not a scene file", source) from None
+        except tomllib.TOMLDecodeError as err:
+            raise SpecError("", f"not valid TOML: {err}", source) from None
+        except (OSError, UnicodeDecodeError) as err:
+            raise SpecError("", f"cannot be read: {err}", source) from None
+    try:
+        data = apply_overrides(data, overrides)
+        if quality is not None:
+            data.setdefault("sim", {})
+            if isinstance(data["sim"], dict):
+                data["sim"]["quality"] = quality
+        parsed = _parse(data, source)
+    except SpecError as err:
+        raise err.in_file(source) from None
+    parsed.digest = hashlib.sha256(
+        json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()
+    return parsed
+
+
+def apply_overrides(data: dict, overrides: Sequence[str]) -> dict:
+    """``data`` with each ``KEY=VALUE`` set (dotted key, TOML value: ``sim.dt=0.01``)."""
+    for item in overrides:
+        key, sep, text = item.partition("=")
+        if not sep or not key.strip():
+            raise SpecError("--set", f"expected KEY=VALUE, got {item!r}")
+        try:
+            value = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()           # a bare word: a string such as quality=fast
+        node = data
+        parts = key.strip().split(".")
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                raise SpecError(key, "cannot set a key inside a non-table value")
+        node[parts[-1]] = value
+    return data
+
+
+def _deep_copy(value: Any) -> Any:
+    if isinstance(value, Mapping):
+        return {k: _deep_copy(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_deep_copy(v) for v in value]
+    return value
+
+
+def _table(data: Any, path: str) -> dict:
+    if not isinstance(data, Mapping):
+        raise SpecError(path, f"must be a table, got {data!r}")
+    return dict(data)
+
+
+def _known(table: Mapping, keys: Sequence[str], path: str) -> None:
+    for key in table:
+        if key not in keys:
+            where = f"{path}.{key}" if path else str(key)
+            raise SpecError(where, "unknown key" + suggest(str(key), list(keys)))
+
+
+def _parse(data: Any, source: str) -> Scene:
+    data = _table(data, "")
+    _known(data, TOP_KEYS, "")
+    if "version" not in data:
+        raise SpecError("version", "is required (version = 1)")
+    if data["version"] != 1 or isinstance(data["version"], bool):
+        raise SpecError("version", f"must be 1, got {data['version']!r}")
+
+    world = _table(data.get("world", {}), "world")
+    _known(world, WORLD_KEYS, "world")
+    gravity = check_vec2(world.get("gravity", (0.0, -9.81)), "world.gravity")
+
+    quality, settings, duration = _parse_sim(_table(data.get("sim", {}), "sim"))
+    render = _parse_render(_table(data.get("render", {}), "render"))
+
+    bodies_data = data.get("body", [])
+    if not isinstance(bodies_data, list):
+        raise SpecError("body", "must be an array of tables ([[body]])")
+    if not bodies_data:
+        raise SpecError("body", "a scene needs at least one [[body]]")
+    bodies = [_parse_body(b, i) for i, b in enumerate(bodies_data)]
+    seen: dict[str, int] = {}
+    for i, b in enumerate(bodies):
+        if b.name in seen:
+            raise SpecError(f"body[{i}].name",
+                            f"duplicate name {b.name!r} (also body[{seen[b.name]}])")
+        seen[b.name] = i
+    return Scene(source, gravity, quality, settings, duration, render, bodies)
+
+
+def _parse_sim(sim: dict) -> tuple[str, Settings, float]:
+    knobs = Settings.names()
+    _known(sim, list(SIM_EXTRA_KEYS) + knobs, "sim")
+    quality = sim.get("quality", "balanced")
+    try:
+        base = preset(quality)
+    except KeyError as err:
+        raise SpecError("sim.quality", str(err.args[0])) from None
+    values = {}
+    types = {f.name: f.type for f in fields(Settings)}
+    for key, value in sim.items():
+        if key in SIM_EXTRA_KEYS:
+            continue
+        values[key] = _check_knob(key, types[key], value, f"sim.{key}")
+    duration = check_number(sim.get("duration", 5.0), "sim.duration", low=0.0, low_open=True)
+    return quality, base.with_values(**values), duration
+
+
+def _check_knob(name: str, kind: Any, value: Any, path: str) -> Any:
+    """A Settings value of the declared type; numbers finite and >= 0, dt/substeps > 0."""
+    kind = kind if isinstance(kind, str) else kind.__name__
+    if kind == "bool":
+        if not isinstance(value, bool):
+            raise SpecError(path, f"must be true or false, got {value!r}")
+        return value
+    if kind == "int":
+        return check_int(value, path, low=1 if name == "substeps" else 0)
+    if kind == "float":
+        return check_number(value, path, low=0.0, low_open=name == "dt")
+    if kind == "str":
+        if not isinstance(value, str):
+            raise SpecError(path, f"must be a string, got {value!r}")
+        return value
+    raise SpecError(path, f"cannot be set from a scene (type {kind})")
+
+
+def _parse_render(render: dict) -> RenderSpec:
+    _known(render, RENDER_KEYS, "render")
+    default = RenderSpec()
+    size = render.get("size", default.size)
+    if not isinstance(size, (list, tuple)) or len(size) != 2:
+        raise SpecError("render.size", f"must be [width, height] in pixels, got {size!r}")
+    w = check_int(size[0], "render.size[0]", low=2, high=8192)
+    h = check_int(size[1], "render.size[1]", low=2, high=8192)
+    center = check_vec2(render.get("center", default.center), "render.center")
+    scale = check_number(render.get("scale", default.scale), "render.scale",
+                         low=0.0, low_open=True)
+    fps = check_int(render.get("fps", default.fps), "render.fps", low=1, high=1000)
+    return RenderSpec((w + w % 2, h + h % 2), center, scale, fps)
+
+
+def _parse_body(data: Any, i: int) -> BodySpec:
+    path = f"body[{i}]"
+    body = _table(data, path)
+    _known(body, BODY_KEYS, path)
+    name = body.get("name", f"body{i}")
+    if not isinstance(name, str) or not name:
+        raise SpecError(f"{path}.name", f"must be a non-empty string, got {name!r}")
+    if "shape" not in body:
+        raise SpecError(f"{path}.shape", "is required")
+    static = _flag(body, "static", path)
+    kinematic = _flag(body, "kinematic", path)
+    if static and kinematic:
+        raise SpecError(f"{path}.kinematic", "a body cannot be both static and kinematic")
+    kind = "static" if static else "kinematic" if kinematic else "dynamic"
+
+    from .shapes import shape_from_spec
+
+    shape = shape_from_spec(body["shape"], f"{path}.shape")
+    if kind == "dynamic" and not math.isfinite(shape.radius):
+        raise SpecError(f"{path}.shape", "an unbounded shape (e.g. a half-plane) must be static")
+    if "density" in body and "mass" in body:
+        raise SpecError(f"{path}.mass", "give density or mass, not both")
+    density = check_number(body.get("density", 1.0), f"{path}.density", low=0.0, low_open=True)
+    mass = None
+    if "mass" in body:
+        mass = check_number(body["mass"], f"{path}.mass", low=0.0, low_open=True)
+    velocity = check_vec2(body.get("velocity", (0.0, 0.0)), f"{path}.velocity")
+    angular_velocity = check_number(body.get("angular_velocity", 0.0), f"{path}.angular_velocity")
+    if kind == "static" and (velocity != (0.0, 0.0) or angular_velocity != 0.0):
+        raise SpecError(f"{path}.velocity",
+                        "a static body cannot move; use kinematic = true for moving platforms")
+    return BodySpec(
+        name=name, shape=shape,
+        position=check_vec2(body.get("position", (0.0, 0.0)), f"{path}.position"),
+        angle=check_number(body.get("angle", 0.0), f"{path}.angle"),
+        velocity=velocity, angular_velocity=angular_velocity,
+        density=density, mass=mass,
+        friction=check_number(body.get("friction", 0.5), f"{path}.friction", low=0.0),
+        restitution=check_number(body.get("restitution", 0.0), f"{path}.restitution",
+                                 low=0.0, high=1.0),
+        kind=kind)
+
+
+def _flag(body: dict, key: str, path: str) -> bool:
+    value = body.get(key, False)
+    if not isinstance(value, bool):
+        raise SpecError(f"{path}.{key}", f"must be true or false, got {value!r}")
+    return value
