@@ -69,19 +69,20 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
         a, b = first[lo:hi], second[lo:hi]
         parts.append(fn(shape_a, shape_b, a, b, pose[a], pose[b], margin, settings))
     c = Contacts.concatenate(parts)
-    c = c.take(c.depth > -margin)
     flip = c.body_a > c.body_b
     c.body_a, c.body_b = np.where(flip, c.body_b, c.body_a), np.where(flip, c.body_a, c.body_b)
     c.normal = np.where(flip[:, None], -c.normal, c.normal)
 
-    c = c.take(np.lexsort((c.feature, -c.depth, c.body_b, c.body_a)))
     pair_key = c.body_a * np.int64(len(pose)) + c.body_b
+    order = np.argsort(pair_key, kind="stable")
+    if np.all(np.diff(pair_key[order]) > 0):            # one contact per pair: done
+        return c.take(order)
+    order = np.lexsort((c.feature, -c.depth, pair_key))
+    c, pair_key = c.take(order), pair_key[order]
     starts = np.flatnonzero(np.diff(pair_key)) + 1
-    if len(starts) + 1 < len(c):
-        keep = reduce_contacts(np.r_[0, starts, len(c)], c.point, c.depth,
-                               settings.contacts_per_pair, settings.linear_slop)
-        c = c.take(keep)
-        pair_key = pair_key[keep]
+    keep = reduce_contacts(np.r_[0, starts, len(c)], c.point, c.depth,
+                           settings.contacts_per_pair, settings.linear_slop)
+    c, pair_key = c.take(keep), pair_key[keep]
     return c.take(np.lexsort((c.feature, pair_key)))
 
 
