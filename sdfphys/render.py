@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -110,13 +111,15 @@ class Palette:
     iso: Color = (250, 250, 250)
     text: Color = (232, 232, 232)
 
-    def fill(self, motion: int) -> Color:
-        """Fill colour of a body with motion code ``DYNAMIC``, ``STATIC`` or ``KINEMATIC``."""
-        return (self.dynamic, self.static, self.kinematic)[motion]
+    @cached_property
+    def fills(self) -> tuple[Color, Color, Color]:
+        """Fill colours indexed by motion code (``DYNAMIC``, ``STATIC``, ``KINEMATIC``)."""
+        return self.dynamic, self.static, self.kinematic
 
-    def edge(self, motion: int) -> Color:
-        """Outline colour of a body: its fill darkened by ``edge_shade``."""
-        return tuple(int(c * self.edge_shade) for c in self.fill(motion))
+    @cached_property
+    def edges(self) -> tuple[Color, ...]:
+        """Outline colours indexed by motion code: the fills darkened by ``edge_shade``."""
+        return tuple(tuple(int(c * self.edge_shade) for c in fill) for fill in self.fills)
 
 
 @dataclass(frozen=True)
@@ -287,14 +290,16 @@ class Renderer:
         mark = frames.com[index] + r_m[:, None] * np.stack([np.cos(angle), np.sin(angle)], 1)
         centre = _draw_coords(cam, frames.com[index])
         tip = _draw_coords(cam, mark).tolist()
-        # aacircle fills the pixels within radius + 0.5 of a pixel centre (ints):
-        # centre and radius are rounded so that the disc covers [x - r, x + r].
+        # The antialiased edge ring covers the pixels within radius + 0.5 of a pixel
+        # centre (ints): centre and radius are rounded so that it spans [x - r, x + r].
+        # The aliased fill inside it is one pixel narrower on one side; a ring two
+        # pixels wide leaves no gap (and costs a third of an antialiased fill).
         pixel = np.round(centre).astype(np.int64).tolist()
         r_px = np.maximum(np.round(r_m * cam.scale - 0.5), 0).astype(np.int64).tolist()
         centre = centre.tolist()
         for k, motion in enumerate(frames.motion[index].tolist()):
-            pygame.draw.aacircle(surface, pal.fill(motion), pixel[k], r_px[k])
-            pygame.draw.aacircle(surface, pal.edge(motion), pixel[k], r_px[k], 1)
+            pygame.draw.circle(surface, pal.fills[motion], pixel[k], r_px[k])
+            pygame.draw.aacircle(surface, pal.edges[motion], pixel[k], r_px[k], 2)
             pygame.draw.aaline(surface, pal.mark, centre[k], tip[k])
 
     def _draw_meshes(self, surface: pygame.Surface, frames: BodyFrames,
@@ -309,8 +314,8 @@ class Renderer:
             pixel = np.round(screen).astype(np.int64).tolist()
             screen = screen.tolist()
             for k, motion in enumerate(frames.motion[bodies].tolist()):
-                pygame.draw.polygon(surface, pal.fill(motion), pixel[k])
-                pygame.draw.aalines(surface, pal.edge(motion), True, screen[k])
+                pygame.draw.polygon(surface, pal.fills[motion], pixel[k])
+                pygame.draw.aalines(surface, pal.edges[motion], True, screen[k])
 
     def _draw_sdf_bodies(self, surface: pygame.Surface, frames: BodyFrames,
                          index: np.ndarray) -> None:
@@ -386,8 +391,8 @@ class Renderer:
         i0, i1, j0, j1 = columns[0], columns[-1] + 1, rows[0], rows[-1] + 1
         coverage, d_px = coverage[i0:i1, j0:j1], d_px[i0:i1, j0:j1]
         edge_weight = np.clip(d_px + 1.5, 0.0, 1.0)[:, :, None]
-        fill = np.array(self.palette.fill(motion), dtype=np.float64)
-        edge = np.array(self.palette.edge(motion), dtype=np.float64)
+        fill = np.array(self.palette.fills[motion], dtype=np.float64)
+        edge = np.array(self.palette.edges[motion], dtype=np.float64)
         sprite = pygame.Surface((i1 - i0, j1 - j0), pygame.SRCALPHA, 32)
         rgb = pygame.surfarray.pixels3d(sprite)
         rgb[...] = (fill + (edge - fill) * edge_weight + 0.5).astype(np.uint8)
