@@ -1,7 +1,9 @@
-"""Primitives with straight edges (Quilez, "2D distance functions").
+"""Primitives with straight edges (Quilez, "2D distance functions"), and the two
+whose corners or sides are arcs (rounded_box, rounded_cross).
 
-Each primitive is centred at its local origin as in Quilez's list (the isosceles
-triangle excepted: it is centred on its bounding box). Gradients are analytic
+Each primitive is centred at its local origin as in Quilez's list, except the
+isosceles triangle (centred on its bounding box) and those placed by their own
+coordinates (oriented_box, triangle, polygon, half_plane). Gradients are analytic
 (his ``sdg*`` forms where published, else derived from the closest-point
 branch); see ``base.py`` for the conventions. Sizes given as ``size`` are full
 widths and heights; Quilez's half-extents are ``size / 2``. Every primitive
