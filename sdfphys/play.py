@@ -21,6 +21,7 @@ import math
 import os
 import sys
 import time
+from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,6 +37,7 @@ from .render import DYNAMIC, Camera, Overlays, Palette, Renderer, body_frames
 __all__ = [
     "HEADLESS_DRIVERS",
     "DragSpring",
+    "RateMeter",
     "RenderSettings",
     "apply_drag",
     "pick_body",
@@ -126,6 +128,26 @@ def apply_drag(world: Any, body: int, anchor: np.ndarray, target: np.ndarray, dt
                     angular_velocity=w + inv_i * (r[0] * impulse[1] - r[1] * impulse[0]))
 
 
+class RateMeter:
+    """Events per second over a sliding window of the last ``window`` frames."""
+
+    def __init__(self, window: int = 30):
+        self._marks: deque[tuple[float, int]] = deque(maxlen=window + 1)
+
+    def add(self, count: int, now: float) -> None:
+        """Record ``count`` events in the frame that ends at ``now`` (s)."""
+        self._marks.append((now, count))
+
+    @property
+    def rate(self) -> float:
+        """Events per second between the oldest and newest frame kept (0 until two)."""
+        if len(self._marks) < 2:
+            return 0.0
+        elapsed = self._marks[-1][0] - self._marks[0][0]
+        events = sum(count for _, count in self._marks) - self._marks[0][1]
+        return events / elapsed if elapsed > 0 else 0.0
+
+
 @dataclass
 class _Grab:
     body: int
@@ -150,8 +172,7 @@ class _Session:
         self.running = True
         self.overlays = Overlays()
         self.grab: _Grab | None = None
-        self.steps = 0
-        self.rate_steps, self.rate_time, self.steps_per_second = 0, time.perf_counter(), 0.0
+        self.step_rate = RateMeter()
 
     @property
     def dt(self) -> float:
@@ -207,12 +228,7 @@ class _Session:
                 apply_drag(self.world, self.grab.body, self.grab.anchor, self.grab.target,
                            self.dt, self.spring)
             self.world.step()
-        self.steps += count
-        self.rate_steps += count
-        now = time.perf_counter()
-        if now - self.rate_time >= 0.5:
-            self.steps_per_second = self.rate_steps / (now - self.rate_time)
-            self.rate_steps, self.rate_time = 0, now
+        self.step_rate.add(count, time.perf_counter())
 
     def draw(self, screen: pygame.Surface, font: pygame.font.Font, frame_rate: float) -> None:
         self.renderer.draw(screen, self.world, self.overlays)
@@ -230,7 +246,7 @@ class _Session:
                                        ("contacts", self.overlays.contacts),
                                        ("field", self.overlays.field),
                                        ("bounds", self.overlays.bounds)) if on]
-        line = (f"{frame_rate:5.1f} frames/s   {self.steps_per_second:6.1f} steps/s   "
+        line = (f"{frame_rate:5.1f} frames/s   {self.step_rate.rate:6.1f} steps/s   "
                 f"t = {float(self.world.time):7.3f} s   {len(self.world.shape_id)} bodies   "
                 + "  ".join(flags))
         screen.blit(font.render(line, True, palette.text), (8, 6))

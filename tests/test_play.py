@@ -10,7 +10,7 @@ import pytest
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import pygame
 
-from sdfphys.play import DragSpring, apply_drag, pick_body, play
+from sdfphys.play import DragSpring, RateMeter, apply_drag, pick_body, play
 from sdfphys.render import Camera, Palette
 from sdfphys.world import World
 
@@ -211,3 +211,13 @@ def test_pick_body_finds_dynamic_bodies_only():
     assert pick_body(world, np.array([2.0, 2.0])) is None              # static post
     assert pick_body(world, np.array([0.0, 0.0])) is None
     assert pick_body(world, np.array([-1.0, 2.45]), tolerance=0.1) == 0
+
+
+def test_rate_meter_counts_steps_per_second_over_its_window():
+    meter = RateMeter(window=4)
+    assert meter.rate == 0.0
+    for k in range(10):
+        meter.add(2, 0.1 * k)                     # 2 steps every 0.1 s
+    assert meter.rate == pytest.approx(20.0)
+    meter.add(0, 1.0)
+    assert meter.rate == pytest.approx(6 / 0.4)   # the window now holds a paused frame
