@@ -119,12 +119,25 @@ class Transform(Field):
         self.rotation = np.array([[c, -s], [s, c]])
 
     def evaluate(self, points):
-        local = (as_points(points) - self.offset) @ self.rotation
-        d, g = self.of.evaluate(local)
-        return d, g @ self.rotation.T
+        d, g = self.of.evaluate(self._to_local(points))
+        return d, self._to_outer(g)
 
     def distance(self, points):
-        return self.of.distance((as_points(points) - self.offset) @ self.rotation)
+        return self.of.distance(self._to_local(points))
+
+    # The 2x2 rotations are written out: a BLAS product (``@``) may round a row
+    # differently depending on its place in the batch, which breaks bit-for-bit
+    # determinism of a body's contacts when the batch around it changes.
+    def _to_local(self, points) -> np.ndarray:
+        """R^T (p - t) for points (N, 2)."""
+        p = as_points(points) - self.offset
+        (c, ms), (s, _) = self.rotation
+        return np.stack([c * p[:, 0] + s * p[:, 1], ms * p[:, 0] + c * p[:, 1]], axis=1)
+
+    def _to_outer(self, v: np.ndarray) -> np.ndarray:
+        """R v for vectors (N, 2)."""
+        (c, ms), (s, _) = self.rotation
+        return np.stack([c * v[:, 0] + ms * v[:, 1], s * v[:, 0] + c * v[:, 1]], axis=1)
 
     def bounds(self):
         return self.level_bounds(0.0)
