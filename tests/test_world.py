@@ -1,0 +1,367 @@
+"""World: API, frames and whole-step physics against closed forms.
+
+Tolerances: round-off where the answer is the integrator's or the solver's own closed
+form (free fall, momentum, head-on collisions); a few percent for motions integrated
+over many steps through soft contacts (sliding, rolling, bouncing).
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from sdfphys.sdf import Field
+from sdfphys.settings import Settings
+from sdfphys.shapes import SdfShape
+from sdfphys.world import STAGES, World
+
+G = 9.81
+GROUND = {"type": "box", "size": [100.0, 20.0]}     # top face at y = 0 when centred at -10
+BOX = {"type": "box", "size": [2.0, 2.0]}
+UNIT_BOX = {"type": "box", "size": [1.0, 1.0]}
+BALL = {"type": "circle", "radius": 0.5}
+
+
+def ground_world(friction: float = 0.5, **settings) -> World:
+    world = World(settings=Settings(**settings))
+    world.add_body(GROUND, position=(0.0, -10.0), kind="static", friction=friction)
+    return world
+
+
+def incline(shape: dict, degrees: float, mu: float, half_height: float):
+    """A static 40 x 1 plank through the origin tilted by ``degrees``, and a body resting
+    on it 5 m up the slope; returns (world, body, unit tangent up the slope, normal)."""
+    a = math.radians(degrees)
+    tangent, normal = np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
+    world = World()
+    world.add_body({"type": "box", "size": [40.0, 1.0]}, angle=a, kind="static", friction=mu)
+    body = world.add_body(shape, position=5.0 * tangent + (0.5 + half_height) * normal, angle=a,
+                          friction=mu)
+    return world, body, tangent, normal
+
+
+# ---------------------------------------------------------------------------------------
+# API and frames
+# ---------------------------------------------------------------------------------------
+
+
+def test_user_origin_and_centre_of_mass_frames():
+    """A triangle whose centroid (2/3, 1/3) is off its user origin: ``position`` returns
+    the user origin, ``center_of_mass`` = position - R(angle) origin."""
+    world = World()
+    i = world.add_body({"type": "polygon", "points": [[0, 0], [2, 0], [0, 1]]},
+                       position=(1.0, 2.0), angle=0.5)
+    np.testing.assert_allclose(world.position[i], [1.0, 2.0], atol=1e-15)
+    c, s = math.cos(0.5), math.sin(0.5)
+    centroid = np.array([2 / 3, 1 / 3])
+    np.testing.assert_allclose(world.center_of_mass[i],
+                               [1.0 + c * centroid[0] - s * centroid[1],
+                                2.0 + s * centroid[0] + c * centroid[1]], atol=1e-15)
+    world.set_state(i, angle=0.0)
+    np.testing.assert_allclose(world.position[i], [1.0, 2.0], atol=1e-15)
+    np.testing.assert_allclose(world.center_of_mass[i], [1.0 + 2 / 3, 2.0 + 1 / 3], atol=1e-15)
+
+
+def test_free_fall_spinning_off_centre_body_closed_form():
+    """Semi-implicit Euler with k substeps of h: com_k = com_0 + k h v0 + h^2 g k(k+1)/2,
+    angle_k = angle_0 + k h w; the user origin follows rigidly (round-off)."""
+    world = World()
+    i = world.add_body({"type": "polygon", "points": [[0, 0], [2, 0], [0, 1]]},
+                       position=(0.0, 50.0), angle=0.2, velocity=(1.0, 3.0),
+                       angular_velocity=2.0)
+    origin = world.shapes[0].origin
+    com0 = world.center_of_mass[i]
+    steps = 60
+    for _ in range(steps):
+        world.step()
+    s = world.settings
+    h, k = s.dt / s.substeps, steps * s.substeps
+    com = com0 + k * h * np.array([1.0, 3.0]) + h * h * np.array([0.0, -G]) * k * (k + 1) / 2
+    angle = 0.2 + k * h * 2.0
+    c, sn = math.cos(angle), math.sin(angle)
+    np.testing.assert_allclose(world.center_of_mass[i], com, atol=1e-12)
+    assert world.angle[i] == pytest.approx(angle, abs=1e-12)
+    np.testing.assert_allclose(world.position[i], com + [c * origin[0] - sn * origin[1],
+                                                         sn * origin[0] + c * origin[1]],
+                               atol=1e-12)
+    assert world.time == pytest.approx(1.0, abs=1e-12) and world.step_count == steps
+
+
+def test_mass_properties_energy_and_kinds():
+    world = World()
+    g = world.add_body(GROUND, position=(0.0, -10.0), kind="static")
+    ball = world.add_body(BALL, position=(0.0, 2.0), velocity=(3.0, 4.0), angular_velocity=2.0,
+                          density=2.0)
+    box = world.add_body(BOX, position=(5.0, 1.0), mass=8.0)
+    k = world.add_body(BOX, position=(9.0, 1.0), kind="kinematic", velocity=(1.0, 0.0))
+    m_ball = 2.0 * math.pi * 0.25
+    np.testing.assert_allclose(world.mass[[ball, box]], [m_ball, 8.0], rtol=1e-15)
+    np.testing.assert_allclose(world.inertia[[ball, box]],
+                               [m_ball * 0.25 / 2, 8.0 * (4 + 4) / 12], rtol=1e-15)
+    assert np.isinf(world.mass[g]) and np.isinf(world.mass[k])
+    assert list(world.kind) == ["static", "dynamic", "dynamic", "kinematic"]
+    assert world.kinetic_energy() == pytest.approx(
+        0.5 * m_ball * 25 + 0.5 * (m_ball * 0.125) * 4, rel=1e-15)
+    assert world.potential_energy() == pytest.approx(G * (m_ball * 2.0 + 8.0 * 1.0), rel=1e-15)
+
+
+def test_add_remove_names_and_errors():
+    world = World()
+    a = world.add_body(BALL, name="a")
+    world.add_body(BALL, position=(3.0, 0.0))
+    world.add_body(BALL, position=(6.0, 0.0), name="c")
+    assert world.names == ["a", "body1", "c"] and a == 0
+    world.remove_body(1)
+    assert world.names == ["a", "c"] and len(world) == 2
+    np.testing.assert_array_equal(world.position[:, 0], [0.0, 6.0])
+    assert world.add_body(BALL) == 2 and world.names[2] == "body3"
+    with pytest.raises(ValueError, match="duplicate"):
+        world.add_body(BALL, name="a")
+    with pytest.raises(ValueError, match="kind"):
+        world.add_body(BALL, kind="floating")
+    with pytest.raises(ValueError, match="static"):
+        world.add_body(BALL, kind="static", velocity=(1.0, 0.0))
+    with pytest.raises(ValueError, match="unbounded"):
+        world.add_body(SdfShape(LowerHalfPlane()))
+    with pytest.raises(IndexError):
+        world.remove_body(5)
+
+
+class LowerHalfPlane(Field):
+    """y <= 0: f = y, gradient (0, 1); unbounded."""
+
+    def evaluate(self, points):
+        p = np.asarray(points, dtype=np.float64)
+        return p[:, 1].copy(), np.tile([0.0, 1.0], (len(p), 1))
+
+    def bounds(self):
+        return np.array([-np.inf, -np.inf, np.inf, 0.0])
+
+
+def test_ball_rests_on_an_unbounded_static_field():
+    world = World()
+    world.add_body(SdfShape(LowerHalfPlane()), kind="static")
+    ball = world.add_body(BALL, position=(0.0, 1.0))
+    for _ in range(90):
+        world.step()
+    assert world.position[ball, 1] == pytest.approx(0.5, abs=1e-3)
+
+
+def test_many_bodies_grow_storage_and_keep_order():
+    world = World(gravity=(0.0, 0.0))
+    for i in range(100):
+        world.add_body(BALL, position=(3.0 * i, 0.0), velocity=(0.0, i))
+    np.testing.assert_array_equal(world.velocity[:, 1], np.arange(100))
+    np.testing.assert_array_equal(world.position[:, 0], 3.0 * np.arange(100))
+
+
+def test_stage_counts_skip_friction_restitution_and_time_of_impact_when_not_needed():
+    """A frictionless, inelastic ball resting on the ground: solve and relax run, but no
+    friction rows, no restitution pass and no time of impact."""
+    world = ground_world(friction=0.0)
+    world.add_body(BALL, position=(0.0, 0.5), friction=0.0)
+    for _ in range(10):
+        world.step()
+    counts = world.stage_counts
+    assert set(counts) == set(STAGES)
+    assert counts["collide"] == 10 and counts["solve"] == 40 and counts["relax"] == 40
+    assert counts["friction"] == 0 and counts["restitution"] == 0
+    assert counts["time_of_impact"] == 0
+    # With friction and a bouncing ball the same stages do run.
+    world = ground_world(friction=0.5)
+    world.add_body(BALL, position=(0.0, 2.0), restitution=0.5)
+    for _ in range(60):
+        world.step()
+    assert world.stage_counts["friction"] > 0 and world.stage_counts["restitution"] == 2
+
+
+def test_kinematic_body_moves_with_its_velocity_and_lifts_a_ball():
+    """A platform rising at 1 m/s carries a ball resting on it (to 1 cm, 1 cm/s)."""
+    world = World()
+    lift = world.add_body({"type": "box", "size": [4.0, 0.5]}, position=(0.0, 0.0),
+                          kind="kinematic", velocity=(0.0, 1.0))
+    ball = world.add_body(BALL, position=(0.0, 0.75))
+    for _ in range(60):
+        world.step()
+    assert world.position[lift, 1] == pytest.approx(1.0, abs=1e-12)
+    assert world.velocity[lift, 1] == 1.0
+    assert world.position[ball, 1] == pytest.approx(1.75, abs=0.01)
+    assert world.velocity[ball, 1] == pytest.approx(1.0, abs=0.01)
+
+
+def test_steps_are_deterministic():
+    def run() -> np.ndarray:
+        world = ground_world()
+        for i in range(6):
+            world.add_body(UNIT_BOX if i == 2 else BALL, position=(0.3 * i, 1.0 + 1.1 * i),
+                           angle=0.1 * i)
+        for _ in range(30):
+            world.step()
+        return np.concatenate([world.position.ravel(), world.angle, world.velocity.ravel()])
+
+    np.testing.assert_array_equal(run(), run())
+
+
+# ---------------------------------------------------------------------------------------
+# Contacts, friction, restitution
+# ---------------------------------------------------------------------------------------
+
+
+def test_box_settles_on_the_ground():
+    """Half-extents 1 x 1 at (0, 4) on a 50 x 10 ground centred at (0, -10), friction
+    0.3, dt 1/60: after 90 steps |x| < 0.01, |y - 1| < 0.01, |angle| < 0.01."""
+    world = ground_world(friction=0.3)
+    box = world.add_body(BOX, position=(0.0, 4.0), friction=0.3)
+    for _ in range(90):
+        world.step()
+    x, y = world.position[box]
+    assert abs(x) < 0.01 and abs(y - 1.0) < 0.01 and abs(world.angle[box]) < 0.01
+
+
+def test_box_slides_down_an_incline_at_g_sin_minus_mu_cos():
+    """30 degrees, mu 0.2: a = g (sin a - mu cos a) = 3.2059 m/s^2, measured between
+    0.25 s and 0.75 s; within 1 %. The box keeps flat on the plank."""
+    world, box, tangent, _ = incline(UNIT_BOX, 30.0, 0.2, 0.5)
+    v = []
+    for _ in range(45):
+        world.step()
+        v.append(world.velocity[box] @ tangent)
+    expected = -G * (math.sin(math.radians(30)) - 0.2 * math.cos(math.radians(30)))
+    assert (v[44] - v[14]) / 0.5 == pytest.approx(expected, rel=0.01)
+    assert world.angle[box] == pytest.approx(math.radians(30), abs=0.01)
+
+
+def test_box_sticks_below_the_friction_angle():
+    """15 degrees, mu 0.5 (tan 15 = 0.27 < 0.5): after 1 s the box has crept < 1 mm."""
+    world, box, tangent, _ = incline(UNIT_BOX, 15.0, 0.5, 0.5)
+    start = world.position[box] @ tangent
+    for _ in range(60):
+        world.step()
+    assert abs(world.position[box] @ tangent - start) < 1e-3
+    assert abs(world.velocity[box] @ tangent) < 1e-3
+
+
+def test_disk_rolls_down_a_ramp_without_slipping():
+    """20 degrees, mu 0.5 (> tan 20 / 3): a = 2/3 g sin a = 2.2368 m/s^2 measured between
+    0.5 s and 2 s, within 1 %; and w r = -v (rolling) within 1 %."""
+    world, disk, tangent, _ = incline(BALL, 20.0, 0.5, 0.5)
+    v = []
+    for _ in range(120):
+        world.step()
+        v.append(world.velocity[disk] @ tangent)
+    expected = -2.0 / 3.0 * G * math.sin(math.radians(20))
+    assert (v[119] - v[29]) / 1.5 == pytest.approx(expected, rel=0.01)
+    assert world.angular_velocity[disk] * 0.5 == pytest.approx(-v[-1], rel=0.01)
+
+
+@pytest.mark.parametrize("e", [0.5, 0.8, 1.0])
+def test_bounce_height_is_e_squared_h(e):
+    """A ball dropped from 2 m (bottom above the ground), restitution e, no friction:
+    the first rebound's apex is e^2 h within 3 % (the approach speed is measured at
+    the start of the impact step, slightly under the true impact speed)."""
+    world = ground_world(friction=0.0)
+    ball = world.add_body(BALL, position=(0.0, 2.5), restitution=e, friction=0.0)
+    heights, rising = [], []
+    for _ in range(200):
+        world.step()
+        heights.append(world.position[ball, 1] - 0.5)
+        rising.append(world.velocity[ball, 1] > 0)
+    rising = np.array(rising)
+    first_up = int(np.argmax(rising))
+    first_down = first_up + int(np.argmax(~rising[first_up:]))
+    assert max(heights[first_up:first_down + 1]) == pytest.approx(e * e * 2.0, rel=0.03)
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5, 1.0])
+def test_head_on_circles_final_velocities(e):
+    """m1 = pi/4 (density 1), m2 = 3 pi/4, v1 = 2, v2 = -1, no gravity or friction:
+    v1' = (p + m2 e (v2 - v1)) / (m1 + m2), v2' = (p + m1 e (v1 - v2)) / (m1 + m2)
+    (round-off: the contact is caught speculatively, so one restitution solve is exact)."""
+    world = World(gravity=(0.0, 0.0))
+    world.add_body(BALL, position=(-1.0, 0.0), velocity=(2.0, 0.0), restitution=e, friction=0)
+    world.add_body(BALL, position=(1.0, 0.0), velocity=(-1.0, 0.0), density=3.0,
+                   restitution=e, friction=0)
+    for _ in range(60):
+        world.step()
+    m1, m2 = world.mass
+    p = 2.0 * m1 - 1.0 * m2
+    np.testing.assert_allclose(world.velocity[:, 0],
+                               [(p + m2 * e * (-3.0)) / (m1 + m2),
+                                (p + m1 * e * 3.0) / (m1 + m2)], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(world.velocity[:, 1], 0.0)
+
+
+def test_momentum_and_angular_momentum_conserved_without_gravity():
+    """Circles and boxes thrown together with friction and restitution, no gravity:
+    sum m v and sum (m x cross v + I w) about the origin stay constant to round-off
+    over 2 s of collisions."""
+    rng = np.random.default_rng(7)
+    world = World(gravity=(0.0, 0.0))
+    for i in range(12):
+        shape = BALL if i % 3 else UNIT_BOX
+        world.add_body(shape, position=rng.uniform(-2.0, 2.0, 2) + [2.2 * (i % 4), 2.2 * (i // 4)],
+                       angle=rng.uniform(0, 3), velocity=-rng.uniform(0.5, 1.5, 2) * [i % 4 - 1.5,
+                                                                                  i // 4 - 1],
+                       angular_velocity=rng.uniform(-2, 2), density=rng.uniform(0.5, 2.0),
+                       friction=0.6, restitution=0.3)
+
+    def momenta():
+        m, v, x = world.mass, world.velocity, world.center_of_mass
+        p = m @ v
+        return p, float(m @ (x[:, 0] * v[:, 1] - x[:, 1] * v[:, 0])
+                        + world.inertia @ world.angular_velocity)
+
+    p0, l0 = momenta()
+    contacts = 0
+    for _ in range(120):
+        world.step()
+        contacts += len(world.contacts)
+    assert contacts > 50 and world.stage_counts["time_of_impact"] == 0
+    p1, l1 = momenta()
+    np.testing.assert_allclose(p1, p0, rtol=0, atol=1e-12)
+    assert l1 == pytest.approx(l0, abs=1e-11)
+
+
+# ---------------------------------------------------------------------------------------
+# Stacking
+# ---------------------------------------------------------------------------------------
+
+
+#: Known collision defect these tests wait for (strict: they must fail until it is fixed).
+ALIGNED_BOXES = pytest.mark.xfail(
+    strict=True, reason="sdfphys.collide: two aligned stacked boxes get side normals at the "
+    "shared corners (collide(box, box) with 1 mm overlap returns normal (-1, 0)); the solver "
+    "stands the stack with exact contacts (test_solver); remove when the collision is fixed")
+
+
+def box_stack(count: int) -> World:
+    world = ground_world(friction=0.6)
+    for i in range(count):
+        world.add_body(UNIT_BOX, position=(0.0, 0.5 + i), friction=0.6)
+    return world
+
+
+@ALIGNED_BOXES
+def test_ten_box_stack_stands_ten_seconds():
+    """Ten unit boxes, 600 steps: every box within 5 cm of its start, angle < 0.05."""
+    world = box_stack(10)
+    start = world.position
+    for second in range(10):
+        for _ in range(60):
+            world.step()
+        assert np.max(np.abs(world.position - start)) < 0.05, f"moved within {second + 1} s"
+        assert np.max(np.abs(world.angle)) < 0.05, f"tilted within {second + 1} s"
+
+
+@pytest.mark.slow
+@ALIGNED_BOXES
+def test_twenty_base_pyramid_stands_twenty_seconds():
+    """210 unit boxes (rows of 20, 19, ..., 1): the top box moves < 5 cm in 20 s."""
+    world = ground_world(friction=0.6)
+    for row in range(20):
+        for i in range(20 - row):
+            world.add_body(UNIT_BOX, position=(i - (19 - row) / 2, 0.5 + row), friction=0.6)
+    start = world.position[-1]
+    for _ in range(1200):
+        world.step()
+    assert np.linalg.norm(world.position[-1] - start) < 0.05
