@@ -4,7 +4,9 @@ Keys: P pause / resume, O one step (while paused), R reset (a new world from the
 factory), S screenshot (PNG in the current directory, its name printed), C contacts
 overlay, F field overlay, B bounds overlay, Esc or closing the window quits.
 Mouse: press the left button on a dynamic body and drag; the grabbed point is
-pulled toward the pointer by a soft spring (``DragSpring``).
+pulled toward the pointer by a soft spring (``DragSpring``). The right button on
+any body shows that body's field alone (and turns the field overlay on); on empty
+space, the union of all fields again.
 
 The top line shows frames per second, simulation steps per second, the simulated
 time and the state (paused, overlays).
@@ -23,7 +25,7 @@ import sys
 import time
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -84,13 +86,16 @@ class DragSpring:
     """Cap on the grabbed point's acceleration from the spring, m/s^2."""
 
 
-def pick_body(world: Any, point: np.ndarray, tolerance: float = 0.0) -> int | None:
-    """The dynamic body under world ``point`` (2,) m: the one whose field is smallest
-    there, if that value is <= ``tolerance`` m; None if there is none."""
+def pick_body(world: Any, point: np.ndarray, tolerance: float = 0.0,
+              dynamic_only: bool = True) -> int | None:
+    """The body under world ``point`` (2,) m: the one whose field is smallest there, if
+    that value is <= ``tolerance`` m; None if there is none. Only dynamic bodies
+    unless ``dynamic_only`` is False."""
     frames = body_frames(world)
     radius = np.array([float(s.radius) for s in frames.shapes])[frames.shape_id]
     gap = np.hypot(*(frames.com - point).T)
-    candidates = np.flatnonzero((frames.motion == DYNAMIC) & (gap <= radius + tolerance))
+    eligible = (frames.motion == DYNAMIC) if dynamic_only else np.ones(len(gap), bool)
+    candidates = np.flatnonzero(eligible & (gap <= radius + tolerance))
     best, best_d = None, tolerance
     for b in candidates.tolist():
         c, s = math.cos(frames.angle[b]), math.sin(frames.angle[b])
@@ -195,6 +200,10 @@ class _Session:
             self.grab.target = self.camera.screen_to_world([event.pos])[0]
         elif event.type == pygame.MOUSEBUTTONUP and event.button == 1:
             self.grab = None
+        elif event.type == pygame.MOUSEBUTTONDOWN and event.button == 3:
+            point = self.camera.screen_to_world([event.pos])[0]
+            body = pick_body(self.world, point, 3.0 / self.camera.scale, dynamic_only=False)
+            self.overlays = replace(self.overlays, field=True, field_body=body)
 
     def _key(self, key: int) -> None:
         if key == pygame.K_ESCAPE:
@@ -206,14 +215,15 @@ class _Session:
         elif key == pygame.K_r:
             self.world = self.factory()
             self.grab = None
+            self.overlays = replace(self.overlays, field_body=None)
         elif key == pygame.K_s:
             self.screenshot = True
         elif key == pygame.K_c:
-            self.overlays = _toggled(self.overlays, contacts=not self.overlays.contacts)
+            self.overlays = replace(self.overlays, contacts=not self.overlays.contacts)
         elif key == pygame.K_f:
-            self.overlays = _toggled(self.overlays, field=not self.overlays.field)
+            self.overlays = replace(self.overlays, field=not self.overlays.field)
         elif key == pygame.K_b:
-            self.overlays = _toggled(self.overlays, bounds=not self.overlays.bounds)
+            self.overlays = replace(self.overlays, bounds=not self.overlays.bounds)
 
     def advance(self) -> None:
         """Run this frame's steps: enough to keep pace with ``fps`` (at least one),
@@ -259,12 +269,6 @@ class _Session:
         pygame.image.save(screen, str(path))
         print(f"screenshot: {path}", flush=True)
         return path
-
-
-def _toggled(overlays: Overlays, **change: bool) -> Overlays:
-    values = {name: getattr(overlays, name) for name in overlays.__dataclass_fields__}
-    values.update(change)
-    return Overlays(**values)
 
 
 def play(world_factory: Callable[[], Any], render_settings: RenderSettings, *,

@@ -167,6 +167,19 @@ def test_field_toggle_shades_the_screen(tmp_path, monkeypatch):
     np.testing.assert_array_equal(off[:, 40:], plain[:, 40:])     # below the heads-up line
 
 
+def test_right_click_shows_one_body_field(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    s = key(pygame.K_s)
+    union, ball, again = shots(tmp_path, [
+        [key(pygame.K_f), s],
+        [mouse(pygame.MOUSEBUTTONDOWN, (-1.0, 2.0), button=3), s],
+        [mouse(pygame.MOUSEBUTTONDOWN, (0.5, 0.5), button=3), s]])
+    post = tuple(CAMERA.world_to_screen([[2.0 + 0.5, 2.0]]).astype(int)[0])  # its edge
+    iso = np.array(Palette().iso, dtype=float)
+    assert np.abs(union[post] - iso).max() < np.abs(ball[post] - iso).max()  # zero line gone
+    np.testing.assert_array_equal(again[:, 40:], union[:, 40:])              # union again
+
+
 def test_contacts_toggle_draws_contacts(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     s = key(pygame.K_s)
@@ -209,6 +222,7 @@ def test_pick_body_finds_dynamic_bodies_only():
     world = ball_world()
     assert pick_body(world, np.array([-1.0, 2.3])) == 0
     assert pick_body(world, np.array([2.0, 2.0])) is None              # static post
+    assert pick_body(world, np.array([2.0, 2.0]), dynamic_only=False) == 1
     assert pick_body(world, np.array([0.0, 0.0])) is None
     assert pick_body(world, np.array([-1.0, 2.45]), tolerance=0.1) == 0
 
