@@ -215,8 +215,9 @@ class ContactConstraints:
     body_a, body_b, feature: (K,) int64, from the Contacts (body_a < body_b).
     normal: (K, 2) unit, a -> b.  separation: (K,) m, current s (< 0 overlapping).
     anchor_a0, anchor_b0: (K, 2) m, the contact point relative to each centre of mass
-        at the start of the step (material anchors, rotated with the bodies).
-    anchor_a, anchor_b: (K, 2) m, current anchors (to one common world point).
+        at the start of the step (the separation carries them with the bodies' moves).
+    anchor_a, anchor_b: (K, 2) m, the lever arms the impulses use, re-based after each
+        position update so that x_a + anchor_a = x_b + anchor_b (module docstring).
     base_separation: (K,) m, s0 - n.(anchor_b0 - anchor_a0).
     normal_mass, tangent_mass: (K,) kg, effective masses (0 if both bodies are fixed).
     friction, restitution: (K,) mixed coefficients (sqrt(a b), max(a, b)).
