@@ -179,6 +179,14 @@ class TriangleMesh(Shape):
     def outline(self) -> np.ndarray:
         return self.vertices
 
+    @cached_property
+    def outline_edges(self) -> np.ndarray:
+        """(T, 3) bool: edge k of triangle t (opposite its vertex k) lies on the outline."""
+        m = len(self.vertices)
+        t = self.triangles
+        step = (t[:, [2, 0, 1]] - t[:, [1, 2, 0]]) % m
+        return (step == 1) | (step == m - 1)
+
     @property
     def field(self) -> Field:
         return self._field

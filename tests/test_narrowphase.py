@@ -279,6 +279,40 @@ def test_rotated_box_corner_pressing_into_a_face(rng):
         np.testing.assert_allclose(c.point, [[x + low[0], 0.5 - d / 2]], atol=1e-9)
 
 
+def test_aligned_stacked_boxes_get_their_corners_with_the_face_normal():
+    """Equal boxes exactly aligned, 1 mm overlap: the shared corners lie on the side
+    faces (f = 0 there, gradient tie), yet the contacts are the corners with (0, 1)."""
+    unit = {"type": "box", "size": [1.0, 1.0]}
+    for dx, expected_x in [(0.0, [-0.5, 0.5]), (1e-4, [-0.4999, 0.5]),
+                           (-1e-4, [-0.5, 0.4999])]:
+        c = collide(unit, (0.0, 0.5, 0.0), unit, (dx, 1.499, 0.0))
+        point, normal, depth = sorted_rows(c)
+        np.testing.assert_allclose(point, np.stack([expected_x, [0.9995] * 2], axis=1),
+                                   atol=1e-9)
+        np.testing.assert_allclose(normal, [[0.0, 1.0], [0.0, 1.0]], atol=1e-9)
+        np.testing.assert_allclose(depth, [0.001, 0.001], atol=1e-9)
+    before = collide(unit, (0.0, 0.5, 0.0), unit, (0.0, 1.499, 0.0))
+    after = collide(unit, (0.0, 0.5, 0.0), unit, (0.0, 1.4991, 0.0))
+    np.testing.assert_array_equal(after.feature, before.feature)
+
+
+@pytest.mark.parametrize("theta", [0.002, -0.002, 0.01])
+def test_slightly_tilted_box_keeps_both_bottom_corners(theta):
+    """The shallower corner is no local minimum of f, yet it must be reported
+    (measured against the face under the deeper one), speculative if separated."""
+    half = np.array([0.5, 0.25])
+    corners = np.array([[-1.0, -1.0], [1.0, -1.0]]) * half @ rotation(theta).T
+    y = 0.5 - 0.005 - corners[:, 1].min()
+    c = collide(GROUND, (0.0, 0.0, 0.0), TOP, (0.2, y, theta), margin=0.02)
+    point, normal, depth = sorted_rows(c)
+    bottom = corners + [0.2, y]
+    expected_depth = 0.5 - bottom[:, 1]
+    np.testing.assert_allclose(depth, expected_depth, atol=1e-9)
+    np.testing.assert_allclose(point, bottom + np.c_[np.zeros(2), expected_depth / 2],
+                               atol=1e-9)
+    np.testing.assert_allclose(normal, [[0.0, 1.0], [0.0, 1.0]], atol=1e-9)
+
+
 def test_concave_table_on_its_two_legs():
     """Four leg corners touch, colinear: the reduction keeps the two outer ones."""
     c = collide({"type": "box", "size": [10.0, 1.0]}, (0.0, -0.49, 0.0), TABLE, (-1.0, 0.0, 0.0))
