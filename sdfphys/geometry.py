@@ -527,12 +527,15 @@ def _cell_moments(f: np.ndarray, gradient: np.ndarray, h: float
     c = 0.5 * (a + b)
     e = 0.5 * (a - b)
     ab = np.maximum(a * b, 1e-300)
-    w = np.where(t < -e, np.maximum(t + c, 0.0) ** 2 / (2.0 * ab),
-                 np.where(t > e, 1.0 - np.maximum(c - t, 0.0) ** 2 / (2.0 * ab), 0.5 + t / a))
-    v = np.maximum(c - np.abs(t), 0.0)
-    m_outer = -(0.5 * c * v * v - v ** 3 / 3.0) / ab
-    m_at_e = -(0.5 * c * b * b - b ** 3 / 3.0) / ab
-    m = np.where(np.abs(t) > e, m_outer, m_at_e + (t * t - e * e) / (2.0 * a))
+    # np.where evaluates every branch: where a branch is not selected its quotient by
+    # a tiny ab may overflow harmlessly (the selected branches stay bounded by b / a).
+    with np.errstate(over="ignore", invalid="ignore"):
+        w = np.where(t < -e, np.maximum(t + c, 0.0) ** 2 / (2.0 * ab),
+                     np.where(t > e, 1.0 - np.maximum(c - t, 0.0) ** 2 / (2.0 * ab), 0.5 + t / a))
+        v = np.maximum(c - np.abs(t), 0.0)
+        m_outer = -(0.5 * c * v * v - v ** 3 / 3.0) / ab
+        m_at_e = -(0.5 * c * b * b - b ** 3 / 3.0) / ab
+        m = np.where(np.abs(t) > e, m_outer, m_at_e + (t * t - e * e) / (2.0 * a))
     return w, m, n
 
 
