@@ -8,10 +8,11 @@ lies inside a smooth piece of the boundary (an edge or an arc) the gradient is
 that piece's outward normal at q, which equals Quilez's ``sdg*`` gradients
 wherever the field is differentiable and stays exact for p on or near the
 boundary; where q is a vertex (a corner, an end point, a cusp) it is
-sign(f) (p - q) / |p - q|. At points where the gradient is undefined (a centre, a
-medial axis, a point on a bare segment or curve) each primitive returns a fixed
-unit vector named in its docstring. No branch divides by a quantity that can
-vanish; the iterative solvers (ellipse, Bezier) run a fixed number of steps.
+sign(f) (p - q) / |p - q|. Where the gradient is undefined (a centre, a medial
+axis, a point on a bare segment or curve) the result is still a deterministic
+unit vector; each docstring names the notable cases. No branch divides by a
+quantity that can vanish; the iterative solvers (ellipse, Bezier) run a fixed
+number of steps.
 
 Angles are in radians; "half" angles are measured from the +y axis on both
 sides, so ``half_angle = pi / 2`` is a half disk above the x axis.
@@ -27,6 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import SpecError
 from .base import REQUIRED, Field, Param, as_points, primitive, safe_normalize
@@ -70,7 +72,7 @@ def _unfold(g: np.ndarray, sx: np.ndarray | float = 1.0,
     return np.column_stack([g[:, 0] * sx, g[:, 1] * sy])
 
 
-def _vec(value) -> np.ndarray:
+def _vec(value: ArrayLike) -> np.ndarray:
     return np.array(value, dtype=np.float64).reshape(2)
 
 
@@ -133,16 +135,16 @@ class Circle(Field):
     def __init__(self, radius: float):
         self.radius = float(radius)
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p = as_points(points)
         length = np.hypot(p[:, 0], p[:, 1])
         return length - self.radius, safe_normalize(p)
 
-    def distance(self, points):
+    def distance(self, points: np.ndarray) -> np.ndarray:
         p = as_points(points)
         return np.hypot(p[:, 0], p[:, 1]) - self.radius
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         r = self.radius
         return np.array([-r, -r, r, r])
 
@@ -157,14 +159,14 @@ class Segment(Field):
     unit left normal of b - a. ``a == b`` is allowed (a point; fallback (1, 0)).
     """
 
-    def __init__(self, a, b):
+    def __init__(self, a: ArrayLike, b: ArrayLike):
         self.a = _vec(a)
         self.b = _vec(b)
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return _segment_distance(as_points(points), self.a, self.b)
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         return np.concatenate([np.minimum(self.a, self.b), np.maximum(self.a, self.b)])
 
 
@@ -178,16 +180,16 @@ class Capsule(Field):
     left normal of b - a. ``a == b`` gives a disk.
     """
 
-    def __init__(self, a, b, radius: float):
+    def __init__(self, a: ArrayLike, b: ArrayLike, radius: float):
         self.a = _vec(a)
         self.b = _vec(b)
         self.radius = _check_positive("radius", radius)
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         d, g = _segment_distance(as_points(points), self.a, self.b)
         return d - self.radius, g
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         r = self.radius
         return np.concatenate([np.minimum(self.a, self.b) - r, np.maximum(self.a, self.b) + r])
 
@@ -219,7 +221,7 @@ class UnevenCapsule(Field):
         self.sin_t = (self.r1 - self.r2) / self.height
         self.cos_t = math.sqrt(1.0 - self.sin_t ** 2)
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q, sx = _fold_x(as_points(points))
         s, c, h = self.sin_t, self.cos_t, self.height
         top_centre = np.array([0.0, h])
@@ -232,7 +234,7 @@ class UnevenCapsule(Field):
                   _pick(top, _unit(q - top_centre, _UP), np.array([c, s])))
         return d, _unfold(g, sx)
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         w = max(self.r1, self.r2)
         return np.array([-w, -self.r1, w, self.height + self.r2])
 
@@ -261,13 +263,16 @@ class Pie(Field):
         self.full = self.half_angle >= math.pi
         self.c = np.array([math.sin(self.half_angle), math.cos(self.half_angle)])
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q, sx = _fold_x(as_points(points))
         r = self.radius
         d_arc = _norm(q) - r
         g_arc = _unit(q, _UP)
         if self.full:
             return d_arc, _unfold(g_arc, sx)
+        # max() is exact: the edge lies in the disk, so beyond it m >= |p| - r; inside
+        # the wedge the radial projection r p/|p| is on the arc, so there
+        # -min(r - |p|, m) is minus the distance to the nearer of arc and edge.
         c = self.c
         normal = np.array([c[1], -c[0]])
         beyond = q @ normal > 0.0
@@ -280,7 +285,7 @@ class Pie(Field):
         arc = d_arc >= d_edge
         return np.where(arc, d_arc, d_edge), _unfold(_pick(arc, g_arc, g_edge), sx)
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         box = _arc_box(self.radius, self.half_angle)
         box[1] = min(box[1], 0.0)
         return box
@@ -306,7 +311,7 @@ class CutDisk(Field):
                             f"({-self.radius:g}, {self.radius:g}), got {self.h:g}")
         self.half_chord = math.sqrt(self.radius ** 2 - self.h ** 2)
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q, sx = _fold_x(as_points(points))
         r, h, w = self.radius, self.h, self.half_chord
         corner = np.array([w, h])
@@ -327,7 +332,7 @@ class CutDisk(Field):
         d = s * np.where(arc, d_arc, d_chord)
         return d, _unfold(_pick(arc, g_arc, g_chord), sx)
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         w = self.half_chord if self.h >= 0.0 else self.radius
         return np.array([-w, self.h, w, self.radius])
 
@@ -359,7 +364,7 @@ class Arc(Field):
         reach = self.radius if full or self.half_angle <= math.pi / 2 else self.radius * self.c[0]
         self.exact = bool(self.half_width <= reach)
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q, sx = _fold_x(as_points(points))
         r, c = self.radius, self.c
         length = _norm(q)
@@ -371,7 +376,7 @@ class Arc(Field):
         g = _pick(on_arc, outward * _unit(q, _UP), _unit(rel, c))
         return d - self.half_width, _unfold(g, sx)
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         x0, y0, x1, y1 = _arc_box(self.radius, self.half_angle)
         w = self.half_width
         return np.array([x0 - w, y0 - w, x1 + w, y1 + w])
@@ -403,7 +408,7 @@ class Ring(Field):
         self.full = self.half_angle >= math.pi
         self.c = np.array([math.sin(self.half_angle), math.cos(self.half_angle)])
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q, sx = _fold_x(as_points(points))
         r, w, c = self.radius, self.half_width, self.c
         length = _norm(q)
@@ -413,6 +418,8 @@ class Ring(Field):
             return d_ring, _unfold(g_ring, sx)
         # Frame of the right end face: u along its outward normal (cos a, -sin a),
         # v along it (the direction c); the face is u = 0, r - w <= v <= r + w.
+        # As for the pie, max() is exact: the face lies in the annulus, and inside
+        # the wedge the radial projections onto both circles are on the sector.
         normal = np.array([c[1], -c[0]])
         u, v = q @ normal, q @ c
         s = np.where(u > 0.0, 1.0, -1.0)
@@ -424,7 +431,7 @@ class Ring(Field):
         ring = d_ring >= d_face
         return np.where(ring, d_ring, d_face), _unfold(_pick(ring, g_ring, g_face), sx)
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         a, r, w = self.half_angle, self.radius, self.half_width
         x0, y0, x1, y1 = _arc_box(r + w, a)
         return np.array([x0, min(y0, (r - w) * math.cos(a)), x1, y1])
@@ -476,7 +483,7 @@ class Horseshoe(Field):
                             f"(radius - thickness / 2) * tan(half_opening) = {limit:g}, "
                             f"got {self.length:g}")
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q, sx = _fold_x(as_points(points))
         r, w, L, n, d = self.radius, self.half_width, self.length, self.n, self.d
         u, v = q @ d, q @ n
@@ -504,7 +511,7 @@ class Horseshoe(Field):
         leg = u > 0.0
         return np.where(leg, d_leg, d_arc), _unfold(_pick(leg, g_leg, g_arc), sx)
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         r, w, L, t = self.radius, self.half_width, self.length, self.half_opening
         x_arc = (r + w) * (1.0 if t <= math.pi / 2 else math.sin(t))
         y_top = (r + w if t <= math.pi / 2 else r - w) * math.cos(t)
@@ -539,7 +546,7 @@ class Vesica(Field):
                             f"got {self.centre_distance:g}")
         self.half_height = math.sqrt(self.radius ** 2 - self.centre_distance ** 2)
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p = as_points(points)
         sx = np.where(p[:, 0] < 0.0, -1.0, 1.0)
         sy = np.where(p[:, 1] < 0.0, -1.0, 1.0)
@@ -555,7 +562,7 @@ class Vesica(Field):
         g = _pick(on_arc, _unit(rel, _RIGHT), _unit(rel_c, _UP))
         return d, _unfold(g, sx, sy)
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         w, b = self.radius - self.centre_distance, self.half_height
         return np.array([-w, -b, w, b])
 
@@ -587,7 +594,7 @@ class Moon(Field):
         a = (ra * ra - rb * rb + dc * dc) / (2.0 * dc)
         self.horn = np.array([a, math.sqrt(max(ra * ra - a * a, 0.0))])
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p = as_points(points)
         sy = np.where(p[:, 1] < 0.0, -1.0, 1.0)
         q = np.column_stack([p[:, 0], np.abs(p[:, 1])])
@@ -613,7 +620,7 @@ class Moon(Field):
         d = s * np.where(outer, d_a, d_b)
         return d, _unfold(_pick(outer, g_a, g_b), 1.0, sy)
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         # The rightmost boundary point is the horn (both arcs have their largest x
         # there); the outer arc reaches y = +-radius only if it passes over the top.
         ra, (ka, kb) = self.radius, self.horn
@@ -643,7 +650,7 @@ class Egg(Field):
                             f"got {self.top_radius:g}")
         self.core = self.radius - self.top_radius
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q, sx = _fold_x(as_points(points))
         r = self.core
         apex = np.array([0.0, math.sqrt(3.0) * r])
@@ -657,7 +664,7 @@ class Egg(Field):
                   _pick(above, _unit(q - apex, _UP), _unit(q - side_centre, _RIGHT)))
         return d - self.top_radius, _unfold(g, sx)
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         ra = self.radius
         return np.array([-ra, -ra, ra, math.sqrt(3.0) * self.core + self.top_radius])
 
@@ -683,7 +690,7 @@ class Heart(Field):
     def __init__(self, scale: float):
         self.scale = _check_positive("scale", scale)
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q, sx = _fold_x(as_points(points) / self.scale)
         lobe = q[:, 0] + q[:, 1] > 1.0
         rel_l = q - self._LOBE_CENTRE
@@ -705,7 +712,7 @@ class Heart(Field):
         d = np.where(lobe, d_lobe, d_low) * self.scale
         return d, _unfold(_pick(lobe, g_lobe, g_low), sx)
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         x = (self._LOBE_CENTRE[0] + self._LOBE_RADIUS) * self.scale
         return np.array([-x, 0.0, x, (self._LOBE_CENTRE[1] + self._LOBE_RADIUS) * self.scale])
 
@@ -741,7 +748,7 @@ class Ellipse(Field):
     _BISECTIONS = 12
     _NEWTON = 6
 
-    def __init__(self, size):
+    def __init__(self, size: ArrayLike):
         w, h = _vec(size)
         if not (w > 0.0 and h > 0.0):
             raise SpecError("size", f"must be two positive numbers, got {[w, h]}")
@@ -749,7 +756,7 @@ class Ellipse(Field):
         self.swap = h > w
         self.a, self.b = (self.half[1], self.half[0]) if self.swap else (self.half[0], self.half[1])
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p = as_points(points)
         if self.swap:
             p = p[:, ::-1]
@@ -788,7 +795,7 @@ class Ellipse(Field):
             g = g[:, ::-1]
         return np.where(inside, -dist, dist), g
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         hx, hy = self.half
         return np.array([-hx, -hy, hx, hy])
 
@@ -844,7 +851,7 @@ class QuadraticBezier(Field):
     # order in the parameter error at an interior minimum.
     _POLISH = 3
 
-    def __init__(self, a, b, c, radius: float = 0.0):
+    def __init__(self, a: ArrayLike, b: ArrayLike, c: ArrayLike, radius: float = 0.0):
         self.a, self.b, self.c = _vec(a), _vec(b), _vec(c)
         self.radius = float(radius)
         if not self.radius >= 0.0:
@@ -865,7 +872,7 @@ class QuadraticBezier(Field):
     def _curve(self, t: np.ndarray) -> np.ndarray:
         return self.a + 2.0 * t[..., None] * self.A + (t * t)[..., None] * self.B
 
-    def evaluate(self, points):
+    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p = as_points(points)
         n = len(p)
         A, B = self.A, self.B
@@ -910,7 +917,7 @@ class QuadraticBezier(Field):
         g = _pick(interior, side[:, None] * normal, _unit(rel, normal))
         return dist - self.radius, g
 
-    def bounds(self):
+    def bounds(self) -> np.ndarray:
         # Extremes of each coordinate: the ends and the stationary t = -A_i / B_i.
         t = [0.0, 1.0] + [-self.A[i] / self.B[i] for i in range(2)
                           if self.B[i] != 0.0 and 0.0 < -self.A[i] / self.B[i] < 1.0]
