@@ -387,18 +387,20 @@ def _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h):
 
 
 @njit(cache=True)
-def _update_anchors(com, com0, angle, angle0, inv_mass, inv_inertia, body_a, body_b, normal,
-                    anchor_a0, anchor_b0, base_separation, anchor_a, anchor_b, separation,
-                    normal_mass, tangent_mass):
+def _update_anchors(com, com0, angle, angle0, cos_d, sin_d, inv_mass, inv_inertia, body_a,
+                    body_b, normal, anchor_a0, anchor_b0, base_separation, anchor_a, anchor_b,
+                    separation, normal_mass, tangent_mass):
     """Re-measure every separation from the accumulated moves; re-base the anchors.
 
     s = base + n.(dp_b + R(dq_b) rb0 - dp_a - R(dq_a) ra0), no collision query.
     Anchors: with D = dp_b - dp_a and inverse masses ma, mb, ra = ra0 + mb / (ma + mb) D
     and rb = rb0 - ma / (ma + mb) D, so x_a + ra = x_b + rb (one common point; module
     docstring). Against a static or kinematic body the movable body keeps its anchor.
+    cos_d, sin_d: (B,) scratch for the rotation of each body since the start of the step.
     """
-    cos_d = np.cos(angle - angle0)
-    sin_d = np.sin(angle - angle0)
+    for i in range(angle.shape[0]):
+        cos_d[i] = math.cos(angle[i] - angle0[i])
+        sin_d[i] = math.sin(angle[i] - angle0[i])
     for k in range(body_a.shape[0]):
         a = body_a[k]
         b = body_b[k]
@@ -433,25 +435,41 @@ def _update_anchors(com, com0, angle, angle0, inv_mass, inv_inertia, body_a, bod
 
 
 @njit(cache=True)
-def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, normal,
-                anchor_a, anchor_b, normal_impulse, tangent_impulse, total_normal_impulse):
+def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pair_start,
+                normal, anchor_a, anchor_b, normal_impulse, tangent_impulse, total_normal_impulse):
     """Apply the accumulated impulses P = l_n n + l_t t at the current anchors."""
-    for k in range(body_a.shape[0]):
-        a = body_a[k]
-        b = body_b[k]
-        nx = normal[k, 0]
-        ny = normal[k, 1]
-        px = normal_impulse[k] * nx + tangent_impulse[k] * ny
-        py = normal_impulse[k] * ny - tangent_impulse[k] * nx
-        total_normal_impulse[k] += normal_impulse[k]
+    for p in range(pair_start.shape[0] - 1):
+        first = pair_start[p]
+        a = body_a[first]
+        b = body_b[first]
         ma = inv_mass[a]
         mb = inv_mass[b]
-        velocity[a, 0] -= ma * px
-        velocity[a, 1] -= ma * py
-        angular_velocity[a] -= inv_inertia[a] * (anchor_a[k, 0] * py - anchor_a[k, 1] * px)
-        velocity[b, 0] += mb * px
-        velocity[b, 1] += mb * py
-        angular_velocity[b] += inv_inertia[b] * (anchor_b[k, 0] * py - anchor_b[k, 1] * px)
+        ia = inv_inertia[a]
+        ib = inv_inertia[b]
+        vax = velocity[a, 0]
+        vay = velocity[a, 1]
+        wa = angular_velocity[a]
+        vbx = velocity[b, 0]
+        vby = velocity[b, 1]
+        wb = angular_velocity[b]
+        for k in range(first, pair_start[p + 1]):
+            nx = normal[k, 0]
+            ny = normal[k, 1]
+            px = normal_impulse[k] * nx + tangent_impulse[k] * ny
+            py = normal_impulse[k] * ny - tangent_impulse[k] * nx
+            total_normal_impulse[k] += normal_impulse[k]
+            vax -= ma * px
+            vay -= ma * py
+            wa -= ia * (anchor_a[k, 0] * py - anchor_a[k, 1] * px)
+            vbx += mb * px
+            vby += mb * py
+            wb += ib * (anchor_b[k, 0] * py - anchor_b[k, 1] * px)
+        velocity[a, 0] = vax
+        velocity[a, 1] = vay
+        angular_velocity[a] = wa
+        velocity[b, 0] = vbx
+        velocity[b, 1] = vby
+        angular_velocity[b] = wb
 
 
 @njit(cache=True)
@@ -560,6 +578,8 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
     """All substeps of one step: integrate v, warm start, solve, integrate x, relax."""
     com0 = com.copy()
     angle0 = angle.copy()
+    cos_d = np.empty_like(angle)
+    sin_d = np.empty_like(angle)
     inv_h = 1.0 / h
     has_contacts = body_a.shape[0] > 0
     for _ in range(substeps):
@@ -567,7 +587,7 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
                               angular_damping, gravity, h)
         if has_contacts:
             _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
-                        normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
+                        pair_start, normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
                         total_normal_impulse)
             _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
                    pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
@@ -576,9 +596,9 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
                    max_push_out, True, use_friction)
         _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h)
         if has_contacts:
-            _update_anchors(com, com0, angle, angle0, inv_mass, inv_inertia, body_a, body_b,
-                            normal, anchor_a0, anchor_b0, base_separation, anchor_a, anchor_b,
-                            separation, normal_mass, tangent_mass)
+            _update_anchors(com, com0, angle, angle0, cos_d, sin_d, inv_mass, inv_inertia,
+                            body_a, body_b, normal, anchor_a0, anchor_b0, base_separation,
+                            anchor_a, anchor_b, separation, normal_mass, tangent_mass)
             for _ in range(relax_passes):
                 _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
                        pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
