@@ -36,9 +36,12 @@ one common world point, p = x_a + ra0 + mb / (ma + mb) D (ma, mb inverse masses)
 impulse pair is then equal, opposite and collinear, so linear and angular momentum are
 conserved to round-off. Against a static or kinematic body (ma = 0) the movable body
 keeps Box2D's fixed anchor exactly (the immovable arm does no work); between two
-dynamic bodies the lighter keeps its anchor best, and the effective masses follow the
-anchors. The separation is measured as SOLVER.md says, from the anchors carried by the
-bodies' rotations and translations.
+dynamic bodies the lighter keeps its anchor best. The effective masses stay those
+prepared from the first anchors (SOLVER.md: prepared once); the arms move by the
+bodies' relative displacement within one step, which changes the iteration's step size
+a little and leaves every impulse pair, hence the momenta, exact. The separation is
+measured as SOLVER.md says, from the anchors carried by the bodies' rotations and
+translations.
 """
 
 from __future__ import annotations
@@ -387,9 +390,8 @@ def _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h):
 
 
 @njit(cache=True)
-def _update_anchors(com, com0, angle, angle0, cos_d, sin_d, inv_mass, inv_inertia, body_a,
-                    body_b, normal, anchor_a0, anchor_b0, base_separation, anchor_a, anchor_b,
-                    separation, normal_mass, tangent_mass):
+def _update_anchors(com, com0, angle, angle0, cos_d, sin_d, inv_mass, body_a, body_b, normal,
+                    anchor_a0, anchor_b0, base_separation, anchor_a, anchor_b, separation):
     """Re-measure every separation from the accumulated moves; re-base the anchors.
 
     s = base + n.(dp_b + R(dq_b) rb0 - dp_a - R(dq_a) ra0), no collision query.
@@ -425,13 +427,6 @@ def _update_anchors(com, com0, angle, angle0, cos_d, sin_d, inv_mass, inv_inerti
         anchor_a[k, 1] = ra0y + share_b * dy
         anchor_b[k, 0] = rb0x - share_a * dx
         anchor_b[k, 1] = rb0y - share_a * dy
-        if ma > 0.0 and mb > 0.0:
-            normal_mass[k] = _effective_mass(ma, inv_inertia[a], mb, inv_inertia[b],
-                                             anchor_a[k, 0], anchor_a[k, 1], anchor_b[k, 0],
-                                             anchor_b[k, 1], nx, ny)
-            tangent_mass[k] = _effective_mass(ma, inv_inertia[a], mb, inv_inertia[b],
-                                              anchor_a[k, 0], anchor_a[k, 1], anchor_b[k, 0],
-                                              anchor_b[k, 1], ny, -nx)
 
 
 @njit(cache=True)
@@ -596,9 +591,9 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
                    max_push_out, True, use_friction)
         _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h)
         if has_contacts:
-            _update_anchors(com, com0, angle, angle0, cos_d, sin_d, inv_mass, inv_inertia,
-                            body_a, body_b, normal, anchor_a0, anchor_b0, base_separation,
-                            anchor_a, anchor_b, separation, normal_mass, tangent_mass)
+            _update_anchors(com, com0, angle, angle0, cos_d, sin_d, inv_mass, body_a, body_b,
+                            normal, anchor_a0, anchor_b0, base_separation, anchor_a, anchor_b,
+                            separation)
             for _ in range(relax_passes):
                 _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
                        pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
