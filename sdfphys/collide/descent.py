@@ -473,7 +473,7 @@ def _descend(problem: _Problem, points: np.ndarray, iterations: int, sigma: np.n
             left[hb] = np.where(to_left[:, None], sample, left[hb])
             right[hb] = np.where(to_right[:, None], sample, right[hb])
         from_model = improved & (win >= 2 * n_ladder)
-        new_sigma = np.where(from_model, np.maximum(moved, tol), new_sigma)
+        new_sigma = np.where(from_model, np.maximum(moved, 0.25 * scale), new_sigma)
 
         # (b) A ladder winner at position k starts a new line search on its path,
         #     bracketed by its neighbours (k - 1, k) if phi' >= 0 there, else
