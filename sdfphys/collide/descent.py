@@ -324,9 +324,11 @@ def _descend(problem: _Problem, points: np.ndarray, iterations: int, sigma: np.n
              tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Minimise the problem's objective from each start (P, 2) (see the module docstring).
 
-    sigma: (P,) initial step scale (path units). Returns the best point (P, 2),
-    its objective (P,), its data (P, kd) and the number of iterations each start
-    took (P,) (a start is counted while it is in the batch).
+    sigma: (P,) initial step scale (path units); tol: a start stops when its
+    accepted step is shorter (m). At most ``iterations`` rounds, each ONE
+    ``problem.evaluate`` call over the candidates of all running starts. Returns
+    the best point (P, 2), its objective (P,), its data (P, kd) and the number of
+    iterations each start took (P,) (a start is counted while it is in the batch).
     """
     phi, grad_best, data = problem.evaluate(points)
     best = points.copy()
