@@ -244,7 +244,12 @@ class World:
     # ----------------------------------------------------------------------------------
 
     def step(self) -> None:
-        """Advance the world by ``settings.dt`` (SOLVER.md, "One step")."""
+        """Advance the world by ``settings.dt`` (SOLVER.md, "One step").
+
+        Stages: collide once; prepare the contact rows (warm start matched by feature
+        key); the substeps (each: integrate velocities, warm start, solve, integrate
+        positions, relax); restitution; time of impact for fast bodies; store impulses.
+        """
         bodies = self._body_state()
         start_com, start_angle = bodies.com.copy(), bodies.angle.copy()
         contacts = self._collide(bodies)

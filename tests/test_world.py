@@ -272,6 +272,20 @@ def test_bounce_height_is_e_squared_h(e):
     assert max(heights[first_up:first_down + 1]) == pytest.approx(e * e * 2.0, rel=0.03)
 
 
+def test_perfectly_elastic_ball_never_gains_energy():
+    """e = 1 on the ground for 15 s (about ten bounces): the total energy never exceeds
+    its initial value (no pumping), and the ball keeps bouncing (> 80 % retained)."""
+    world = ground_world(friction=0.0)
+    world.add_body(BALL, position=(0.0, 2.5), restitution=1.0, friction=0.0)
+    e0 = world.kinetic_energy() + world.potential_energy()
+    energy = []
+    for _ in range(900):
+        world.step()
+        energy.append(world.kinetic_energy() + world.potential_energy())
+    assert max(energy) <= e0
+    assert energy[-1] > 0.8 * e0
+
+
 @pytest.mark.parametrize("e", [0.0, 0.5, 1.0])
 def test_head_on_circles_final_velocities(e):
     """m1 = pi/4 (density 1), m2 = 3 pi/4, v1 = 2, v2 = -1, no gravity or friction:
