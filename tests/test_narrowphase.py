@@ -325,19 +325,19 @@ def test_concave_table_on_its_two_legs():
 def test_box_in_the_notch_of_an_l():
     """A box pressed 0.02 into the L's arm and 0.01 into its wall, corner in the notch.
 
-    Its bottom-left corner (0.99, 0.98) is nearest the re-entrant vertex (1, 1):
-    depth |(0.01, 0.02)|, normal along it; bottom-right (1.79, 0.98) is 0.02 under
-    the arm, normal (0, 1); top-left (0.99, 1.58) is 0.01 inside the wall, (1, 0).
+    Its bottom-left corner (0.99, 0.98) is nearest the L's re-entrant vertex (1, 1),
+    a vertex normal, which polygon pairs do not use. Face contacts instead: the arm
+    under the box's bottom face from x = 1 (the re-entrant vertex measured against
+    the box's bottom face) to x = 1.79 (the box's corner), normal (0, 1), depth 0.02;
+    the wall against the box's left face at its top-left corner (0.99, 1.58), normal
+    (1, 0), depth 0.01.
     """
     c = collide(L_SHAPE, (0.0, 0.0, 0.0), {"type": "box", "size": [0.8, 0.6]},
                 (1.39, 1.28, 0.0))
     point, normal, depth = sorted_rows(c)
-    corner = math.hypot(0.01, 0.02)
-    np.testing.assert_allclose(depth, [corner, 0.01, 0.02], atol=1e-9)
-    np.testing.assert_allclose(normal, [[1 / math.sqrt(5), 2 / math.sqrt(5)], [1.0, 0.0],
-                                        [0.0, 1.0]], atol=1e-9)
-    np.testing.assert_allclose(point, [[0.99 + 0.005, 0.98 + 0.01], [0.995, 1.58],
-                                       [1.79, 0.99]], atol=1e-9)
+    np.testing.assert_allclose(depth, [0.01, 0.02, 0.02], atol=1e-9)
+    np.testing.assert_allclose(normal, [[1.0, 0.0], [0.0, 1.0], [0.0, 1.0]], atol=1e-9)
+    np.testing.assert_allclose(point, [[0.995, 1.58], [1.0, 0.99], [1.79, 0.99]], atol=1e-9)
 
 
 @pytest.mark.parametrize("shift", [(1e-4, 0.0), (0.0, 1e-4), (-1e-4, 1e-4)])

@@ -1,0 +1,262 @@
+"""Contact candidates of a triangle mesh inside another shape's field, n pairs at once.
+
+Used by the narrowphase for mesh-mesh (both ways) and mesh-sdf pairs. Everything
+happens in the other shape's body frame ("local"); one call handles n pairs that
+share the same mesh and the same other shape, so each stage is one batched field
+evaluation whatever n is.
+
+Stages (derivations in each function's docstring):
+
+1. ``_descent_minima``: local minima of the other field f over every triangle
+   (``descent.triangle_deepest``, Macklin et al. 2020): the points of the mesh
+   deepest in the other shape, depth -f, normal grad f.
+2. ``_samples``: the mesh's outline vertices and outline edge midpoints with
+   f < margin. A descent minimum is a LOCAL minimum: a box resting slightly tilted
+   has one (its deeper corner); its other corner is still a contact.
+3. Polygon filters (other is a polygon too and the pair also runs the other way):
+   minima off the outline are slivers of triangles cut by a corner of the other
+   polygon; ``_face_normals`` drops candidates whose normal is not a face's (on a
+   medial axis, or nearest to a vertex of the other polygon). Polygon contacts are
+   vertex-face or face-face (separating axis theorem), so the other direction, or
+   step 4, carries what is dropped.
+4. ``_reference_faces`` (Box2D's reference face and clipping, in SDF form): every
+   kept candidate proposes the face under it as a contact plane; a plane under
+   which some mesh vertex lies deeper than anything reaches into the other shape
+   (plus the slop) is cut by the mesh, not pressed by it, and is rejected (a side
+   face near the end of a thin overlap strip: SAT's non-minimal axis). Mesh
+   vertices are measured against the accepted planes.
+
+Keys (see ``narrowphase`` for the layout): descent minima keep (triangle, start
+id); a minimum at a mesh vertex, a vertex sample and a vertex measured against a
+face all get the vertex key (element = vertex index, start ``VERTEX_START``), edge
+midpoints the edge key (element = outline edge index, start ``EDGE_START``); one
+candidate per key and pair survives, in the order: face measures (deepest face
+first), then descent minima and samples.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from ..sdf import Field, safe_normalize
+from ..settings import Settings
+from ..shapes import Shape
+from . import descent
+
+__all__ = ["EDGE_START", "VERTEX_START", "mesh_in_field"]
+
+#: Start id of vertex keys: the key's element is then a mesh vertex index.
+VERTEX_START = 255
+#: Start id of edge-midpoint keys: the key's element is then an outline edge index.
+EDGE_START = 254
+#: Barycentric weight under which a point counts as on the opposite edge (descent
+#: minima on an edge come from a projection onto it, exact up to round-off).
+_ON_EDGE = 1e-9
+#: A vertex measured against a face must have its foot this close to the surface (m).
+_ON_FACE = 1e-9
+#: Probe distance (m) and largest gradient turn (rad) of ``_face_normals``: a normal
+#: that turns by more within 1e-7 m is a kink (medial axis) or a vertex's.
+_PROBE = 1e-7
+_KINK = 1e-3
+_AXES = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
+#: Descent starts of one triangle ending closer than this (m) are one minimum (the
+#: lowest start id is kept, a stable key); far below any physical length.
+_MERGE_RADIUS = 1e-6
+
+
+@dataclass
+class _Candidates:
+    """C candidate contacts in other's frame: mesh point, depth (m), outward normal."""
+
+    pair: np.ndarray        # (C,) index of the pair in the batch
+    element: np.ndarray     # (C,) triangle, vertex or edge index (see start)
+    start: np.ndarray       # (C,) descent start id, VERTEX_START or EDGE_START
+    point: np.ndarray       # (C, 2) the mesh's point, other's frame
+    depth: np.ndarray       # (C,) -f(point), or the depth below a reference face
+    normal: np.ndarray      # (C, 2) unit outward normal of other (zeros: not yet known)
+
+    def take(self, index: np.ndarray) -> _Candidates:
+        return _Candidates(*(getattr(self, f.name)[index] for f in fields(self)))
+
+    @classmethod
+    def concatenate(cls, parts: list[_Candidates]) -> _Candidates:
+        return cls(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(cls)))
+
+
+def _barycentric(triangle: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """Barycentric weights (C, 3) of points (C, 2) in triangles (C, 3, 2) (signed areas)."""
+    v0, v1, v2 = triangle[:, 0], triangle[:, 1], triangle[:, 2]
+
+    def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+
+    area = cross(v1 - v0, v2 - v0)
+    return np.stack([cross(v1 - point, v2 - point), cross(v2 - point, v0 - point),
+                     cross(v0 - point, v1 - point)], axis=1) / area[:, None]
+
+
+def _first_per_key(*keys: np.ndarray) -> np.ndarray:
+    """Sorted indices of the first row (in input order) of each distinct key tuple."""
+    order = np.lexsort((np.arange(len(keys[0])),) + keys[::-1])
+    sorted_keys = np.stack([k[order] for k in keys], axis=1)
+    new = np.r_[True, np.any(sorted_keys[1:] != sorted_keys[:-1], axis=1)]
+    return np.sort(order[new])
+
+
+def _descent_minima(mesh: Shape, field: Field, local: np.ndarray, margin: float,
+                    settings: Settings, outline_only: bool) -> _Candidates:
+    """Minima of f over each triangle (n pairs x T triangles ``local`` (n T, 3, 2)).
+
+    ``descent.triangle_cull`` drops triangles that cannot reach f < margin,
+    ``descent.triangle_deepest`` descends from each triangle's starts,
+    ``descent.merge_minima`` keeps one start per distinct minimum. With
+    ``outline_only``, minima off the mesh's outline are dropped (see the module
+    docstring); minima at a mesh vertex get the vertex key. Normals are left zero.
+    """
+    n_tri = len(mesh.triangles)
+    kept = np.nonzero(descent.triangle_cull(field, local, margin))[0]
+    point, value = descent.triangle_deepest(field, local[kept],
+                                            iterations=settings.descent_iterations)
+    distinct = descent.merge_minima(point, _MERGE_RADIUS)
+    hit, start = np.nonzero(distinct & (value < margin))
+    flat = kept[hit]
+    element = flat % n_tri
+    p = point[hit, start]
+    weight = _barycentric(local[flat], p)
+    keep = (np.any((weight <= _ON_EDGE) & mesh.outline_edges[element], axis=1)
+            if outline_only else np.ones(len(p), bool))
+    at_vertex = np.max(weight, axis=1) >= 1.0 - _ON_EDGE
+    corner = mesh.triangles[element, np.argmax(weight, axis=1)]
+    c = _Candidates(flat // n_tri, np.where(at_vertex, corner, element),
+                    np.where(at_vertex, VERTEX_START, start), p, -value[hit, start],
+                    np.zeros_like(p))
+    return c.take(keep)
+
+
+def _samples(mesh: Shape, field: Field, vertices: np.ndarray, margin: float) -> _Candidates:
+    """Outline vertices and outline edge midpoints (n, V, 2) of every pair with f < margin.
+
+    ``vertices``: the mesh's vertices in other's frame per pair. One distance call.
+    """
+    m = vertices.shape[1]
+    midpoints = 0.5 * (vertices + np.roll(vertices, -1, axis=1))
+    points = np.concatenate([vertices, midpoints], axis=1).reshape(-1, 2)
+    f = field.distance(points)
+    index = np.nonzero(f < margin)[0]
+    slot = index % (2 * m)
+    return _Candidates(index // (2 * m), slot % m,
+                       np.where(slot < m, VERTEX_START, EDGE_START), points[index],
+                       -f[index], np.zeros((len(index), 2)))
+
+
+def _face_normals(field: Field, p: np.ndarray, depth: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Unit gradient (C, 2) at points p (C, 2), and (C,) bool: it is a face's normal.
+
+    One evaluation of 7 C points. The normal at p is trusted when (a) the gradient
+    is the same at p +- h x and p +- h y (p is not on a kink of f, such as the
+    medial axis of a polygon, where the gradient picks one of two faces) and (b)
+    the gradient is the same at the foot q = p + depth g +- h t, t the tangent
+    (the nearest boundary point is inside a face, not a vertex: outside a corner
+    the gradient points from that corner and the normal of a vertex-vertex pair
+    is ill-defined). h = ``_PROBE``; "the same" is within ``_KINK`` (rad).
+    """
+    n = len(p)
+    points = np.concatenate([p, (p[:, None, :] + _PROBE * _AXES[None]).reshape(-1, 2)])
+    g = safe_normalize(field.evaluate(points)[1])
+    g0, around = g[:n], g[n:].reshape(n, 4, 2)
+    foot = p + depth[:, None] * g0
+    tangent = np.stack([-g0[:, 1], g0[:, 0]], axis=1)
+    sides = np.concatenate([foot + _PROBE * tangent, foot - _PROBE * tangent])
+    g_foot = safe_normalize(field.evaluate(sides)[1]).reshape(2, n, 2).transpose(1, 0, 2)
+    turn = np.sum((np.concatenate([around, g_foot], axis=1) - g0[:, None, :]) ** 2, axis=2)
+    return g0, np.all(turn <= _KINK ** 2, axis=1)
+
+
+def _reference_faces(field: Field, c: _Candidates, vertices: np.ndarray, deepest: np.ndarray,
+                     margin: float, slop: float) -> tuple[np.ndarray, _Candidates]:
+    """Which candidates' faces are contact planes, and the vertices measured on them.
+
+    For candidate r (point p, depth d, outward normal g), the face point is
+    q = p + d g (on other's surface for an exact field). A mesh vertex v of the same
+    pair is *supported* by the face when its foot v - s g, s = (v - q).g, lies on
+    other's surface (|f| <= ``_ON_FACE``: the face extends under v) and
+    f(v) <= margin (v is near other, not across it). The face is a contact plane
+    when no supported vertex lies deeper below it than the pair's deepest point
+    (``deepest`` (n,): max of -f over the mesh, from the descent) plus ``slop``:
+    otherwise the mesh cuts through the plane (a side face near the end of a thin
+    overlap), and pushing along it would take more than the actual penetration.
+    Returns the (C,) mask and the supported vertices of accepted faces with s <
+    margin as candidates (depth -s, normal g), deepest faces first.
+    """
+    v = vertices[c.pair]                                            # (C, V, 2)
+    q = c.point + c.depth[:, None] * c.normal
+    s = np.einsum("cvi,ci->cv", v - q[:, None, :], c.normal)
+    r_idx, v_idx = np.nonzero(s < margin)
+    sep = s[r_idx, v_idx]
+    vv = v[r_idx, v_idx]
+    f = field.distance(np.concatenate([vv - sep[:, None] * c.normal[r_idx], vv]))
+    supported = ((np.abs(f[:len(vv)]) <= _ON_FACE) & (f[len(vv):] <= margin + _ON_FACE))
+    cut = supported & (-sep > deepest[c.pair[r_idx]] + slop)
+    accepted = np.ones(len(c.depth), bool)
+    accepted[r_idx[cut]] = False
+    use = supported & accepted[r_idx]
+    r_idx, v_idx, sep = r_idx[use], v_idx[use], sep[use]
+    order = np.lexsort((-c.depth[r_idx], c.pair[r_idx]))
+    r_idx, v_idx, sep = r_idx[order], v_idx[order], sep[order]
+    measured = _Candidates(c.pair[r_idx], v_idx, np.full(len(v_idx), VERTEX_START),
+                           v[r_idx, v_idx], -sep, c.normal[r_idx])
+    return accepted, measured
+
+
+def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: np.ndarray,
+                  margin: float, settings: Settings, polygon_pair: bool
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                             np.ndarray]:
+    """Contacts of ``mesh`` inside ``other``'s field for n pairs (see the module doc).
+
+    pose_mesh, pose_other: (n, 3) centre-of-mass poses (x, y, angle), world.
+    margin: m, candidates with depth > -margin. polygon_pair: other is a polygon
+    and the caller also runs other's mesh in this mesh's field (stage 3).
+    Returns pair index (C,), midway point (C, 2) world (the mesh point moved by
+    depth / 2 along the normal), outward normal of other (C, 2) world (from other
+    toward the mesh), depth (C,), key element (C,) and key start (C,).
+    """
+    n = len(pose_mesh)
+    angle = pose_mesh[:, 2] - pose_other[:, 2]
+    cos, sin = np.cos(angle), np.sin(angle)
+    rotation = np.stack([np.stack([cos, -sin], axis=1), np.stack([sin, cos], axis=1)], axis=1)
+    d = pose_mesh[:, :2] - pose_other[:, :2]
+    co, so = np.cos(pose_other[:, 2]), np.sin(pose_other[:, 2])
+    offset = np.stack([co * d[:, 0] + so * d[:, 1], -so * d[:, 0] + co * d[:, 1]], axis=1)
+    vertices = np.einsum("nij,vj->nvi", rotation, mesh.vertices) + offset[:, None, :]
+    local = vertices[:, mesh.triangles].reshape(-1, 3, 2)
+
+    c = _Candidates.concatenate([
+        _descent_minima(mesh, other.field, local, margin, settings, polygon_pair),
+        _samples(mesh, other.field, vertices, margin)])
+    if len(c.depth) == 0:
+        return c.pair, c.point, c.normal, c.depth, c.element, c.start
+    deepest = np.full(n, -np.inf)
+    np.maximum.at(deepest, c.pair, c.depth)
+    if polygon_pair:
+        c.normal, face = _face_normals(other.field, c.point, c.depth)
+        c = c.take(face)
+        if len(c.depth) == 0:
+            return c.pair, c.point, c.normal, c.depth, c.element, c.start
+    else:
+        c.normal = safe_normalize(other.field.evaluate(c.point)[1])
+    accepted, measured = _reference_faces(other.field, c, vertices, deepest, margin,
+                                          settings.linear_slop)
+    c = _Candidates.concatenate([measured, c.take(accepted)])
+    c = c.take(_first_per_key(c.pair, c.element, c.start))
+
+    mid = c.point + (0.5 * c.depth)[:, None] * c.normal
+    co, so = co[c.pair], so[c.pair]
+    world_mid = np.stack([co * mid[:, 0] - so * mid[:, 1], so * mid[:, 0] + co * mid[:, 1]],
+                         axis=1) + pose_other[c.pair, :2]
+    world_normal = np.stack([co * c.normal[:, 0] - so * c.normal[:, 1],
+                             so * c.normal[:, 0] + co * c.normal[:, 1]], axis=1)
+    return c.pair, world_mid, world_normal, c.depth, c.element, c.start
