@@ -378,3 +378,15 @@ def test_mesh_instancing_field_calls_do_not_grow_with_bodies(rng):
         calls.append(counting.calls)
         assert set(c.body_b) == set(range(1, n + 1))
     assert max(calls) <= settings.descent_iterations + 3
+
+
+@pytest.mark.parametrize("quality", ["fast", "accurate"])
+def test_mesh_contacts_do_not_depend_on_the_quality_preset(quality):
+    from sdfphys.settings import preset
+
+    for pose in [(0.3, 0.74, 0.0), (0.1, 0.9, 0.6), (0.2, 0.7451, 0.002)]:
+        expected = collide(GROUND, (0.0, 0.0, 0.0), TOP, pose, margin=0.02)
+        got = collide(GROUND, (0.0, 0.0, 0.0), TOP, pose, margin=0.02,
+                      settings=preset(quality))
+        for e, g in zip(sorted_rows(expected), sorted_rows(got), strict=True):
+            np.testing.assert_allclose(g, e, atol=1e-9)

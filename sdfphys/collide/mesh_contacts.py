@@ -61,6 +61,9 @@ _ON_FACE = 1e-9
 _PROBE = 1e-7
 _KINK = 1e-3
 _AXES = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
+#: Descent start ids in the order ``settings.descent_starts`` takes them: centroid, edge
+#: midpoints, then vertices (the vertices are sampled anyway, see ``_samples``).
+_START_PRIORITY = np.array([6, 3, 4, 5, 0, 1, 2])
 #: Descent starts of one triangle ending closer than this (m) are one minimum (the
 #: lowest start id is kept, a stable key); far below any physical length.
 _MERGE_RADIUS = 1e-6
@@ -110,27 +113,32 @@ def _descent_minima(mesh: Shape, field: Field, local: np.ndarray, margin: float,
     """Minima of f over each triangle (n pairs x T triangles ``local`` (n T, 3, 2)).
 
     ``descent.triangle_cull`` drops triangles that cannot reach f < margin,
-    ``descent.triangle_deepest`` descends from each triangle's starts,
+    ``descent.triangle_deepest`` descends from each triangle's first
+    ``settings.descent_starts`` starts in ``_START_PRIORITY`` order (start ids keep
+    their ``descent.START_BARYCENTRIC`` numbering),
     ``descent.merge_minima`` keeps one start per distinct minimum. With
     ``outline_only``, minima off the mesh's outline are dropped (see the module
     docstring); minima at a mesh vertex get the vertex key. Normals are left zero.
     """
     n_tri = len(mesh.triangles)
+    start_ids = _START_PRIORITY[:max(1, min(settings.descent_starts, len(_START_PRIORITY)))]
     kept = np.nonzero(descent.triangle_cull(field, local, margin))[0]
     point, value = descent.triangle_deepest(field, local[kept],
-                                            iterations=settings.descent_iterations)
+                                            iterations=settings.descent_iterations,
+                                            starts=descent.START_BARYCENTRIC[start_ids])
     distinct = descent.merge_minima(point, _MERGE_RADIUS)
-    hit, start = np.nonzero(distinct & (value < margin))
+    hit, column = np.nonzero(distinct & (value < margin))
+    start = start_ids[column]
     flat = kept[hit]
     element = flat % n_tri
-    p = point[hit, start]
+    p = point[hit, column]
     weight = _barycentric(local[flat], p)
     keep = (np.any((weight <= _ON_EDGE) & mesh.outline_edges[element], axis=1)
             if outline_only else np.ones(len(p), bool))
     at_vertex = np.max(weight, axis=1) >= 1.0 - _ON_EDGE
     corner = mesh.triangles[element, np.argmax(weight, axis=1)]
     c = _Candidates(flat // n_tri, np.where(at_vertex, corner, element),
-                    np.where(at_vertex, VERTEX_START, start), p, -value[hit, start],
+                    np.where(at_vertex, VERTEX_START, start), p, -value[hit, column],
                     np.zeros_like(p))
     return c.take(keep)
 
