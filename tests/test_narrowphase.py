@@ -390,3 +390,47 @@ def test_mesh_contacts_do_not_depend_on_the_quality_preset(quality):
                       settings=preset(quality))
         for e, g in zip(sorted_rows(expected), sorted_rows(got), strict=True):
             np.testing.assert_allclose(g, e, atol=1e-9)
+
+
+# --------------------------------------------------------------------------------------
+# Sdf pairs
+# --------------------------------------------------------------------------------------
+
+def test_sdf_discs_equal_analytic_circles(rng):
+    """Two sdf discs: field-field descent against circle-circle (exact for circles)."""
+    disc_a = {"type": "sdf", "field": {"type": "circle", "radius": 0.5}}
+    disc_b = {"type": "sdf", "field": {"type": "circle", "radius": 0.3}}
+    for _ in range(20):
+        pa = np.r_[rng.uniform(-1, 1, 2), rng.uniform(-3, 3)]
+        direction = rng.normal(size=2)
+        pb = np.r_[pa[:2] + rng.uniform(0.2, 0.78) * direction / np.linalg.norm(direction),
+                   rng.uniform(-3, 3)]
+        got = collide(disc_a, pa, disc_b, pb)
+        expected = collide(BALL, pa, {"type": "circle", "radius": 0.3}, pb)
+        assert len(got) == 1
+        # the sdf discs' centres of mass come from quadrature (1e-4 relative)
+        np.testing.assert_allclose(got.depth, expected.depth, atol=1e-4)
+        np.testing.assert_allclose(got.normal, expected.normal, atol=1e-3)
+        np.testing.assert_allclose(got.point, expected.point, atol=1e-4)
+
+
+def test_sdf_box_resting_flat_on_an_sdf_box():
+    ground = {"type": "sdf", "field": GROUND}
+    top = {"type": "sdf", "field": TOP}
+    c = collide(ground, (0.0, 0.0, 0.0), top, (0.3, 0.74, 0.0))
+    point, normal, depth = sorted_rows(c)
+    np.testing.assert_allclose(point, [[-0.2, 0.495], [0.8, 0.495]], atol=1e-6)
+    np.testing.assert_allclose(normal, [[0.0, 1.0], [0.0, 1.0]], atol=1e-6)
+    np.testing.assert_allclose(depth, [0.01, 0.01], atol=1e-6)
+
+
+def test_mesh_box_resting_on_an_sdf_ground():
+    """Mesh-sdf: the mesh's corners against the sdf's face, either kind order."""
+    ground = {"type": "sdf", "field": GROUND}
+    for first, second, sign in [((ground, (0.0, 0.0, 0.0)), (TOP, (0.3, 0.74, 0.0)), 1.0),
+                                ((TOP, (0.3, 0.74, 0.0)), (ground, (0.0, 0.0, 0.0)), -1.0)]:
+        c = collide(first[0], first[1], second[0], second[1])
+        point, normal, depth = sorted_rows(c)
+        np.testing.assert_allclose(point, [[-0.2, 0.495], [0.8, 0.495]], atol=1e-6)
+        np.testing.assert_allclose(normal, [[0.0, sign], [0.0, sign]], atol=1e-6)
+        np.testing.assert_allclose(depth, [0.01, 0.01], atol=1e-6)
