@@ -155,7 +155,16 @@ def collide_meshes(mesh_a: Shape, mesh_b: Shape, body_a: np.ndarray, body_b: np.
 def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
                          pose_a: np.ndarray, pose_b: np.ndarray, margin: float,
                          settings: Settings) -> Contacts:
-    """Mesh-sdf: the mesh's triangles in the sdf's field (``mesh_contacts``)."""
+    """Mesh-sdf: the mesh in the sdf's field (``mesh_contacts``), one direction only.
+
+    Decision: the mesh's triangles, vertices and edge midpoints are queried in the
+    sdf's field, batched over the group. The other view (the sdf's deepest points
+    inside the mesh's polygon field) needs a field-field query, per pair today (see
+    ``collide_sdfs``), so it is not run: where a sharp feature of the sdf pokes
+    into a face of the mesh, the depth is underestimated and the normal follows
+    the feature's side (the approximation stated in the module docstring). A mesh
+    vertex or edge pressing on the sdf, and faces resting on faces, are exact.
+    """
     pair, point, out_b, depth, tri, start = mesh_in_field(mesh_a, sdf_b, pose_a, pose_b,
                                                           margin, settings, False)
     return Contacts(body_a[pair], body_b[pair], point, -out_b, depth,
