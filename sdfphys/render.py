@@ -390,12 +390,14 @@ class Renderer:
             return None, (0, 0)
         i0, i1, j0, j1 = columns[0], columns[-1] + 1, rows[0], rows[-1] + 1
         coverage, d_px = coverage[i0:i1, j0:j1], d_px[i0:i1, j0:j1]
-        edge_weight = np.clip(d_px + 1.5, 0.0, 1.0)[:, :, None]
         fill = np.array(self.palette.fills[motion], dtype=np.float64)
         edge = np.array(self.palette.edges[motion], dtype=np.float64)
         sprite = pygame.Surface((i1 - i0, j1 - j0), pygame.SRCALPHA, 32)
+        sprite.fill(self.palette.fills[motion])
         rgb = pygame.surfarray.pixels3d(sprite)
-        rgb[...] = (fill + (edge - fill) * edge_weight + 0.5).astype(np.uint8)
+        i, j = np.nonzero((d_px > -1.5) & (d_px < 0.5))     # the visible edge band
+        weight = np.clip(d_px[i, j] + 1.5, 0.0, 1.0)[:, None]
+        rgb[i, j] = (fill + (edge - fill) * weight + 0.5).astype(np.uint8)
         del rgb
         alpha = pygame.surfarray.pixels_alpha(sprite)
         alpha[...] = (coverage * 255.0 + 0.5).astype(np.uint8)

@@ -10,7 +10,8 @@ Two runs of the same frames from the same initial state:
   1. simulate + render onto an off-screen Surface;
   2. simulate + render + encode to H.264 .mp4 (sdfphys.video; ffmpeg runs in its own
      process, so on two or more cores encoding overlaps the simulation).
-Reported: the median frames per second of each run (per-frame wall time), the
+Reported: the median frames per second of each run (per-frame wall time) and the
+same without the simulation step (the renderer's and encoder's own budget), the
 median milliseconds spent per frame in step(), draw() and the sink's write(), and
 the median CPU time of this process per frame (less sensitive than wall time to
 other load on the machine; ffmpeg's own CPU time is not in it).
@@ -108,7 +109,9 @@ def report(name: str, times: dict[str, np.ndarray]) -> float:
     parts = "   ".join(f"{part} {1000 * np.median(times[part]):6.2f} ms"
                        for part in ("step", "draw", "write", "cpu"))
     verdict = "ok" if fps >= TARGET_FPS else f"below the {TARGET_FPS:.0f} frames/s target"
-    print(f"{name:<28} {fps:7.1f} frames/s (median)   {parts}   {verdict}")
+    alone = 1.0 / float(np.median(times["draw"] + times["write"]))
+    print(f"{name:<28} {fps:7.1f} frames/s (median)   {parts}   {verdict}\n"
+          f"{'':<28} {alone:7.1f} frames/s without the step")
     return fps
 
 
