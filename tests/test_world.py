@@ -341,13 +341,6 @@ def test_momentum_and_angular_momentum_conserved_without_gravity():
 # ---------------------------------------------------------------------------------------
 
 
-#: Known collision defect these tests wait for (strict: they must fail until it is fixed).
-ALIGNED_BOXES = pytest.mark.xfail(
-    strict=True, reason="sdfphys.collide: two aligned stacked boxes get side normals at the "
-    "shared corners (collide(box, box) with 1 mm overlap returns normal (-1, 0)); the solver "
-    "stands the stack with exact contacts (test_solver); remove when the collision is fixed")
-
-
 def box_stack(count: int) -> World:
     world = ground_world(friction=0.6)
     for i in range(count):
@@ -355,7 +348,6 @@ def box_stack(count: int) -> World:
     return world
 
 
-@ALIGNED_BOXES
 def test_ten_box_stack_stands_ten_seconds():
     """Ten unit boxes, 600 steps: every box within 5 cm of its start, angle < 0.05."""
     world = box_stack(10)
@@ -368,7 +360,6 @@ def test_ten_box_stack_stands_ten_seconds():
 
 
 @pytest.mark.slow
-@ALIGNED_BOXES
 def test_twenty_base_pyramid_stands_twenty_seconds():
     """210 unit boxes (rows of 20, 19, ..., 1): the top box moves < 5 cm in 20 s."""
     world = ground_world(friction=0.6)
