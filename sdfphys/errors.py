@@ -11,7 +11,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-__all__ = ["SpecError", "check_number", "check_vec2", "check_int", "check_points"]
+__all__ = ["SpecError", "check_int", "check_number", "check_points", "check_vec2"]
 
 
 class SpecError(ValueError):
@@ -24,11 +24,11 @@ class SpecError(ValueError):
         where = ": ".join(s for s in (source, path) if s)
         super().__init__(f"{where}: {message}" if where else message)
 
-    def in_file(self, source: str) -> "SpecError":
+    def in_file(self, source: str) -> SpecError:
         """The same error attributed to the file ``source`` (printed first)."""
         return SpecError(self.path, self.message, source)
 
-    def under(self, prefix: str) -> "SpecError":
+    def under(self, prefix: str) -> SpecError:
         """The same error with ``prefix`` prepended to its key path."""
         if not prefix:
             return self

@@ -30,7 +30,7 @@ from .errors import SpecError, check_int, check_number, check_vec2
 from .sdf.build import suggest
 from .settings import Settings, preset
 
-__all__ = ["Scene", "BodySpec", "RenderSpec", "read_scene", "load_scene", "apply_overrides"]
+__all__ = ["BodySpec", "RenderSpec", "Scene", "apply_overrides", "load_scene", "read_scene"]
 
 TOP_KEYS = ("version", "world", "sim", "render", "body")
 WORLD_KEYS = ("gravity",)

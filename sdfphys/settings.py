@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 
-__all__ = ["Settings", "PRESETS", "preset"]
+__all__ = ["PRESETS", "Settings", "preset"]
 
 
 @dataclass(frozen=True)
@@ -49,7 +49,7 @@ class Settings:
     max_linear_speed: float = 400.0
     """Speeds above this (m/s) are clamped in position integration."""
 
-    def with_values(self, **values) -> "Settings":
+    def with_values(self, **values) -> Settings:
         """A copy with the given knobs replaced (unknown names raise TypeError)."""
         return replace(self, **values)
 

@@ -18,7 +18,7 @@ SCENES = sorted((ROOT / "scenes").glob("*.toml"))
 
 def run_cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "sdfphys.cli", *map(str, args)],
-                          capture_output=True, text=True, cwd=ROOT)
+                          capture_output=True, text=True, cwd=ROOT, check=False)
 
 
 def test_mp4_has_seconds_times_fps_frames(tmp_path):

@@ -8,7 +8,8 @@ import sys
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import sdfphys
 from sdfphys.errors import SpecError
@@ -134,7 +135,7 @@ def test_cli_bad_scene_exit_2_one_line_no_output(tmp_path):
     path.write_text("version = 1\n[[body]]\nshape = { type = 'circle', radius = -1.0 }\n")
     out = tmp_path / "out.mp4"
     result = subprocess.run([sys.executable, "-m", "sdfphys.cli", "run", str(path), "-o", str(out)],
-                            capture_output=True, text=True)
+                            capture_output=True, text=True, check=False)
     assert result.returncode == 2
     assert result.stderr.strip().splitlines() == [
         f"sdfphys: error: {path}: body[0].shape.radius: must be > 0, got -1"]

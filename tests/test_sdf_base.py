@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
+from fieldcheck import check_field
 
 import sdfphys
 from sdfphys.sdf import PRIMITIVES, field
-from fieldcheck import check_field
 
 
 def test_circle_and_box_are_exact(rng):

@@ -9,5 +9,12 @@ from . import curved, gradient, grid, operators, polygonal  # noqa: F401  (they 
 from .base import FALLBACK_DIRECTION, OPERATORS, PRIMITIVES, Field, Param, safe_normalize
 from .build import field
 
-__all__ = ["Field", "Param", "PRIMITIVES", "OPERATORS", "field", "safe_normalize",
-           "FALLBACK_DIRECTION"]
+__all__ = [
+           "FALLBACK_DIRECTION",
+           "OPERATORS",
+           "PRIMITIVES",
+           "Field",
+           "Param",
+           "field",
+           "safe_normalize",
+]

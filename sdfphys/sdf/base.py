@@ -21,16 +21,24 @@ Conventions (every field in ``sdfphys.sdf`` follows them):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
 from ..errors import SpecError, check_int, check_number, check_points, check_vec2
 
 __all__ = [
-    "Field", "Param", "PRIMITIVES", "OPERATORS", "primitive", "operator",
-    "as_points", "safe_normalize", "FALLBACK_DIRECTION",
+    "FALLBACK_DIRECTION",
+    "OPERATORS",
+    "PRIMITIVES",
+    "Field",
+    "Param",
+    "as_points",
+    "operator",
+    "primitive",
+    "safe_normalize",
 ]
 
 #: Direction used wherever a gradient or normal is undefined (a zero vector).
