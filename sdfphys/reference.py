@@ -1,0 +1,507 @@
+"""The same scene in pymunk (Chipmunk2D): contact-level and trajectory comparison.
+
+pymunk is the reference for circle contacts (DESIGN.md). ``PymunkWorld`` builds a
+scene in pymunk and steps it like sdfphys's World; ``compare`` runs both from the
+same initial state and, at every frame, also feeds sdfphys's poses to a second
+pymunk space to compare the contacts of the two engines at identical poses;
+``report`` prints both as tables per time window; ``compare_main`` is
+``sdfphys compare SCENE``.
+
+What is modelled
+----------------
+Every pair that can collide has a circle in it, so that its contact is exact in both
+engines (``tests/test_collide_pymunk.py``): dynamic bodies are circles; static and
+kinematic bodies are circles, boxes, convex polygons (``pymunk.Poly``) or a
+``capsule`` / ``segment`` field, optionally placed by ``offset`` and ``angle``
+(``pymunk.Segment`` with the capsule's radius, 0 for a segment). Anything else (SDF
+bodies, concave polygons, dynamic boxes or polygons, whose contacts are multi-point
+manifolds that the two engines build differently) raises ``NotModelledError`` naming
+the bodies.
+
+How the engines are matched, and what cannot be
+-----------------------------------------------
+- Bodies: each pymunk body sits at sdfphys's centre of mass and angle, with its
+  shape in the body frame (user geometry shifted by ``Shape.origin``). Mass is
+  ``mass`` or density x area, the moment ``pymunk.moment_for_circle(m, 0, r)``
+  (= m r^2 / 2, sdfphys's value to round-off). Gravity is the scene's; no damping;
+  pymunk never sleeps by default.
+- Time: pymunk has no substeps, so one sdfphys step is ``substeps`` calls of
+  ``Space.step(h)``, h = dt / substeps. (One call with dt would integrate gravity
+  four times more coarsely: free flight would differ by about g t dt.)
+- Step phase: Chipmunk's step is "integrate positions, collide, integrate
+  velocities, solve"; sdfphys's substep is "integrate velocities, solve, integrate
+  positions": the same loop entered at another stage. The first pymunk step runs with
+  position integration switched off (``Body.position_func`` a no-op), so that every
+  later pymunk position update uses the velocity of the matching substep of
+  sdfphys. Positions are then at the same time in both engines and free flight
+  agrees to round-off; pymunk's velocities are one substep's kick ahead (sdfphys's
+  velocity + h g in free flight).
+- Materials: pymunk multiplies the two shapes' friction and elasticity; sdfphys
+  mixes friction sqrt(f_a f_b) and restitution max(e_a, e_b), with no restitution
+  for approach speeds under ``settings.restitution_threshold``. Per-shape values can
+  match the friction for every pair (sqrt(f) per shape multiplies to sqrt(f_a f_b)),
+  but no per-shape values give max(e_a, e_b) for every pair. So each shape carries
+  sdfphys's raw values and a ``pre_solve`` handler on every pair sets
+  ``arbiter.friction = sqrt(f_a f_b)`` and ``arbiter.restitution = max(e_a, e_b)``
+  when the pair approaches faster than the threshold at its contact point, else 0.
+  Every pair then mixes exactly as in sdfphys.
+- Solver: pymunk runs ``iterations`` sequential-impulse sweeps per pymunk step, each
+  solving the bias (pseudo) velocity and the real velocity together; sdfphys runs
+  one biased and ``relax_passes`` rigid sweeps per substep. ``iterations`` is set to
+  1 + relax_passes, the same number of sweeps over the contacts per substep. (On the
+  reference scenes 10, pymunk's default, gives the same trajectories: their circle
+  pairs have one point and converge in one sweep.)
+- Overlap: sdfphys's soft contacts push an overlap s out at about
+  k = mass_scale x bias_rate (per second, s' = -k s; 17/s against static bodies at
+  the defaults, half that between two dynamic bodies) up to ``max_push_out``, down
+  to s = 0; pymunk removes the fraction 1 - collision_bias^h of the overlap beyond
+  ``collision_slop`` per pymunk step, a rate of -ln(collision_bias) per second. So
+  collision_bias = exp(-k) with sdfphys's rate against static bodies (the contacts
+  of the reference scenes are mostly against the ground). collision_slop is
+  ``linear_slop``, not 0: pymunk only keeps contacts that overlap, and with no slop
+  its piles jitter (circles_in_box after 8 s: median speed 3e-3 m/s at slop 0,
+  2e-6 m/s at 0.005). Resting bodies therefore sit anywhere from 0 to
+  collision_slop deep in pymunk, and at the soft contact's steady depth
+  impulse_scale g h / (mass_scale bias_rate) (7e-5 m at the defaults) in sdfphys.
+  Not matched: the contact softness itself (pymunk's contacts are rigid), the
+  push-out cap, and the rate between two dynamic bodies.
+- Contacts: sdfphys collides once per step and keeps contacts closer than
+  ``speculative_distance``; pymunk collides every pymunk step and keeps only
+  overlapping shapes. A body approaching faster than speculative_distance / dt
+  (1.2 m/s at the defaults) can overlap by up to one step's travel before sdfphys
+  sees the contact, which its next step resolves; pymunk resolves it within a
+  substep. An impact is thus up to two steps later in sdfphys, and positions after
+  it differ by up to |v_after - v_before| x 2 dt. Both anchor a contact differently:
+  pymunk at each body's own surface point, sdfphys (as Box2D v3) at the midpoint, so
+  a ball sunk by d rolls on radius r - d / 2 in sdfphys.
+- Restitution: sdfphys applies it after the substeps, toward -e times the approach
+  speed at the start of the step; pymunk inside every sweep, toward -e times the
+  approach speed at the start of its pymunk step. Both conserve momentum exactly.
+- Time of impact: pymunk has none; scenes whose bodies move more than half their
+  size in one step are not comparable.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pymunk
+
+from .collide import Contacts, find_contacts
+from .errors import SpecError
+from .scene import Scene, read_scene
+from .shapes import Circle, SdfShape, Shape, TriangleMesh
+from .solver import contact_softness
+
+__all__ = ["CONTACT_TOLERANCE", "Comparison", "NotModelledError", "PymunkWorld",
+           "check_modelled", "compare", "compare_main", "contact_difference", "report",
+           "sdfphys_contacts"]
+
+#: Contact points, normals and depths of the two engines agree to this (m; exact
+#: formulas on both sides, differing by round-off).
+CONTACT_TOLERANCE = 1e-9
+
+#: Width of the time windows of ``report``'s tables, s.
+WINDOW = 0.5
+
+#: Shape field types built as pymunk.Segment (a capsule's radius, 0 for a segment).
+SEGMENT_FIELDS = ("capsule", "segment")
+
+#: What the reference can build, for error messages.
+MODELLED = ("dynamic circles, and static or kinematic circles, boxes, convex polygons "
+            "and capsule or segment fields")
+
+
+class NotModelledError(SpecError):
+    """The scene has bodies the pymunk reference cannot build (the message names them)."""
+
+
+def _segment(shape: Shape) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """(a, b, radius) in the body frame if ``shape`` is a capsule or segment field."""
+    if not isinstance(shape, SdfShape):
+        return None
+    spec = shape.spec["field"]
+    if not isinstance(spec, dict) or spec.get("type") not in SEGMENT_FIELDS:
+        return None
+    angle = spec.get("angle", 0.0)
+    c, s = math.cos(angle), math.sin(angle)
+    offset = np.asarray(spec.get("offset", (0.0, 0.0)), np.float64) + shape.origin
+    ends = [np.array([c * x - s * y, s * x + c * y]) + offset
+            for x, y in (spec["a"], spec["b"])]
+    return ends[0], ends[1], float(spec.get("radius", 0.0))
+
+
+def _is_convex(vertices: np.ndarray) -> bool:
+    """True if the counter-clockwise outline (M, 2) turns left or goes straight at every
+    vertex (cross products >= -1e-12 x the squared size: collinear points count)."""
+    edge = np.roll(vertices, -1, axis=0) - vertices
+    turn = np.roll(edge, -1, axis=0)
+    cross = edge[:, 0] * turn[:, 1] - edge[:, 1] * turn[:, 0]
+    return bool(np.all(cross >= -1e-12 * float(np.max(np.sum(edge * edge, axis=1)))))
+
+
+def _why_not(shape: Shape, kind: str) -> str | None:
+    """Why the reference cannot build this body, or None if it can."""
+    if isinstance(shape, Circle):
+        return None
+    if kind == "dynamic":
+        what = "sdf" if isinstance(shape, SdfShape) else shape.spec["type"]
+        return f"dynamic {what}"
+    if isinstance(shape, TriangleMesh):
+        return None if _is_convex(shape.vertices) else "concave polygon"
+    if _segment(shape) is not None:
+        return None
+    return "sdf"
+
+
+def check_modelled(scene: Scene) -> None:
+    """Raise NotModelledError naming every body the reference cannot build (up to ten)."""
+    bad = []
+    for i, body in enumerate(scene.bodies):
+        reason = _why_not(body.shape, body.kind)
+        if reason is not None:
+            bad.append(f"body[{i}] {body.name!r} ({reason})")
+    if bad:
+        shown = ", ".join(bad[:10]) + (f" and {len(bad) - 10} more" if len(bad) > 10 else "")
+        raise NotModelledError("", f"pymunk cannot model {shown}; the reference models "
+                                   f"{MODELLED}", scene.source)
+
+
+def _noop_position(body: pymunk.Body, dt: float) -> None:
+    """A position update that leaves the body where it is (the priming step)."""
+
+
+class PymunkWorld:
+    """A modelled Scene built in pymunk; ``step()`` advances one sdfphys step.
+
+    Body i is scene body i. State accessors return arrays like World's: centre of
+    mass (B, 2) m, angle (B,) rad, velocity (B, 2) m/s. See the module docstring for
+    how each setting is matched.
+    """
+
+    def __init__(self, scene: Scene):
+        check_modelled(scene)
+        settings = scene.settings
+        self.settings = settings
+        self.substep = settings.dt / settings.substeps
+        _, stiff = contact_softness(settings)
+        space = pymunk.Space()
+        space.gravity = tuple(scene.gravity)
+        space.iterations = 1 + settings.relax_passes
+        space.collision_slop = settings.linear_slop
+        space.collision_bias = math.exp(-stiff.bias_rate * stiff.mass_scale)
+        self.space = space
+        self.bodies: list[pymunk.Body] = []
+        self.shapes: list[pymunk.Shape] = []
+        self._index: dict[int, int] = {}
+        for i, spec in enumerate(scene.bodies):
+            body, shape = self._build(spec)
+            space.add(body, shape)
+            self.bodies.append(body)
+            self.shapes.append(shape)
+            self._index[id(shape)] = i
+        self.dynamic = np.array([b.kind == "dynamic" for b in scene.bodies])
+        self.circle = np.array([isinstance(s, pymunk.Circle) for s in self.shapes])
+        self._threshold = settings.restitution_threshold
+        self._primed = False
+        space.on_collision(None, None, pre_solve=self._mix_materials)
+
+    @staticmethod
+    def _build(spec) -> tuple[pymunk.Body, pymunk.Shape]:
+        """The pymunk body (at the centre of mass) and shape of one modelled BodySpec,
+        the shape carrying the body's own friction and restitution."""
+        shape = spec.shape
+        if spec.kind == "dynamic":
+            mass = spec.mass if spec.mass is not None else spec.density * shape.area
+            body = pymunk.Body(mass, pymunk.moment_for_circle(mass, 0.0, shape.radius))
+        else:
+            body = pymunk.Body(body_type=pymunk.Body.STATIC if spec.kind == "static"
+                               else pymunk.Body.KINEMATIC)
+        c, s = math.cos(spec.angle), math.sin(spec.angle)
+        ox, oy = shape.origin
+        body.position = (spec.position[0] - (c * ox - s * oy),
+                         spec.position[1] - (s * ox + c * oy))
+        body.angle = spec.angle
+        if spec.kind != "static":
+            body.velocity = spec.velocity
+            body.angular_velocity = spec.angular_velocity
+        if isinstance(shape, Circle):
+            made = pymunk.Circle(body, shape.radius)
+        elif isinstance(shape, TriangleMesh):
+            made = pymunk.Poly(body, [tuple(v) for v in shape.vertices])
+        else:
+            a, b, radius = _segment(shape)
+            made = pymunk.Segment(body, tuple(a), tuple(b), radius)
+        made.friction = spec.friction
+        made.elasticity = spec.restitution
+        return body, made
+
+    def _mix_materials(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data) -> None:
+        """pre_solve on every pair: sdfphys's mixing and restitution threshold."""
+        shape_a, shape_b = arbiter.shapes
+        arbiter.friction = math.sqrt(shape_a.friction * shape_b.friction)
+        n = arbiter.normal
+        approach = 0.0
+        for p in arbiter.contact_point_set.points:
+            mid = (p.point_a + p.point_b) / 2
+            relative = (shape_b.body.velocity_at_world_point(mid)
+                        - shape_a.body.velocity_at_world_point(mid))
+            approach = max(approach, -relative.dot(n))
+        bouncy = approach > self._threshold
+        arbiter.restitution = max(shape_a.elasticity, shape_b.elasticity) if bouncy else 0.0
+
+    def step(self) -> None:
+        """Advance by settings.dt: ``substeps`` pymunk steps of h (after the priming step)."""
+        if not self._primed:
+            moving = [b for b in self.bodies if b.body_type != pymunk.Body.STATIC]
+            for body in moving:
+                body.position_func = _noop_position
+            self.space.step(self.substep)
+            for body in moving:
+                body.position_func = pymunk.Body.update_position
+            self._primed = True
+        for _ in range(self.settings.substeps):
+            self.space.step(self.substep)
+
+    def describe(self) -> str:
+        """One line: pymunk's version and the settings chosen for this scene."""
+        space = self.space
+        return (f"pymunk {pymunk.version}: {self.settings.substeps} x Space.step("
+                f"{self.substep:.6g} s) per step after a priming step, iterations "
+                f"{space.iterations}, collision_slop {space.collision_slop:g} m, "
+                f"collision_bias {space.collision_bias:.3g}; materials mixed as sdfphys's")
+
+    @property
+    def center_of_mass(self) -> np.ndarray:
+        """(B, 2) m."""
+        return np.array([tuple(b.position) for b in self.bodies], np.float64)
+
+    @property
+    def angle(self) -> np.ndarray:
+        """(B,) rad."""
+        return np.array([b.angle for b in self.bodies], np.float64)
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """(B, 2) m/s (one substep's kick ahead of sdfphys's, see the module docstring)."""
+        return np.array([tuple(b.velocity) for b in self.bodies], np.float64)
+
+    def set_poses(self, com: np.ndarray, angle: np.ndarray) -> None:
+        """Move every body to centre of mass ``com`` (B, 2) m and ``angle`` (B,) rad."""
+        for body, p, a in zip(self.bodies, com, angle):
+            body.position = (float(p[0]), float(p[1]))
+            body.angle = float(a)
+            self.space.reindex_shapes_for_body(body)
+
+    def contacts(self) -> Contacts:
+        """pymunk's contacts at the current poses, as sdfphys's Contacts.
+
+        Pairs with a dynamic body that pymunk finds overlapping (``Space.shape_query``),
+        body_a < body_b; each pair's contact from ``Shape.shapes_collide`` called with
+        the circle first (pymunk reports a wrong-signed distance when a polygon comes
+        first): point midway between point_a and point_b, normal from a to b, depth =
+        -distance. ``feature`` is 0.
+        """
+        pairs = set()
+        for i in np.flatnonzero(self.dynamic):
+            for info in self.space.shape_query(self.shapes[i]):
+                j = self._index[id(info.shape)]
+                pairs.add((min(i, j), max(i, j)))
+        rows = []
+        for i, j in sorted(pairs):
+            first, second = (i, j) if self.circle[i] else (j, i)
+            try:
+                result = self.shapes[first].shapes_collide(self.shapes[second])
+            except AssertionError:        # pymunk 7 asserts when the shapes do not touch
+                continue
+            sign = 1.0 if first == i else -1.0
+            for p in result.points:
+                point = (np.array(p.point_a) + np.array(p.point_b)) / 2
+                rows.append((i, j, point, sign * np.array(result.normal), -p.distance))
+        if not rows:
+            return Contacts.empty()
+        return Contacts(np.array([r[0] for r in rows], np.int64),
+                        np.array([r[1] for r in rows], np.int64),
+                        np.array([r[2] for r in rows]), np.array([r[3] for r in rows]),
+                        np.array([r[4] for r in rows], np.float64),
+                        np.zeros(len(rows), np.int64))
+
+
+def sdfphys_contacts(world) -> Contacts:
+    """The contacts sdfphys's next step will use (``find_contacts`` at the world's state)."""
+    return find_contacts(world.shapes, world.shape_id, world.center_of_mass, world.angle,
+                         world.kind == "dynamic", world.settings)
+
+
+@dataclass
+class ContactDifference:
+    """One frame's contact comparison.
+
+    compared: pairs found by both engines. point, normal, depth: largest differences
+    over them (m, unit-vector components, m). one_sided: pairs found by one engine only
+    with depth > CONTACT_TOLERANCE (a pair that barely touches may be found by one
+    engine and not the other; sdfphys's speculative contacts, depth <= 0, are not
+    counted).
+    """
+
+    compared: int
+    point: float
+    normal: float
+    depth: float
+    one_sided: int
+
+
+def contact_difference(ours: Contacts, theirs: Contacts) -> ContactDifference:
+    """Compare two Contacts pair by pair (circle pairs have one point per pair)."""
+    mine = {(a, b): k for k, (a, b) in enumerate(zip(ours.body_a.tolist(), ours.body_b.tolist()))}
+    other = {(a, b): k for k, (a, b) in enumerate(zip(theirs.body_a.tolist(),
+                                                       theirs.body_b.tolist()))}
+    both = sorted(mine.keys() & other.keys())
+    k_ours = np.array([mine[p] for p in both], np.int64)
+    k_theirs = np.array([other[p] for p in both], np.int64)
+
+    def largest(x: np.ndarray) -> float:
+        return float(np.max(np.abs(x))) if x.size else 0.0
+
+    one_sided = (sum(ours.depth[k] > CONTACT_TOLERANCE for p, k in mine.items() if p not in other)
+                 + sum(theirs.depth[k] > CONTACT_TOLERANCE
+                       for p, k in other.items() if p not in mine))
+    return ContactDifference(
+        len(both), largest(ours.point[k_ours] - theirs.point[k_theirs]),
+        largest(ours.normal[k_ours] - theirs.normal[k_theirs]),
+        largest(ours.depth[k_ours] - theirs.depth[k_theirs]), int(one_sided))
+
+
+@dataclass
+class Comparison:
+    """sdfphys and pymunk over F frames (frame 0: the initial state; then one per step).
+
+    names: (B,) body names. time: (F,) s. ours_*, theirs_*: sdfphys's and pymunk's
+    centres of mass (F, B, 2) m, angles (F, B) rad and velocities (F, B, 2) m/s
+    (pymunk's are one substep's kick ahead, see the module docstring). contacts: (F,)
+    ContactDifference at sdfphys's poses of each frame.
+    """
+
+    names: list[str]
+    time: np.ndarray
+    ours_com: np.ndarray
+    theirs_com: np.ndarray
+    ours_angle: np.ndarray
+    theirs_angle: np.ndarray
+    ours_velocity: np.ndarray
+    theirs_velocity: np.ndarray
+    contacts: list[ContactDifference]
+
+    def position_difference(self) -> np.ndarray:
+        """(F, B) m, |centre of mass (sdfphys) - centre of mass (pymunk)|."""
+        d = self.ours_com - self.theirs_com
+        return np.hypot(d[..., 0], d[..., 1])
+
+    def contact_failures(self) -> int:
+        """Frames whose contacts differ by more than CONTACT_TOLERANCE or are one-sided."""
+        return sum(max(c.point, c.normal, c.depth) > CONTACT_TOLERANCE or c.one_sided > 0
+                   for c in self.contacts)
+
+
+def compare(scene: Scene, seconds: float | None = None) -> Comparison:
+    """Run sdfphys and pymunk for ``seconds`` (default: the scene's duration).
+
+    Frames are the initial state and the state after every step. Each frame also
+    moves a second, never-stepped pymunk space to sdfphys's poses and compares the
+    contacts of the two engines there. Raises NotModelledError (see check_modelled).
+    """
+    seconds = scene.duration if seconds is None else seconds
+    world = scene.build()
+    reference = PymunkWorld(scene)
+    probe = PymunkWorld(scene)
+    steps = max(1, round(seconds / scene.settings.dt))
+    states: list[list[tuple[np.ndarray, np.ndarray, np.ndarray]]] = [[], []]
+    contacts = []
+    for step in range(steps + 1):
+        if step:
+            world.step()
+            reference.step()
+        probe.set_poses(world.center_of_mass, world.angle)
+        contacts.append(contact_difference(sdfphys_contacts(world), probe.contacts()))
+        for engine, record in zip((world, reference), states):
+            record.append((engine.center_of_mass, engine.angle, engine.velocity))
+    (ours_com, ours_angle, ours_velocity), (theirs_com, theirs_angle, theirs_velocity) = (
+        [np.array(column) for column in zip(*record)] for record in states)
+    return Comparison(world.names, np.arange(steps + 1) * scene.settings.dt, ours_com,
+                      theirs_com, ours_angle, theirs_angle, ours_velocity, theirs_velocity,
+                      contacts)
+
+
+def _windows(time: np.ndarray, width: float) -> list[np.ndarray]:
+    """Frame indices per window [k w, (k + 1) w) of ``time`` (F,) s; a last frame that
+    starts a window of its own joins the one before. (The 1e-9 keeps k dt / w from
+    rounding down a window.)"""
+    last = max(0.0, math.floor(time[-1] / width - 1e-9))
+    window = np.minimum(np.floor(time / width + 1e-9), last)
+    return [np.flatnonzero(window == k) for k in np.unique(window)]
+
+
+def _label(time: np.ndarray, frames: np.ndarray) -> str:
+    """A window's first and last frame times, ``0.50-0.98``, right-aligned in 13 columns."""
+    return f"{time[frames[0]]:.2f}-{time[frames[-1]]:.2f}".rjust(13)
+
+
+def report(comparison: Comparison, window: float = WINDOW) -> list[str]:
+    """The two tables of ``sdfphys compare`` as lines (per time window of ``window`` s)."""
+    c = comparison
+    title = ("contacts at sdfphys's poses (find_contacts vs pymunk shapes_collide; "
+             f"agreement expected to {CONTACT_TOLERANCE:g}); pairs: compared, summed over "
+             "the window's frames")
+    header = (f"{'window s':>13} {'pairs':>6} {'|d point| m':>12} {'|d normal|':>11} "
+              f"{'|d depth| m':>12} {'one engine only':>16}")
+    lines = [title, header]
+    for frames in _windows(c.time, window):
+        rows = [c.contacts[f] for f in frames]
+        lines.append(f"{_label(c.time, frames)} {sum(r.compared for r in rows):>6} "
+                     f"{max(r.point for r in rows):>12.2e} {max(r.normal for r in rows):>11.2e} "
+                     f"{max(r.depth for r in rows):>12.2e} {sum(r.one_sided for r in rows):>16}")
+    header = (f"{'window s':>13} {'max |dx| m':>11} {'body':>12} {'max |dangle| rad':>17} "
+              f"{'body':>12}")
+    lines += ["", "trajectories from the same initial state (centres of mass and angles)",
+              header]
+    dx = c.position_difference()
+    da = np.abs(c.ours_angle - c.theirs_angle)
+    for frames in _windows(c.time, window):
+        bx = int(np.argmax(dx[frames].max(axis=0)))
+        ba = int(np.argmax(da[frames].max(axis=0)))
+        lines.append(f"{_label(c.time, frames)} {dx[frames, bx].max():>11.2e} {c.names[bx]:>12} "
+                     f"{da[frames, ba].max():>17.2e} {c.names[ba]:>12}")
+    return lines
+
+
+def compare_main(scene_path: str | Path, seconds: float | None = None,
+                 overrides: Sequence[str] = ()) -> int:
+    """``sdfphys compare SCENE``: print the settings and the two tables.
+
+    Returns 0, 1 if some frame's contacts differ by more than CONTACT_TOLERANCE (or a
+    pair is found by one engine only), 2 for bad input, including a scene the
+    reference cannot model (one line naming the bodies).
+    """
+    try:
+        if seconds is not None and not (math.isfinite(seconds) and seconds > 0.0):
+            raise SpecError("--seconds", f"must be a positive number, got {seconds}")
+        scene = read_scene(scene_path, overrides)
+        check_modelled(scene)
+    except SpecError as err:
+        print(f"sdfphys: error: {err}", file=sys.stderr)
+        return 2
+    comparison = compare(scene, seconds)
+    print(PymunkWorld(scene).describe())
+    print()
+    for line in report(comparison):
+        print(line)
+    failures = comparison.contact_failures()
+    if failures:
+        print(f"\ncontacts differ by more than {CONTACT_TOLERANCE:g} at {failures} frames")
+        return 1
+    return 0
