@@ -75,19 +75,22 @@ scene("circles_in_box", """
 Shows: circle-circle and circle-box contacts at scale, piling, friction.
 """, bodies, sim={"duration": 6.0}, render={"center": [0.0, 6.0], "scale": 36.0})
 
-# 4. Newton's cradle (no strings: five touching balls on a frictionless rail)
+# 4. Newton's cradle (no strings: five balls on a frictionless rail, 5 cm apart)
 r = 0.5
+gap = 0.05
 bodies = [ground(30.0, friction=0.0)]
 for i in range(5):
     bodies.append({"name": f"ball{i}", "shape": {"type": "circle", "radius": r},
-                   "position": [i * 2 * r, r], "friction": 0.0, "restitution": 1.0})
+                   "position": [i * (2 * r + gap), r], "friction": 0.0, "restitution": 1.0})
 bodies.append({"name": "striker", "shape": {"type": "circle", "radius": r},
                "position": [-4.0, r], "velocity": [4.0, 0.0], "friction": 0.0, "restitution": 1.0})
 scene("newtons_cradle", """
-Newton's cradle on a frictionless rail: a striker hits a row of five touching
-balls with restitution 1, and the last ball leaves with the striker's speed.
-Shows: elastic collisions, momentum transfer through resting contacts,
-restitution passes.
+Newton's cradle on a frictionless rail: a striker hits a row of five balls set
+5 cm apart, with restitution 1; each collision passes the whole speed on, and the
+last ball leaves with the striker's 4 m/s while the others stop.
+Shows: elastic collisions, momentum transfer, the restitution pass. (Touching
+balls would need simultaneous impacts, which a sequential impulse solver resolves
+as partly inelastic: the gaps make the impacts one at a time, as in a real cradle.)
 """, bodies, sim={"duration": 4.0}, render={"center": [2.0, 1.5], "scale": 60.0})
 
 # 5. ramp with friction
