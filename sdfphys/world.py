@@ -268,10 +268,12 @@ class World:
                          v("angular_damping"))
 
     def _collide(self, bodies: BodyState) -> Contacts:
-        """Stage 1: every contact closer than the speculative distance, once per step."""
+        """Stage 1: every contact closer than the speculative distance plus the pair's
+        reach at the step's starting velocities (``sdfphys.collide``), once per step."""
         self._contacts = find_contacts(self._shapes, self._view("shape_id"), bodies.com,
                                        bodies.angle, self._view("kind") == _DYNAMIC,
-                                       self.settings)
+                                       self.settings, bodies.velocity,
+                                       bodies.angular_velocity)
         self.stage_counts["collide"] += 1
         return self._contacts
 
@@ -279,7 +281,7 @@ class World:
         """Stage 2: anchors, masses, base separations, warm-start impulses."""
         constraints = prepare_contacts(contacts, bodies, self._view("friction"),
                                        self._view("restitution"), self._impulses,
-                                       self.settings.warm_starting)
+                                       self.settings.warm_starting, self.gravity)
         if len(constraints):
             self.stage_counts["prepare"] += 1
         return constraints

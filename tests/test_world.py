@@ -6,10 +6,13 @@ over many steps through soft contacts (sliding, rolling, bouncing).
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from sdfphys.collide import find_contacts
+from sdfphys.scene import load_scene
 from sdfphys.sdf import Field
 from sdfphys.settings import Settings
 from sdfphys.shapes import SdfShape
@@ -388,3 +391,66 @@ def test_twenty_base_pyramid_stands_twenty_seconds():
     for _ in range(1200):
         world.step()
     assert np.linalg.norm(world.position[-1] - start) < 0.05
+
+
+# ---------------------------------------------------------------------------------------
+# Velocity-aware speculative margin
+# ---------------------------------------------------------------------------------------
+
+
+def test_fast_ball_is_caught_by_its_speculative_contact_before_it_sinks():
+    """A ball falling at 10 m/s, 0.19 m above the ground: after one step the gap is
+    0.0227 m, just over the speculative distance, so with a fixed margin the contact
+    was seen a step late and the ball ended its first contact step 0.149 m deep
+    (measured before the change). With the margin widened by |v| dt (0.167 m) the
+    contact is found a step early; its row is speculative (s > 0: rigid, bias s / h),
+    so the ball stops at s = 0 in the substep it arrives, and the relax pass removes
+    its approach velocity. What is left is the gravity the ball gathers before the soft
+    contact pushes back: at most g dt^2 in one step. Bound: linear_slop + g dt^2
+    (7.7 mm); measured after: 1e-5 m, and 7e-5 m over the next 30 steps."""
+    world = ground_world(friction=0.0)
+    ball = world.add_body(BALL, position=(0.0, 0.69), velocity=(0.0, -10.0))
+    s = world.settings
+    bound = s.linear_slop + G * s.dt ** 2
+    penetration = []
+    for _ in range(30):
+        world.step()
+        penetration.append(0.5 - world.position[ball, 1])
+    first = next(p for p in penetration if p >= 0.0)
+    assert first < bound
+    assert max(penetration) < bound
+
+
+def test_ball_rolling_off_a_ledge_lands_less_than_a_centimetre_deep():
+    """scenes/ball_off_ledge.toml: a 0.3 m ball rolling at 2 m/s off a 2.5 m ledge lands
+    at about 7 m/s. Deepest sink into the ground: 8.9 cm with the fixed margin
+    (measured before the change), 1.0 mm with the velocity-aware one; bound 1 cm."""
+    world = load_scene(Path(__file__).parents[1] / "scenes" / "ball_off_ledge.toml")
+    ball = world.names.index("ball")
+    sink = 0.0
+    for _ in range(180):
+        world.step()
+        if world.position[ball, 0] > -0.7:        # past the ledge's corner (x = -1)
+            sink = max(sink, 0.3 - world.position[ball, 1])
+    assert sink < 0.01
+
+
+def test_speculative_margin_grows_with_speed_and_keeps_distant_pairs_out():
+    """find_contacts keeps a pair while gap < speculative_distance + dt (|v| + |w| r)
+    summed over both bodies: a ball 0.1 m above a box floor is kept at 6 m/s down
+    (0.02 + 0.1 m margin) or spinning so that |w| r dt = 0.1 m, not at rest, and
+    never when the reach cap (2 radii) is below the gap."""
+    world = World()
+    world.add_body(GROUND, position=(0.0, -10.0), kind="static")
+    world.add_body(BALL, position=(0.0, 0.6))
+    args = (world.shapes, world.shape_id, world.center_of_mass, world.angle,
+            np.array([False, True]), world.settings)
+    dt = world.settings.dt
+    assert len(find_contacts(*args)) == 0
+    c = find_contacts(*args, np.array([[0.0, 0.0], [0.0, -6.0]]), np.zeros(2))
+    assert len(c) == 1 and c.depth[0] == pytest.approx(-0.1, abs=1e-12)
+    assert len(find_contacts(*args, np.zeros((2, 2)), np.r_[0.0, 0.1 / (0.5 * dt)])) == 1
+    assert len(find_contacts(*args, np.zeros((2, 2)), np.r_[0.0, 0.05 / (0.5 * dt)])) == 0
+    world.set_state(1, position=(0.0, 1.6))                 # 1.1 m gap > 2 r + 0.02
+    args = args[:2] + (world.center_of_mass,) + args[3:]
+    assert len(find_contacts(*args, np.array([[0.0, 0.0], [0.0, -1e3]]), np.zeros(2))) == 0

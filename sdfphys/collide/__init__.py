@@ -7,14 +7,34 @@ point midway between the two surfaces, feature keys stable from step to step.
 
 One step of ``find_contacts`` (no Python loop over bodies, pairs or contacts):
 
-1. world AABBs of all bodies, each grown by half the speculative distance, so
-   boxes meet whenever the bodies are closer than that (``broadphase``);
+1. world AABBs of all bodies, each grown by half the speculative distance plus
+   the body's reach (below), so boxes meet whenever the bodies are closer than the
+   pair's margin (``broadphase``);
 2. candidate pairs by sort-and-sweep (numba), keeping pairs with a movable body;
 3. pairs oriented lower kind first (circle < mesh < sdf; for equal kinds, lower
    shape id first) and grouped by their two Shape objects: one pair-function call
    per group, each evaluating a field once per batch of points (``narrowphase``);
-4. contacts with depth > -speculative distance kept, reduced to at most
+4. contacts with depth > -margin of their pair kept, reduced to at most
    ``contacts_per_pair`` per pair (``reduce``), sorted by (body_a, body_b, feature).
+
+Velocity-aware speculative margin. A contact found before the bodies touch costs
+nothing (the solver's speculative rows, s > 0, only forbid closing more than s), and
+one found late costs a step's travel of overlap. So the pair margin is
+
+    margin(a, b) = speculative_distance + reach_a + reach_b,
+    reach = min(dt (|v| + |w| r), REACH_CAP_RADII r),
+
+|v| + |w| r bounding the speed of every point of a body (r its bounding radius about
+the centre of mass), so no two points of a and b close more than reach_a + reach_b
+in a step. The velocities are the step's start values; gravity adds at most g dt^2
+(2.7 mm at 60 Hz), inside the speculative distance. The cap keeps one fast body from
+pulling far pairs into the narrowphase; a body moving more than about half its
+extent per step is caught by time of impact instead. Unbounded shapes (r = inf)
+count as r = ``UNBOUNDED_RADIUS`` (their reach is then not a bound when they spin;
+ground fields are static). Boxes grow symmetrically by each body's reach, not only
+along its motion: the narrowphase margin is symmetric too, and a receding pair's
+speculative contacts are inert. Without velocities the reach is 0: the margin is
+the speculative distance alone.
 """
 
 from __future__ import annotations
@@ -31,7 +51,14 @@ from .contacts import Contacts
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .reduce import reduce_contacts
 
-__all__ = ["Contacts", "collide", "find_contacts"]
+__all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "Contacts", "collide", "find_contacts",
+           "speculative_reach"]
+
+#: A body's reach (extra speculative margin) is capped at this many bounding radii.
+REACH_CAP_RADII = 2.0
+
+#: Bounding radius (m) assumed for the reach of unbounded shapes.
+UNBOUNDED_RADIUS = 1.0
 
 
 def _distinct(shapes: Sequence[Shape]) -> tuple[list[Shape], np.ndarray]:
@@ -42,12 +69,28 @@ def _distinct(shapes: Sequence[Shape]) -> tuple[list[Shape], np.ndarray]:
     return unique, canonical
 
 
+def speculative_reach(radius: np.ndarray, velocity: np.ndarray,
+                      angular_velocity: np.ndarray, dt: float) -> np.ndarray:
+    """Per body (B,), m: how far any of its points may move in ``dt`` (see module doc).
+
+    radius: (B,) bounding radius about the centre of mass (inf if unbounded);
+    velocity: (B, 2) m/s of the centre of mass; angular_velocity: (B,) rad/s.
+    """
+    r = np.where(np.isfinite(radius), radius, UNBOUNDED_RADIUS)
+    speed = np.hypot(velocity[:, 0], velocity[:, 1]) + np.abs(angular_velocity) * r
+    return np.minimum(dt * speed, REACH_CAP_RADII * r)
+
+
 def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
-                 pose: np.ndarray, margin: float, settings: Settings) -> Contacts:
+                 pose: np.ndarray, margin: float, reach: np.ndarray,
+                 settings: Settings) -> Contacts:
     """Contacts of the candidate ``pairs`` (P, 2), reduced and sorted (see module doc).
 
     shapes: distinct Shape objects; body_shape: (B,) index into them per body;
-    pose: (B, 3) centre-of-mass poses (x, y, angle).
+    pose: (B, 3) centre-of-mass poses (x, y, angle); margin: m, the speculative
+    distance; reach: (B,) m per body, a pair keeping contacts with depth >
+    -(margin + reach_a + reach_b). Each pair-function call gets its group's largest
+    pair margin; contacts beyond their own pair's margin are then dropped.
     """
     kind_rank = np.array([KIND_ORDER.index(s.kind) for s in shapes], np.int64)
     sa, sb = body_shape[pairs[:, 0]], body_shape[pairs[:, 1]]
@@ -67,8 +110,10 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
         shape_b = shapes[body_shape[second[lo]]]
         fn = PAIR_FUNCTIONS[(shape_a.kind, shape_b.kind)]
         a, b = first[lo:hi], second[lo:hi]
-        parts.append(fn(shape_a, shape_b, a, b, pose[a], pose[b], margin, settings))
+        group_margin = margin + float(np.max(reach[a] + reach[b]))
+        parts.append(fn(shape_a, shape_b, a, b, pose[a], pose[b], group_margin, settings))
     c = Contacts.concatenate(parts)
+    c = c.take(c.depth > -(margin + reach[c.body_a] + reach[c.body_b]))
     flip = c.body_a > c.body_b
     c.body_a, c.body_b = np.where(flip, c.body_b, c.body_a), np.where(flip, c.body_a, c.body_b)
     c.normal = np.where(flip[:, None], -c.normal, c.normal)
@@ -87,14 +132,18 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
 
 
 def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.ndarray,
-                  angle: np.ndarray, movable: np.ndarray, settings: Settings) -> Contacts:
+                  angle: np.ndarray, movable: np.ndarray, settings: Settings,
+                  velocity: np.ndarray | None = None,
+                  angular_velocity: np.ndarray | None = None) -> Contacts:
     """All contacts of B bodies this step, sorted by (body_a, body_b, feature).
 
     shapes: Shape objects; shape_id: (B,) int index into ``shapes`` per body;
     position: (B, 2) centre-of-mass world positions (m); angle: (B,) rad;
-    movable: (B,) bool (pairs of two immovable bodies are skipped).
-    Returns contacts with body_a < body_b, depth > -settings.speculative_distance,
-    at most settings.contacts_per_pair per pair.
+    movable: (B,) bool (pairs of two immovable bodies are skipped);
+    velocity: (B, 2) m/s and angular_velocity: (B,) rad/s at the start of the step
+    (None: at rest), which widen each pair's margin by its bodies' reach (module doc).
+    Returns contacts with body_a < body_b, depth > -(settings.speculative_distance +
+    reach_a + reach_b), at most settings.contacts_per_pair per pair.
     """
     distinct, canonical = _distinct(shapes)
     body_shape = canonical[np.asarray(shape_id, np.int64)]
@@ -102,12 +151,18 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     radius = np.array([s.radius for s in distinct], np.float64)
     position = np.asarray(position, np.float64).reshape(-1, 2)
     angle = np.asarray(angle, np.float64).reshape(-1)
+    n = len(angle)
+    velocity = np.zeros((n, 2)) if velocity is None else np.asarray(velocity, np.float64)
+    angular_velocity = (np.zeros(n) if angular_velocity is None
+                        else np.asarray(angular_velocity, np.float64))
+    reach = speculative_reach(radius[body_shape], velocity.reshape(-1, 2),
+                              angular_velocity.reshape(-1), settings.dt)
     margin = settings.speculative_distance
     boxes = world_bounds(local_bounds[body_shape], radius[body_shape], position, angle,
-                         0.5 * margin)
+                         0.5 * margin + reach)
     pairs = candidate_pairs(boxes, np.asarray(movable, bool))
     pose = np.column_stack([position, angle])
-    return _narrowphase(distinct, body_shape, pairs, pose, margin, settings)
+    return _narrowphase(distinct, body_shape, pairs, pose, margin, reach, settings)
 
 
 def collide(shape_a: Any, pose_a: Sequence[float], shape_b: Any, pose_b: Sequence[float],
@@ -131,4 +186,4 @@ def collide(shape_a: Any, pose_a: Sequence[float], shape_b: Any, pose_b: Sequenc
         pose[k, :2] -= [c * ox - s * oy, s * ox + c * oy]
     distinct, canonical = _distinct(shapes)
     return _narrowphase(distinct, canonical, np.array([[0, 1]], np.int64), pose,
-                        float(margin), settings)
+                        float(margin), np.zeros(2), settings)

@@ -46,8 +46,11 @@ def _scaled(k: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, 
 
 
 def world_bounds(local_bounds: np.ndarray, radius: np.ndarray, position: np.ndarray,
-                 angle: np.ndarray, margin: float = 0.0) -> np.ndarray:
+                 angle: np.ndarray, margin: float | np.ndarray = 0.0) -> np.ndarray:
     """World AABBs (B, 4) ``[xmin, ymin, xmax, ymax]`` of B bodies, grown by ``margin`` (m).
+
+    margin: one growth for all bodies, or (B,) one per body (``find_contacts`` grows a
+    moving body's box by the distance its points may travel in a step).
 
     local_bounds: (B, 4) body-frame AABBs (centre of mass at the origin; entries may
         be infinite for unbounded fields). radius: (B,) bounding radius about the
