@@ -66,12 +66,12 @@ How the engines are matched, and what cannot be
   Not matched: the contact softness itself (pymunk's contacts are rigid), the
   push-out cap, and the rate between two dynamic bodies.
 - Contacts: sdfphys collides once per step and keeps contacts closer than
-  ``speculative_distance``; pymunk collides every pymunk step and keeps only
-  overlapping shapes. A body approaching faster than speculative_distance / dt
-  (1.2 m/s at the defaults) can overlap by up to one step's travel before sdfphys
-  sees the contact, which its next step resolves; pymunk resolves it within a
-  substep. An impact is thus up to two steps later in sdfphys, and positions after
-  it differ by up to |v_after - v_before| x 2 dt. Both anchor a contact differently:
+  ``speculative_distance`` plus the distance the two bodies can close in one step
+  (capped at two radii per body); pymunk collides every pymunk step and keeps only
+  overlapping shapes. Only a body faster than that cap can overlap by a step's
+  travel before sdfphys sees the contact; restitution is aimed at the approach
+  speed on arrival. Impacts may thus land a step apart in the two engines, and
+  positions after them differ by up to |v_after - v_before| x 2 dt. Both anchor a contact differently:
   pymunk at each body's own surface point, sdfphys (as Box2D v3) at the midpoint, so
   a ball sunk by d rolls on radius r - d / 2 in sdfphys.
 - Restitution: sdfphys applies it after the substeps, toward -e times the approach
@@ -335,7 +335,8 @@ class PymunkWorld:
 def sdfphys_contacts(world) -> Contacts:
     """The contacts sdfphys's next step will use (``find_contacts`` at the world's state)."""
     return find_contacts(world.shapes, world.shape_id, world.center_of_mass, world.angle,
-                         world.kind == "dynamic", world.settings)
+                         world.kind == "dynamic", world.settings,
+                         world.velocity, world.angular_velocity)
 
 
 @dataclass
