@@ -82,11 +82,11 @@ intersection of the bounding boxes, normal from grad f_a - grad f_b).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Protocol
 
 import numpy as np
 
 from ..sdf import Field, safe_normalize
+from . import _descent_kernels as kernels
 
 __all__ = [
     "START_BARYCENTRIC",
@@ -95,6 +95,7 @@ __all__ = [
     "triangle_cull",
     "triangle_deepest",
 ]
+
 
 #: Default starts of ``triangle_deepest`` as barycentric weights of (v0, v1, v2);
 #: row k is start id k: 0-2 the vertices, 3 mid(v0, v1), 4 mid(v1, v2),
@@ -105,70 +106,18 @@ START_BARYCENTRIC = np.array([
     [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
 ])
 
-#: Step multipliers of the ladder evaluated on the path from the best point, descending.
-_LADDER = np.array([4.0, 1.0, 0.25, 1.0 / 16.0])
-#: sigma is divided by this after a round without decrease.
-_SHRINK = 64.0
-#: Model points stay this fraction of the bracket away from its ends.
-_GUARD = 1e-3
-#: The path's slope at its start is read at s = _PROBE * sigma (past any corner at s = 0).
-_PROBE = 1e-9
-#: A projected gradient shorter than this (unit gradients) means a stationary point.
-_STATIONARY = 1e-12
-#: The Barzilai-Borwein scale stays within this factor of the last step's scale.
-_BB_RANGE = 16.0
-#: Two unit gradients with cosine below 1 - _KINK are taken as the two sides of a kink.
-_KINK = 1e-3
-#: Weight k of the imbalance in the field-field objective (f_a + f_b) / 2 + k |f_a - f_b|.
-_IMBALANCE = 0.25
 #: Contacts of two fields closer than this fraction of the region's diagonal are one.
 _MERGE = 1e-3
 #: Thickness of the sliver measuring a flat patch, as a fraction of the region's diagonal.
 _SLIVER = 1e-9
-_EPS = np.finfo(np.float64).eps
 _TINY = 1e-300
-
+#: f is linear over a triangle when the starts' values stay within this fraction of
+#: the coordinates' and values' size from one plane (and the gradients are equal).
+_LINEAR = 1e-13
 
 # --------------------------------------------------------------------------------------
 # Triangle geometry
 # --------------------------------------------------------------------------------------
-
-def _project_to_triangles(tri: np.ndarray, x: np.ndarray, u: np.ndarray
-                          ) -> tuple[np.ndarray, np.ndarray]:
-    """Closest points of triangles to points, and the derivative of the projection along u.
-
-    tri: (n, 3, 2); x, u: (n, m, 2). Returns q = Proj_T(x) (n, m, 2) and
-    dq = D Proj_T(x) u (n, m, 2): u itself inside, its component along the edge
-    when q lies inside an edge, 0 when q is a vertex. Degenerate (collinear)
-    triangles are handled as their edges.
-    """
-    start = tri
-    edge = np.roll(tri, -1, axis=1) - tri                          # (n, 3, 2): v_k -> v_k+1
-    rel = x[:, :, None, :] - start[:, None, :, :]                  # (n, m, 3, 2)
-    length2 = np.einsum("nkd,nkd->nk", edge, edge)
-    t = np.einsum("nmkd,nkd->nmk", rel, edge) / np.maximum(length2, _TINY)[:, None, :]
-    t = np.clip(t, 0.0, 1.0)
-    foot = start[:, None, :, :] + t[..., None] * edge[:, None, :, :]
-    k = np.argmin(np.einsum("nmkd,nmkd->nmk", x[:, :, None] - foot, x[:, :, None] - foot),
-                  axis=2)
-    q_edge = np.take_along_axis(foot, k[..., None, None], axis=2)[:, :, 0]
-    t_edge = np.take_along_axis(t, k[..., None], axis=2)[..., 0]
-
-    # Inside test: x on the inner side of all three edges (orientation-independent).
-    cross = edge[:, None, :, 0] * rel[..., 1] - edge[:, None, :, 1] * rel[..., 0]
-    area = edge[:, 0, 0] * (-edge[:, 2, 1]) - edge[:, 0, 1] * (-edge[:, 2, 0])
-    inside = np.all(cross * np.sign(area)[:, None, None] >= 0.0, axis=2) & (area != 0.0)[:, None]
-
-    unit = edge / np.sqrt(np.maximum(length2, _TINY))[..., None]
-    e = np.take_along_axis(unit[:, None].repeat(x.shape[1], axis=1), k[..., None, None],
-                           axis=2)[:, :, 0]
-    along = np.einsum("nmd,nmd->nm", u, e)
-    on_edge = (t_edge > 0.0) & (t_edge < 1.0)
-    dq = np.where(on_edge[..., None], along[..., None] * e, 0.0)
-    q = np.where(inside[..., None], x, q_edge)
-    dq = np.where(inside[..., None], u, dq)
-    return q, dq
-
 
 def _enclosing_circles(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Minimal enclosing circles (centre (T, 2), radius (T,)) of triangles (T, 3, 2).
@@ -224,403 +173,105 @@ def triangle_cull(field: Field, triangles: np.ndarray, margin: float = 0.0) -> n
     return field.distance(centre) < radius + margin
 
 
+
+
 # --------------------------------------------------------------------------------------
 # The line-search descent engine
 # --------------------------------------------------------------------------------------
 
-class _Problem(Protocol):
-    """What ``_descend`` needs from a problem (see the module docstring).
-
-    ``evaluate`` returns, at points (N, 2), the objective (N,), its (sub)gradient
-    (N, 2) and the per-point data (N, kd) a path needs; ``fresh`` builds the
-    parameters (n, kp) of the path leaving each best point, given the second
-    plane of the bundle (a point, its objective and gradient; b's own plane for
-    the steepest path); ``path`` maps path parameters and steps (n, m) to points
-    q and dq/ds (n, m, 2); ``bundle_free`` says where a bundle path is worth a
-    ladder; ``stationarity`` (N,) >= 0 breaks ties of the objective at rounding
-    level (zero: no tie-breaking). ``rows`` index the starts (for per-start
-    geometry such as a start's triangle).
-    """
-
-    #: Scale the ladder by the Barzilai-Borwein step (else by the last step).
-    barzilai_borwein: bool
-
-    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
-
-    def fresh(self, rows: np.ndarray, best: np.ndarray, phi: np.ndarray, data: np.ndarray,
-              plane: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray: ...
-
-    def path(self, rows: np.ndarray, params: np.ndarray, s: np.ndarray
-             ) -> tuple[np.ndarray, np.ndarray]: ...
-
-    def bundle_free(self, rows: np.ndarray, params: np.ndarray, probe: np.ndarray
-                    ) -> np.ndarray: ...
-
-    def stationarity(self, data: np.ndarray) -> np.ndarray: ...
-
-
-def _proximal_path(f1: np.ndarray, f2: np.ndarray, g1: np.ndarray, g2: np.ndarray,
-                   tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Step delta(tau) and d delta / d tau (n, m, 2) of the proximal min-max path.
-
-    Two linear models l_i(b + delta) = f_i + g_i . delta (f: (n,), g: (n, 2)) and
-    tau: (n, m) >= 0. delta(tau) minimises max(l_1, l_2) + |delta|^2 / (2 tau).
-    Dual: delta = -tau (lam g1 + (1 - lam) g2) with lam in [0, 1] maximising
-    lam f1 + (1 - lam) f2 - tau |lam g1 + (1 - lam) g2|^2 / 2, i.e. with
-    w = g1 - g2, D = f1 - f2:
-
-        lam = clamp((D / tau - g2 . w) / |w|^2, 0, 1).
-
-    For small tau lam is clamped and the path is steepest descent of the larger
-    model; from tau* = |D| / (g_larger . w) on it is the balancing correction
-    -(D / |w|^2) w plus tau times -(g2 - (g2 . w / |w|^2) w), the min-norm element
-    of the models' gradient hull, which runs along the line l_1 = l_2 (a ridge, or
-    the contact between two fields). Where w = 0 the larger model's (first on a
-    tie) gradient is followed.
-    """
-    w = g1 - g2
-    ww = np.einsum("nd,nd->n", w, w)
-    gap = (f1 - f2)[:, None]
-    flat = ww <= _TINY
-    with np.errstate(divide="ignore", invalid="ignore"):
-        lam = (gap / tau - np.einsum("nd,nd->n", g2, w)[:, None]) / np.where(flat, 1.0, ww)[:, None]
-    lam = np.where(flat[:, None], np.where(gap >= 0.0, 1.0, 0.0), lam)
-    free = (lam > 0.0) & (lam < 1.0)
-    lam = np.clip(lam, 0.0, 1.0)
-    direction = lam[..., None] * g1[:, None] + (1.0 - lam[..., None]) * g2[:, None]
-    delta = -tau[..., None] * direction
-    along = g2 - (np.einsum("nd,nd->n", g2, w) / np.where(flat, 1.0, ww))[:, None] * w
-    d_delta = -np.where(free[..., None], along[:, None], direction)
-    return delta, d_delta
-
-
-def _model_steps(sl: np.ndarray, pl: np.ndarray, dl: np.ndarray,
-                 sr: np.ndarray, pr: np.ndarray, dr: np.ndarray) -> np.ndarray:
-    """Two trial steps (n, 2) inside brackets [sl, sr] from values p and slopes d at the ends.
-
-    Column 0: zero of the secant of the slope (dr > 0), else the minimiser of the
-    quadratic with value pl, slope dl at sl and value pr at sr. Column 1: the
-    crossing of the tangent lines at both ends. Both are clamped to
-    [sl + g w, sr - g w] (w = sr - sl, g = _GUARD); invalid models (zero or
-    negative denominators) fall back to the midpoint.
-    """
-    w = sr - sl
-    mid = sl + 0.5 * w
-    with np.errstate(divide="ignore", invalid="ignore"):
-        secant = sl - dl * w / (dr - dl)
-        curvature = pr - pl - dl * w
-        quadratic = sl - 0.5 * dl * w * w / curvature
-        first = np.where(dr > 0.0, np.where(dr > dl, secant, mid),
-                         np.where(curvature > 0.0, quadratic, mid))
-        tangent = (pr - pl + dl * sl - dr * sr) / (dl - dr)
-        second = np.where(dr > dl, tangent, mid)
-    first = np.where(np.isfinite(first), first, mid)
-    second = np.where(np.isfinite(second), second, mid)
-    lo, hi = sl + _GUARD * w, sr - _GUARD * w
-    return np.stack([np.clip(first, lo, hi), np.clip(second, lo, hi)], axis=1)
-
-
-def _descend(problem: _Problem, points: np.ndarray, iterations: int, sigma: np.ndarray,
-             tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Minimise the problem's objective from each start (P, 2) (see the module docstring).
-
-    sigma: (P,) initial step scale (path units); tol: a start stops when its
-    accepted step is shorter (m). At most ``iterations`` rounds, each ONE
-    ``problem.evaluate`` call over the candidates of all running starts. Returns
-    the best point (P, 2), its objective (P,), its data (P, kd) and the number of
-    iterations each start took (P,) (a start is counted while it is in the batch).
-    """
-    phi, grad_best, data = problem.evaluate(points)
-    best = points.copy()
-    n_points = len(best)
-    sigma = np.asarray(sigma, dtype=np.float64).copy()
-    fails = np.zeros(n_points, dtype=np.int64)
-    rounds = np.zeros(n_points, dtype=np.int64)
-    active = np.ones(n_points, dtype=bool)
-    # The previous best point and path direction, for the Barzilai-Borwein scale.
-    prev_x, prev_v = best.copy(), np.zeros_like(best)
-    has_prev = np.zeros(n_points, dtype=bool)
-    # The second plane of the bundle (see ``_proximal_path``): initially b's own.
-    alt_x, alt_phi, alt_g = best.copy(), phi.copy(), grad_best.copy()
-    # The line search in progress: its path and bracket ends (s, value, slope).
-    params: np.ndarray | None = None
-    left_end, right_end = np.zeros((n_points, 3)), np.zeros((n_points, 3))
-    bracketed = np.zeros(n_points, dtype=bool)
-    n_ladder = len(_LADDER)
-    n_cand = 2 * n_ladder + 2                  # columns: steepest ladder | bundle ladder | models
-
-    for _ in range(iterations):
-        rows = np.flatnonzero(active)
-        if len(rows) == 0:
-            break
-        # The steepest path from b and its slope at the start; a zero projected
-        # gradient is a stationary point (the start leaves the batch).
-        own = (best[rows], phi[rows], grad_best[rows])
-        steep = problem.fresh(rows, best[rows], phi[rows], data[rows], own)
-        if params is None:
-            params = np.zeros((n_points, steep.shape[1]))
-        _, dq0 = problem.path(rows, steep, (_PROBE * sigma[rows])[:, None])
-        still = np.hypot(dq0[:, 0, 0], dq0[:, 0, 1]) > _STATIONARY
-        active[rows[~still]] = False
-        rows, steep = rows[still], steep[still]
-        n = len(rows)
-        if n == 0:
-            break
-        rounds[rows] += 1
-        d0 = np.einsum("nd,nd->n", grad_best[rows], dq0[still, 0])
-        bundle = problem.fresh(rows, best[rows], phi[rows], data[rows],
-                               (alt_x[rows], alt_phi[rows], alt_g[rows]))
-        has_alt = np.any(alt_x[rows] != best[rows], axis=1)
-        has_alt[has_alt] = problem.bundle_free(rows[has_alt], bundle[has_alt],
-                                               (_PROBE * sigma[rows[has_alt]])[:, None])
-
-        # The ladder's scale: sigma, or the Barzilai-Borwein step s.s / s.y from the
-        # last accepted step s = b - b_prev and the change y of the path's
-        # direction at scale sigma (exact for a locally quadratic model: it places
-        # the ladder around the step that lands on the minimum), kept within a
-        # factor _BB_RANGE of sigma (next to a kink y jumps and s.s / s.y is
-        # meaningless).
-        _, direction = problem.path(rows, steep, sigma[rows, None])
-        direction = direction[:, 0]
-        step = best[rows] - prev_x[rows]
-        change = prev_v[rows] - direction
-        curvature = np.einsum("nd,nd->n", step, change)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            bb = np.einsum("nd,nd->n", step, step) / curvature
-        use_bb = problem.barzilai_borwein & has_prev[rows] & (curvature > 0.0)
-        bb = np.clip(np.where(np.isfinite(bb), bb, sigma[rows]), sigma[rows] / _BB_RANGE,
-                     sigma[rows] * _BB_RANGE)
-        scale = np.where(use_bb, bb, sigma[rows])
-        prev_x[rows], prev_v[rows] = best[rows], direction
-
-        # Candidates, one evaluation for all: a ladder on each path (ascending s)
-        # and two model points in each bracket.
-        s_ladder = scale[:, None] * _LADDER[::-1]
-        q_steep, dq_steep = problem.path(rows, steep, s_ladder)
-        arows = rows[has_alt]
-        q_bundle, dq_bundle = problem.path(arows, bundle[has_alt], s_ladder[has_alt])
-        has = bracketed[rows]
-        brows = rows[has]
-        s_model = np.sort(_model_steps(*left_end[brows].T, *right_end[brows].T), axis=1)
-        q_model, dq_model = problem.path(brows, params[brows], s_model)
-        value, grad, cand_data = problem.evaluate(np.concatenate(
-            [q_steep.reshape(-1, 2), q_bundle.reshape(-1, 2), q_model.reshape(-1, 2)]))
-        slope = np.einsum("nd,nd->n", grad, np.concatenate(
-            [dq_steep.reshape(-1, 2), dq_bundle.reshape(-1, 2), dq_model.reshape(-1, 2)]))
-
-        # Table of candidates per row (inf where absent); index into the evaluation.
-        table = np.full((n, n_cand), np.inf)
-        table_slope = np.zeros((n, n_cand))
-        table_q = np.repeat(best[rows, None], n_cand, axis=1)
-        index = np.zeros((n, n_cand), dtype=np.int64)
-        blocks = ((np.ones(n, dtype=bool), slice(0, n_ladder), q_steep),
-                  (has_alt, slice(n_ladder, 2 * n_ladder), q_bundle),
-                  (has, slice(2 * n_ladder, n_cand), q_model))
-        start = 0
-        for mask, cols, q in blocks:
-            count = q.shape[0] * q.shape[1]
-            where = np.arange(start, start + count).reshape(q.shape[:2])
-            table[mask, cols] = value[where]
-            table_slope[mask, cols] = slope[where]
-            table_q[mask, cols] = q
-            index[mask, cols] = where
-            start += count
-
-        # On each path only the first valley counts (samples up to the first one
-        # where phi rises or its slope turns >= 0): the descent stays local, each
-        # start finds the minimum of its own basin.
-        samples = []
-        for cols in (slice(0, n_ladder), slice(n_ladder, 2 * n_ladder)):
-            s_asc = np.concatenate([np.zeros((n, 1)), s_ladder], axis=1)
-            p_asc = np.concatenate([phi[rows, None], table[:, cols]], axis=1)
-            d_asc = np.concatenate([d0[:, None], table_slope[:, cols]], axis=1)
-            rise = (d_asc[:, 1:] >= 0.0) | (p_asc[:, 1:] > p_asc[:, :-1])
-            first_rise = np.where(rise.any(axis=1), np.argmax(rise, axis=1) + 1, n_ladder)
-            reachable = np.arange(1, n_ladder + 1) <= first_rise[:, None]
-            table[:, cols] = np.where(reachable, table[:, cols], np.inf)
-            samples.append(np.stack([s_asc, p_asc, d_asc], axis=2))  # (n, 1 + ladder, 3)
-
-        at = np.arange(n)
-        win = np.argmin(table, axis=1)
-        phi_old = phi[rows]
-        phi_win = table[at, win]
-        rounding = 4.0 * _EPS * np.maximum(1.0, np.abs(phi_old))
-        improved = phi_win < phi_old - rounding
-        # Near a smooth minimum phi stops changing in double precision long before
-        # the point stops moving; there a candidate whose value ties with b's (to
-        # rounding) is taken when it halves the problem's stationarity measure.
-        tied = np.where(table <= (phi_old + rounding)[:, None], problem.stationarity(
-            cand_data[index.ravel()]).reshape(n, n_cand), np.inf)
-        tie_win = np.argmin(tied, axis=1)
-        by_tie = ~improved & (tied[at, tie_win] < 0.5 * problem.stationarity(data[rows]))
-        win = np.where(by_tie, tie_win, win)
-        phi_win = table[at, win]
-        improved |= by_tie
-        moved = np.hypot(*(table_q[at, win] - best[rows]).T)
-        left, right = left_end[rows], right_end[rows]
-        new_has = has.copy()
-        new_params = params[rows].copy()
-        new_sigma = scale.copy()
-
-        # (a) The model samples shrink their bracket: one with phi' < 0 and phi <=
-        #     phi(s_l) becomes the left end, otherwise the right end (the second only
-        #     if it still lies inside).
-        hb = np.flatnonzero(has)
-        for col in (0, 1):
-            sample = np.stack([s_model[:, col], table[hb, 2 * n_ladder + col],
-                               table_slope[hb, 2 * n_ladder + col]], axis=1)
-            inside = (sample[:, 0] > left[hb, 0]) & (sample[:, 0] < right[hb, 0])
-            to_left = inside & (sample[:, 2] < 0.0) & (sample[:, 1] <= left[hb, 1])
-            to_right = inside & ~to_left
-            left[hb] = np.where(to_left[:, None], sample, left[hb])
-            right[hb] = np.where(to_right[:, None], sample, right[hb])
-        from_model = improved & (win >= 2 * n_ladder)
-        new_sigma = np.where(from_model, np.maximum(moved, 0.25 * scale), new_sigma)
-
-        # (b) A ladder winner at position k starts a new line search on its path,
-        #     bracketed by its neighbours (k - 1, k) if phi' >= 0 there, else
-        #     (k, k + 1); open (no bracket) past the last sample, where the scale
-        #     then grows by 16 (a long slide along an edge or a ridge).
-        for number, path_params in enumerate((steep, bundle)):
-            pick = improved & (win >= number * n_ladder) & (win < (number + 1) * n_ladder)
-            k = np.clip(win - number * n_ladder, 0, n_ladder - 1) + 1
-            smp = samples[number]
-            down = smp[at, k, 2] < 0.0
-            lk = np.where(down, k, k - 1)
-            rk = np.minimum(np.where(down, k + 1, k), n_ladder)
-            new_params[pick] = path_params[pick]
-            left = np.where(pick[:, None], smp[at, lk], left)
-            right = np.where(pick[:, None], smp[at, rk], right)
-            open_end = down & (k == n_ladder)
-            new_has = np.where(pick, ~open_end, new_has)
-            new_sigma = np.where(pick, smp[at, k, 0] * np.where(open_end, _LADDER[0], 1.0),
-                                 new_sigma)
-
-        # (c) No decrease: search finely around b on the steepest path next round.
-        stuck = ~improved
-        new_params[stuck] = steep[stuck]
-        left = np.where(stuck[:, None], samples[0][:, 0], left)
-        right = np.where(stuck[:, None], samples[0][:, 1], right)
-        new_has = np.where(stuck, d0 < 0.0, new_has)
-        new_sigma = np.where(stuck, scale / _SHRINK, new_sigma)
-
-        # The next second plane: among the planes seen near the new best (this
-        # round's samples, the old best and the old second plane, within the step
-        # scale) whose gradient differs from the new best's, the one most active
-        # there, i.e. with the smallest linearisation error |f(b) - l_i(b)| (the
-        # bundle methods' rule). A different gradient close by reveals a kink (a
-        # ridge of the medial axis, or a minimum just passed); the bundle path then
-        # follows the ridge l_1 = l_2 instead of zigzagging across it.
-        new_x = table_q[at, win]
-        new_g = np.where(improved[:, None], grad[index[at, win]], grad_best[rows])
-        new_phi = np.where(improved, phi_win, phi_old)
-        seen = np.isfinite(table)
-        seen_x = np.concatenate([table_q, best[rows, None], alt_x[rows, None]], axis=1)
-        seen_phi = np.concatenate([np.where(seen, table, 0.0), phi[rows, None],
-                                   alt_phi[rows, None]], axis=1)
-        seen_g = np.concatenate([grad[index], grad_best[rows, None], alt_g[rows, None]], axis=1)
-        cosine = np.einsum("nkd,nd->nk", seen_g, _unit_or_zero(new_g))
-        cosine /= np.maximum(np.linalg.norm(seen_g, axis=2), _TINY)
-        error = np.abs(new_phi[:, None] - seen_phi
-                       - np.einsum("nkd,nkd->nk", seen_g, new_x[:, None] - seen_x))
-        reach = np.maximum(scale, new_sigma)
-        usable = np.linalg.norm(seen_x - new_x[:, None], axis=2) <= reach[:, None]
-        usable &= np.concatenate([seen, np.ones((n, 2), dtype=bool)], axis=1)
-        usable &= cosine < 1.0 - _KINK
-        error = np.where(usable, error, np.inf)
-        pick_alt = np.argmin(error, axis=1)
-        kink = usable[at, pick_alt]
-        alt_x[rows] = np.where(kink[:, None], seen_x[at, pick_alt], new_x)
-        alt_g[rows] = np.where(kink[:, None], seen_g[at, pick_alt], new_g)
-        alt_phi[rows] = np.where(kink, seen_phi[at, pick_alt], new_phi)
-
-        # Commit.
-        take = rows[improved]
-        best[take] = table_q[improved, win[improved]]
-        phi[take] = phi_win[improved]
-        data[take] = cand_data[index[improved, win[improved]]]
-        grad_best[take] = grad[index[improved, win[improved]]]
-        left_end[rows], right_end[rows] = left, right
-        bracketed[rows] = new_has & (right[:, 0] > left[:, 0])
-        params[rows] = new_params
-        sigma[rows] = np.maximum(new_sigma, _TINY)
-        fails[rows] = np.where(improved, 0, fails[rows] + 1)
-        has_prev[rows] = improved
-        done = (fails[rows] >= 2) | (improved & (moved < tol))
-        active[rows[done]] = False
-
-    return best, phi, data, rounds
-
-
-# --------------------------------------------------------------------------------------
-# Deepest points of triangles
-# --------------------------------------------------------------------------------------
-
-def _unit_or_zero(v: np.ndarray) -> np.ndarray:
-    """Rows of v (n, 2) scaled to unit length; zero rows stay zero."""
-    norm = np.hypot(v[:, 0], v[:, 1])
-    return v / np.where(norm > _TINY, norm, 1.0)[:, None]
-
-
 class _TriangleProblem:
-    """f restricted to a triangle; start i belongs to triangle ``owner[i]``.
+    """f restricted to triangles (T, 3, 2); start i belongs to triangle ``owner[i]``.
 
-    Point data: the gradient of f. Path parameters: origin b, the two planes'
-    values at b and gradients (f1, f2, g1, g2), and q(s) = Proj_T(b + delta(s))
-    with delta the proximal path of ``_proximal_path``: plane 1 is the
-    linearisation at b, plane 2 the bundle's second plane capped at f(b) (so the
-    path leaves b along -grad f). Without a second plane it is the projected
-    gradient arc Proj_T(b - s grad f).
+    Point data: the gradient of f. The paths are projected onto the start's
+    triangle. ``at_vertex`` (T, 3): the start placed at each vertex, -1 if none
+    (its value is reused wherever a path reaches that vertex).
     """
 
+    kind = kernels.TRIANGLE
     barzilai_borwein = False
 
-    def __init__(self, field: Field, triangles: np.ndarray, owner: np.ndarray):
+    def __init__(self, field: Field, triangles: np.ndarray, owner: np.ndarray,
+                 at_vertex: np.ndarray, spanning: bool):
         self.field = field
         self.triangles = triangles
         self.owner = owner
+        self.at_vertex = at_vertex
+        self.spanning = spanning
 
     def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         d, g = self.field.evaluate(points)
         return d, g, g
 
-    def fresh(self, rows: np.ndarray, best: np.ndarray, phi: np.ndarray, data: np.ndarray,
-              plane: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
-        x2, phi2, g2 = plane
-        f2 = np.minimum(phi2 + np.einsum("nd,nd->n", g2, best - x2), phi)
-        return np.column_stack([best, phi, f2, data, g2])
+    def known(self, points: np.ndarray, phi: np.ndarray, grad: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """What the starts (P, 2) with values (P,), gradients (P, 2) tell of each triangle.
 
-    def path(self, rows: np.ndarray, params: np.ndarray, s: np.ndarray
-             ) -> tuple[np.ndarray, np.ndarray]:
-        delta, d_delta = _proximal_path(params[:, 2], params[:, 3], params[:, 4:6],
-                                        params[:, 6:8], s)
-        return _project_to_triangles(self.triangles[self.owner[rows]],
-                                     params[:, None, :2] + delta, d_delta)
-
-    def bundle_free(self, rows: np.ndarray, params: np.ndarray, probe: np.ndarray
-                    ) -> np.ndarray:
-        """(n,) bool: the bundle path is worth a ladder: it enters the triangle.
-
-        That is, its first direction (-g1) or its ridge direction (-m, see
-        ``_proximal_path``) is not cut by the projection at b. Where both are, b is
-        on an edge with the kink leading out of the triangle: the kink is then a 1D
-        V along the edge, which the steepest path's bracket resolves exactly, and a
-        projected bundle path would only add breakpoints to the line search.
+        corner (T, 3, 3): value and gradient at each vertex, NaN where no start is
+        there. linear (T,) bool: f is linear over the triangle, i.e. the starts
+        span it (``spanning``) and all see the same gradient, with values on that
+        plane (to rounding). A linear field's steepest path needs no ladder: it runs
+        straight to its end (the minimising vertex, or the foot on an edge normal to
+        the gradient), where f is lowest.
         """
-        g1, g2 = params[:, 4:6], params[:, 6:8]
-        w = g1 - g2
-        ww = np.maximum(np.einsum("nd,nd->n", w, w), _TINY)
-        ridge = -(g2 - (np.einsum("nd,nd->n", g2, w) / ww)[:, None] * w)
-        u = np.stack([_unit_or_zero(-g1), _unit_or_zero(ridge)], axis=1)
-        x = params[:, None, :2] + probe[:, :, None] * u
-        _, dq = _project_to_triangles(self.triangles[self.owner[rows]], x, u)
-        cut = np.einsum("nkd,nkd->nk", dq - u, dq - u) > _STATIONARY ** 2
-        return ~np.all(cut, axis=1)
+        n_tri = len(self.triangles)
+        values = np.column_stack([phi, grad])
+        corner = np.where((self.at_vertex >= 0)[..., None], values[self.at_vertex], np.nan)
+        if not self.spanning:
+            return corner, np.zeros(n_tri, dtype=bool)
+        x, f, g = (a.reshape(n_tri, -1, *a.shape[1:]) for a in (points, phi, grad))
+        plane = f[:, :1] + np.einsum("tkd,td->tk", x - x[:, :1], g[:, 0])
+        size = (np.abs(x - x[:, :1]).max(axis=(1, 2)) + np.abs(x[:, 0]).max(axis=1) + 1.0)[:, None]
+        linear = (np.all(g == g[:, :1], axis=(1, 2))
+                  & np.all(np.abs(f - plane) <= _LINEAR * (size + np.abs(f[:, :1])), axis=1))
+        return corner, linear
 
-    def stationarity(self, data: np.ndarray) -> np.ndarray:
-        # No tie-breaking: f itself is the answer, its value is what matters.
-        return np.zeros(len(data))
 
+def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, iterations: int,
+             sigma: np.ndarray, tol: float
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Minimise the problem's objective from each start (P, 2) (see the module docstring).
+
+    sigma: (P,) initial step scale (path units); tol: a start stops when its
+    accepted step is shorter (m). At most ``iterations`` rounds, each ONE
+    ``problem.evaluate`` call over the candidates of all running starts between
+    two compiled kernels (``_descent_kernels.propose`` and ``accept``). Returns
+    the best point (P, 2), its objective (P,), its data (P, kd) and the number of
+    rounds each start ran (P,).
+    """
+    points = np.array(points, dtype=np.float64, order="C")
+    phi, grad, data = (np.array(a, dtype=np.float64, order="C")
+                       for a in problem.evaluate(points))
+    n_points = len(points)
+    state = np.zeros((n_points, kernels.N_STATE))
+    state[:, kernels.BEST:kernels.BEST + 2] = points
+    state[:, kernels.PHI] = phi
+    state[:, kernels.GRAD:kernels.GRAD + 2] = grad
+    state[:, kernels.ALT:kernels.ALT + 5] = state[:, kernels.BEST:kernels.BEST + 5]
+    state[:, kernels.SIGMA] = sigma
+    state[:, kernels.PREVIOUS:kernels.PREVIOUS + 2] = points
+    flags = np.zeros((n_points, kernels.N_FLAGS), dtype=np.int64)
+    flags[:, kernels.RUNNING] = 1
+    corner, linear = problem.known(points, phi, grad)
+    size = n_points * kernels.N_COLUMNS
+    cand, cand_i = np.empty((size, 5)), np.empty((size, 2), dtype=np.int64)
+    candidates = np.empty((size, 2))
+    for _ in range(iterations):
+        n, n_eval = kernels.propose(problem.kind, problem.triangles, problem.owner, corner,
+                                    linear, state, flags, data, problem.barzilai_borwein, cand, cand_i,
+                                    candidates)
+        if n == 0:
+            break
+        value, gradient, cand_data = (np.ascontiguousarray(a, dtype=np.float64)
+                                      for a in problem.evaluate(candidates[:n_eval]))
+        kernels.accept(problem.kind, problem.owner, corner, state, flags, data, cand, cand_i,
+                       value, gradient, cand_data, tol)
+    return (state[:, kernels.BEST:kernels.BEST + 2].copy(), state[:, kernels.PHI].copy(), data,
+            flags[:, kernels.ROUNDS].copy())
+
+
+# --------------------------------------------------------------------------------------
+# Deepest points of triangles
+# --------------------------------------------------------------------------------------
 
 def _triangle_minima(field: Field, triangles: np.ndarray, iterations: int,
                      starts: np.ndarray | None, tol: float
@@ -634,9 +285,17 @@ def _triangle_minima(field: Field, triangles: np.ndarray, iterations: int,
         return np.zeros((0, n_start, 2)), np.zeros((0, n_start)), np.zeros((0, n_start), int)
     points = np.einsum("kj,tjd->tkd", weights, tri).reshape(-1, 2)
     owner = np.repeat(np.arange(n_tri), n_start)
+    # Starts exactly at a vertex: their evaluations are reused where paths end there.
+    at_vertex = np.full((n_tri, 3), -1, dtype=np.int64)
+    for v in range(3):
+        hits = np.flatnonzero(np.all(weights == np.eye(3)[v], axis=1))
+        if len(hits):
+            at_vertex[:, v] = np.arange(n_tri) * n_start + hits[0]
+            points.reshape(n_tri, n_start, 2)[:, hits] = tri[:, v, None]
     edge = np.roll(tri, -1, axis=1) - tri
     longest = np.sqrt(np.einsum("tkd,tkd->tk", edge, edge).max(axis=1))
-    problem = _TriangleProblem(field, tri, owner)
+    problem = _TriangleProblem(field, tri, owner, at_vertex,
+                               np.linalg.matrix_rank(weights) == 3)
     best, value, _, rounds = _descend(problem, points, iterations,
                                       np.maximum(longest[owner], _TINY), tol)
     return (best.reshape(n_tri, n_start, 2), value.reshape(n_tri, n_start),
@@ -700,12 +359,20 @@ class _PairProblem:
     tangent, where the sum f_a + f_b (minus the depth) decreases.
     """
 
+    kind = kernels.PAIR
     barzilai_borwein = True
 
     def __init__(self, field_a: Field, field_b: Field, rotation: np.ndarray,
                  offset: np.ndarray):
         self.field_a, self.field_b = field_a, field_b
         self.rotation, self.offset = rotation, offset
+        self.triangles = np.zeros((1, 3, 2))           # no triangle: paths are not projected
+        self.owner = np.zeros(0, dtype=np.int64)
+
+    def known(self, points: np.ndarray, phi: np.ndarray, grad: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """No triangle: no vertex values (1, 3, 3) NaN, not linear (1,)."""
+        return np.full((1, 3, 3), np.nan), np.zeros(1, dtype=bool)
 
     def values(self, points: np.ndarray) -> np.ndarray:
         """(N, 6): f_a, f_b, grad f_a, grad f_b at points (N, 2) of a's frame."""
@@ -717,50 +384,13 @@ class _PairProblem:
         data = self.values(points)
         fa, fb, ga, gb = data[:, 0], data[:, 1], data[:, 2:4], data[:, 4:6]
         sign = np.where(fa >= fb, 1.0, -1.0)
-        phi = 0.5 * (fa + fb) + _IMBALANCE * np.abs(fa - fb)
-        grad = 0.5 * (ga + gb) + (_IMBALANCE * sign)[:, None] * (ga - gb)
+        phi = 0.5 * (fa + fb) + kernels.IMBALANCE * np.abs(fa - fb)
+        grad = 0.5 * (ga + gb) + (kernels.IMBALANCE * sign)[:, None] * (ga - gb)
         return phi, grad, data
 
-    def fresh(self, rows: np.ndarray, best: np.ndarray, phi: np.ndarray, data: np.ndarray,
-              plane: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
-        # Own plane: phi = max(A, B) with A, B = (1/2 +- k) f_a + (1/2 -+ k) f_b,
-        # k = _IMBALANCE, and the path of those two planes. A second plane (a
-        # kink of f_a or f_b nearby, e.g. the centre of a circle nested in the
-        # other body): the bundle path of phi's linearisation and that plane.
-        fa, fb, ga, gb = data[:, 0], data[:, 1], data[:, 2:4], data[:, 4:6]
-        high, low = 0.5 + _IMBALANCE, 0.5 - _IMBALANCE
-        pair = np.column_stack([best, high * fa + low * fb, low * fa + high * fb,
-                                high * ga + low * gb, low * ga + high * gb])
-        x2, phi2, g2 = plane
-        own = np.all(x2 == best, axis=1)
-        sign = np.where(fa >= fb, _IMBALANCE, -_IMBALANCE)[:, None]
-        g1 = 0.5 * (ga + gb) + sign * (ga - gb)
-        f2 = np.minimum(phi2 + np.einsum("nd,nd->n", g2, best - x2), phi)
-        bundle = np.column_stack([best, phi, f2, g1, g2])
-        return np.where(own[:, None], pair, bundle)
-
-    def path(self, rows: np.ndarray, params: np.ndarray, s: np.ndarray
-             ) -> tuple[np.ndarray, np.ndarray]:
-        delta, d_delta = _proximal_path(params[:, 2], params[:, 3], params[:, 4:6],
-                                        params[:, 6:8], s)
-        return params[:, None, :2] + delta, d_delta
-
-    def bundle_free(self, rows: np.ndarray, params: np.ndarray, probe: np.ndarray
-                    ) -> np.ndarray:
-        return np.ones(len(rows), dtype=bool)
-
     def stationarity(self, data: np.ndarray) -> np.ndarray:
-        """|f_a - f_b| plus the length of the min-norm element of the planes' hull.
-
-        Both vanish at a balanced minimum (antiparallel gradients), where the
-        normal is exact; used to break ties of phi at rounding level.
-        """
-        fa, fb, ga, gb = data[:, 0], data[:, 1], data[:, 2:4], data[:, 4:6]
-        w = ga - gb
-        mean = 0.5 * (ga + gb)
-        ww = np.maximum(np.einsum("nd,nd->n", w, w), _TINY)
-        across = mean - (np.einsum("nd,nd->n", mean, w) / ww)[:, None] * w
-        return np.abs(fa - fb) + np.hypot(across[:, 0], across[:, 1])
+        """(N,) >= 0 at data (N, 6): zero at a balanced minimum (see the kernels)."""
+        return kernels.stationarity(kernels.PAIR, data)
 
 
 def _halton(index: np.ndarray, base: int) -> np.ndarray:
@@ -790,7 +420,7 @@ def _clusters(point: np.ndarray, key: np.ndarray, score: np.ndarray, tiebreak: n
     head = np.flatnonzero(leader == np.arange(len(point)))
     member = leader[None, :] == head[:, None]                          # (C, K)
     lowest = np.min(np.where(member, score[None, :], np.inf), axis=1, keepdims=True)
-    rounding = 4.0 * _EPS * np.maximum(1.0, np.abs(lowest))
+    rounding = 4.0 * kernels.EPS * np.maximum(1.0, np.abs(lowest))
     member &= score[None, :] <= lowest + rounding
     best = np.argmin(np.where(member, tiebreak[None, :], np.inf), axis=1)
     return head, best

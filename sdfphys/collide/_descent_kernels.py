@@ -1,0 +1,695 @@
+"""Compiled kernels of ``descent``: one round of the line-search descent, for every start.
+
+``descent._descend`` runs rounds of: ``propose`` (numba) writes the candidate
+points of every running start into one buffer; ONE problem evaluation (numpy,
+the fields are Python objects) gives their values and gradients; ``accept``
+(numba) updates every start's best point, line-search bracket, second bundle
+plane and step scale. The algorithm is described in ``descent``'s module
+docstring; the derivations of its pieces sit above the functions below.
+
+Kinds of problem (``kind``): ``TRIANGLE`` (f restricted to a triangle, paths
+projected onto the start's triangle) and ``PAIR`` (a balance of two fields over
+the plane, see ``descent._PairProblem``; data columns f_a, f_b, grad f_a, grad f_b).
+
+State of P starts, updated in place (columns named by the constants below):
+
+- ``state`` (P, N_STATE) float64: best point b (m), its objective and gradient,
+  the second plane of the bundle (point, value, gradient), the path of the line
+  search in progress (``PATH``: 8 parameters, see ``_proximal_step``) and its
+  bracket ends (s, value, slope), the step scale sigma (path units), the
+  Barzilai-Borwein memory (last b, last direction), and per round the steepest
+  and bundle paths from b, the slope at s = 0 and the ladder's scale.
+- ``flags`` (P, N_FLAGS) int64: running, bracketed, rounds without decrease in a
+  row, rounds run, BB memory usable, and per round the number and offset of the
+  start's candidates.
+- ``data`` (P, kd): the problem's data at b (TRIANGLE: the gradient).
+
+Candidates of a round: ``cand`` (C, 5) float64 (step s, point, dq/ds),
+``cand_i`` (C, 2) int64 (column, source: the row of the evaluated points, or
+``AT_BEST`` (b itself), or ``AT_CORNER - v`` (vertex v of the start's triangle,
+whose value is known from a start placed there)).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+TRIANGLE = 0
+PAIR = 1
+
+#: Step multipliers of the ladder on a path from the best point, ascending.
+LADDER = np.array([1.0 / 16.0, 0.25, 1.0, 4.0])
+#: Rungs per ladder: the geometric ones and, on a triangle's steepest path, its end.
+N_RUNGS = len(LADDER) + 1
+#: Candidate columns: steepest ladder | bundle ladder | two model points.
+COLUMN_BUNDLE = N_RUNGS
+COLUMN_MODEL = 2 * N_RUNGS
+N_COLUMNS = 2 * N_RUNGS + 2
+#: The end of a triangle's steepest path is a rung when within this many scales.
+END_REACH = 16.0
+#: Two unit directions with |cosine| above 1 - PARALLEL are along one line.
+PARALLEL = 1e-12
+#: A line search continues without ladders after at most this many rounds without decrease.
+CONTINUE_FAILS = 0
+#: sigma is divided by this after a round without decrease.
+SHRINK = 64.0
+#: Model points stay this fraction of the bracket away from its ends.
+GUARD = 1e-3
+#: The path's slope at its start is read at s = PROBE * sigma (past any corner at s = 0).
+PROBE = 1e-9
+#: A projected gradient shorter than this (unit gradients) means a stationary point.
+STATIONARY = 1e-12
+#: The Barzilai-Borwein scale stays within this factor of the last step's scale.
+BB_RANGE = 16.0
+#: Two unit gradients with cosine below 1 - KINK are taken as the two sides of a kink.
+KINK = 1e-3
+#: Weight k of the imbalance in the field-field objective (f_a + f_b) / 2 + k |f_a - f_b|.
+IMBALANCE = 0.25
+EPS = np.finfo(np.float64).eps
+TINY = 1e-300
+
+# Columns of ``state``.
+BEST = 0          # b (2)
+PHI = 2           # objective at b
+GRAD = 3          # its gradient (2)
+ALT = 5           # second plane: point (2), value, gradient (2)
+PATH = 10         # path of the line search in progress (8)
+LEFT = 18         # its bracket: s, value, slope at the left end
+RIGHT = 21        # ... and at the right end
+SIGMA = 24        # step scale
+PREVIOUS = 25     # Barzilai-Borwein memory: last b (2), last direction (2)
+STEEP = 29        # this round's steepest path from b (8)
+BUNDLE = 37       # this round's bundle path from b (8)
+D0 = 45           # this round's slope of the steepest path at s = 0
+SCALE = 46        # this round's ladder scale
+N_STATE = 47
+# Columns of ``flags``.
+RUNNING = 0
+BRACKETED = 1
+FAILS = 2
+ROUNDS = 3
+HAS_PREVIOUS = 4
+COUNT = 5
+OFFSET = 6
+ENDED = 7
+N_FLAGS = 8
+# Sources of candidates that need no evaluation.
+AT_BEST = -1
+AT_CORNER = -2
+
+
+# --------------------------------------------------------------------------------------
+# Paths
+# --------------------------------------------------------------------------------------
+
+# The proximal min-max path of two linear models l_i(b + delta) = f_i + g_i . delta:
+# delta(tau) minimises max(l_1, l_2) + |delta|^2 / (2 tau), tau >= 0. Dual:
+# delta = -tau (lam g1 + (1 - lam) g2) with lam in [0, 1] maximising
+# lam f1 + (1 - lam) f2 - tau |lam g1 + (1 - lam) g2|^2 / 2, i.e. with w = g1 - g2,
+# D = f1 - f2:
+#
+#     lam = clamp((D / tau - g2 . w) / |w|^2, 0, 1).
+#
+# For small tau lam is clamped and the path is steepest descent of the larger
+# model; from tau* = |D| / (g_larger . w) on it is the balancing correction
+# -(D / |w|^2) w plus tau times -(g2 - (g2 . w / |w|^2) w), the min-norm element of
+# the models' gradient hull, which runs along the line l_1 = l_2 (a ridge, or the
+# contact between two fields). Where w = 0 the larger model's (first on a tie)
+# gradient is followed. With the same plane twice it is plain steepest descent.
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _proximal_step(f1: float, f2: float, g1x: float, g1y: float, g2x: float, g2y: float,
+                   tau: float) -> tuple[float, float, float, float]:
+    """delta(tau) and d delta / d tau (m, m per path unit) of the proximal min-max path."""
+    wx, wy = g1x - g2x, g1y - g2y
+    ww = wx * wx + wy * wy
+    gap = f1 - f2
+    g2w = g2x * wx + g2y * wy
+    free = False
+    if ww <= TINY:
+        lam = 1.0 if gap >= 0.0 else 0.0
+        ww = 1.0
+    else:
+        lam = ((gap / tau if tau > 0.0 else np.sign(gap) * np.inf) - g2w) / ww
+        free = lam > 0.0 and lam < 1.0
+        lam = min(max(lam, 0.0), 1.0)
+    dx = lam * g1x + (1.0 - lam) * g2x
+    dy = lam * g1y + (1.0 - lam) * g2y
+    if free:
+        return -tau * dx, -tau * dy, -(g2x - g2w / ww * wx), -(g2y - g2w / ww * wy)
+    return -tau * dx, -tau * dy, -dx, -dy
+
+
+# Projection onto a triangle and its derivative (Bertsekas' projection arc): the
+# closest point of the three edges (clamped foot of the perpendicular, the vertex
+# itself where clamped; the first edge on ties) unless x is on the inner side of
+# all three edges (either orientation; never for a degenerate triangle, which is
+# searched as its edges). D Proj_T(x) u is u inside, the component of u along the
+# edge when the closest point is inside an edge, and 0 at a vertex.
+
+@njit(cache=True, inline="always", error_model="numpy")
+def project(tri: np.ndarray, t: int, x: float, y: float, ux: float, uy: float
+            ) -> tuple[float, float, float, float]:
+    """Closest point q of triangle tri[t] (tri: (T, 3, 2)) to (x, y) and dq = D Proj_T(x) u."""
+    ax, ay = tri[t, 0, 0], tri[t, 0, 1]
+    bx, by = tri[t, 1, 0], tri[t, 1, 1]
+    cx, cy = tri[t, 2, 0], tri[t, 2, 1]
+    e0x, e0y, e1x, e1y, e2x, e2y = bx - ax, by - ay, cx - bx, cy - by, ax - cx, ay - cy
+    area = e0x * (-e2y) - e0y * (-e2x)
+    c0 = e0x * (y - ay) - e0y * (x - ax)
+    c1 = e1x * (y - by) - e1y * (x - bx)
+    c2 = e2x * (y - cy) - e2y * (x - cx)
+    if area > 0.0 and c0 >= 0.0 and c1 >= 0.0 and c2 >= 0.0:
+        return x, y, ux, uy
+    if area < 0.0 and c0 <= 0.0 and c1 <= 0.0 and c2 <= 0.0:
+        return x, y, ux, uy
+    best = np.inf
+    qx = qy = dqx = dqy = 0.0
+    for k in range(3):
+        if k == 0:
+            px, py, ex, ey, nx, ny = ax, ay, e0x, e0y, bx, by
+        elif k == 1:
+            px, py, ex, ey, nx, ny = bx, by, e1x, e1y, cx, cy
+        else:
+            px, py, ex, ey, nx, ny = cx, cy, e2x, e2y, ax, ay
+        length2 = max(ex * ex + ey * ey, TINY)
+        along = ((x - px) * ex + (y - py) * ey) / length2
+        if along <= 0.0:
+            fx, fy = px, py
+        elif along >= 1.0:
+            fx, fy = nx, ny
+        else:
+            fx, fy = px + along * ex, py + along * ey
+        d2 = (x - fx) * (x - fx) + (y - fy) * (y - fy)
+        if d2 < best:
+            best = d2
+            qx, qy = fx, fy
+            if 0.0 < along < 1.0:
+                slide = (ux * ex + uy * ey) / length2
+                dqx, dqy = slide * ex, slide * ey
+            else:
+                dqx = dqy = 0.0
+    return qx, qy, dqx, dqy
+
+
+# Where the projected ray Proj_T(b + s u) stops. For large s, b + s u lies in the
+# normal cone of the support vertex v (the vertex maximising u . v): the wedge
+# {x : (x - v) . (w - v) <= 0 for both neighbours w}, where the projection is v.
+# The ray enters the half-plane of neighbour w at s_w = (b - v) . e / (-u . e),
+# e = w - v (u . e <= 0 at the support vertex), and stays in it; the end is the
+# largest of the two. Just before it the ray is on w's side of the last one
+# entered, so the path arrives sliding along the edge (w, v): dq/ds is the
+# component of u along that edge. When u is normal to the edge (v, w) (u . e = 0)
+# the ray ends in that edge's slab instead, once it crosses the edge's line, at
+# s = -(b - v) . u / |u|^2, arriving with dq/ds = u.
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _ray_end(tri: np.ndarray, t: int, bx: float, by: float, ux: float, uy: float
+             ) -> tuple[float, float, float]:
+    """Step s >= 0 from which Proj_T(b + s u) no longer moves (triangle t of tri), and
+    dq/ds just before it."""
+    top = 0
+    for k in range(1, 3):
+        if ux * tri[t, k, 0] + uy * tri[t, k, 1] > ux * tri[t, top, 0] + uy * tri[t, top, 1]:
+            top = k
+    vx, vy = tri[t, top, 0], tri[t, top, 1]
+    end, dx, dy = 0.0, 0.0, 0.0
+    for k in range(1, 3):
+        w = (top + k) % 3
+        ex, ey = tri[t, w, 0] - vx, tri[t, w, 1] - vy
+        be = (bx - vx) * ex + (by - vy) * ey
+        if be <= 0.0:
+            continue
+        ue = ux * ex + uy * ey
+        if ue < 0.0:
+            if be / -ue > end:
+                slide = ue / max(ex * ex + ey * ey, TINY)
+                end, dx, dy = be / -ue, slide * ex, slide * ey
+        else:
+            cross = -((bx - vx) * ux + (by - vy) * uy) / max(ux * ux + uy * uy, TINY)
+            if cross > end:
+                end, dx, dy = cross, ux, uy
+    return end, dx, dy
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _path(kind: int, tri: np.ndarray, t: int, state: np.ndarray, i: int, col: int, s: float
+          ) -> tuple[float, float, float, float]:
+    """Point and dq/ds at step s of the path state[i, col:col + 8]."""
+    dx, dy, ddx, ddy = _proximal_step(state[i, col + 2], state[i, col + 3], state[i, col + 4],
+                                      state[i, col + 5], state[i, col + 6], state[i, col + 7], s)
+    if kind == TRIANGLE:
+        return project(tri, t, state[i, col] + dx, state[i, col + 1] + dy, ddx, ddy)
+    return state[i, col] + dx, state[i, col + 1] + dy, ddx, ddy
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _unit(x: float, y: float) -> tuple[float, float]:
+    norm = math.hypot(x, y)
+    if norm > TINY:
+        return x / norm, y / norm
+    return 0.0, 0.0
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _bundle_free(tri: np.ndarray, t: int, state: np.ndarray, i: int, probe: float) -> bool:
+    """The bundle path enters triangle t: its first direction (-g1) or its ridge
+    direction (-m, the min-norm element of the two gradients' hull) is not cut by
+    the projection at b.
+
+    Where both are, b is on an edge with the kink leading out of the triangle: the
+    kink is then a 1D V along the edge, which the steepest path's bracket resolves
+    exactly, and a projected bundle path would only add breakpoints.
+    """
+    g1x, g1y = state[i, BUNDLE + 4], state[i, BUNDLE + 5]
+    g2x, g2y = state[i, BUNDLE + 6], state[i, BUNDLE + 7]
+    wx, wy = g1x - g2x, g1y - g2y
+    ww = max(wx * wx + wy * wy, TINY)
+    g2w = (g2x * wx + g2y * wy) / ww
+    for which in range(2):
+        if which == 0:
+            ux, uy = _unit(-g1x, -g1y)
+        else:
+            ux, uy = _unit(-(g2x - g2w * wx), -(g2y - g2w * wy))
+        _, _, dqx, dqy = project(tri, t, state[i, BEST] + probe * ux,
+                                 state[i, BEST + 1] + probe * uy, ux, uy)
+        if (dqx - ux) ** 2 + (dqy - uy) ** 2 <= STATIONARY * STATIONARY:
+            return True
+    return False
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _own_plane(kind: int, state: np.ndarray, data: np.ndarray, i: int) -> None:
+    """The steepest path from b (``STEEP``): the linearisation at b twice (TRIANGLE),
+    or the two planes whose max is phi (PAIR: phi = max(A, B) with
+    A, B = (1/2 +- k) f_a + (1/2 -+ k) f_b, k = IMBALANCE)."""
+    state[i, STEEP], state[i, STEEP + 1] = state[i, BEST], state[i, BEST + 1]
+    if kind == TRIANGLE:
+        state[i, STEEP + 2] = state[i, STEEP + 3] = state[i, PHI]
+        state[i, STEEP + 4] = state[i, STEEP + 6] = state[i, GRAD]
+        state[i, STEEP + 5] = state[i, STEEP + 7] = state[i, GRAD + 1]
+        return
+    high, low = 0.5 + IMBALANCE, 0.5 - IMBALANCE
+    state[i, STEEP + 2] = high * data[i, 0] + low * data[i, 1]
+    state[i, STEEP + 3] = low * data[i, 0] + high * data[i, 1]
+    state[i, STEEP + 4] = high * data[i, 2] + low * data[i, 4]
+    state[i, STEEP + 5] = high * data[i, 3] + low * data[i, 5]
+    state[i, STEEP + 6] = low * data[i, 2] + high * data[i, 4]
+    state[i, STEEP + 7] = low * data[i, 3] + high * data[i, 5]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _stationarity(kind: int, data: np.ndarray, i: int) -> float:
+    """PAIR: |f_a - f_b| plus the length of the min-norm element of the gradients'
+    hull at data[i]; both vanish at a balanced minimum (antiparallel gradients),
+    where the normal is exact. Breaks ties of phi at rounding level. TRIANGLE: 0
+    (f itself is the answer)."""
+    if kind == TRIANGLE:
+        return 0.0
+    wx, wy = data[i, 2] - data[i, 4], data[i, 3] - data[i, 5]
+    mx, my = 0.5 * (data[i, 2] + data[i, 4]), 0.5 * (data[i, 3] + data[i, 5])
+    ww = max(wx * wx + wy * wy, TINY)
+    c = (mx * wx + my * wy) / ww
+    return abs(data[i, 0] - data[i, 1]) + math.hypot(mx - c * wx, my - c * wy)
+
+
+@njit(cache=True, error_model="numpy")
+def stationarity(kind: int, data: np.ndarray) -> np.ndarray:
+    """``_stationarity`` of every row of data (N, kd): (N,)."""
+    out = np.empty(len(data))
+    for i in range(len(data)):
+        out[i] = _stationarity(kind, data, i)
+    return out
+
+
+# --------------------------------------------------------------------------------------
+# Line-search models
+# --------------------------------------------------------------------------------------
+
+# Two trial steps inside a bracket [sl, sr] from values p and slopes d at its ends:
+# (1) the zero of the secant of the slope, sl - dl w / (dr - dl) (w = sr - sl; exact
+#     for a quadratic), when dr > 0; else the minimiser of the quadratic with value
+#     pl and slope dl at sl and value pr at sr, sl - dl w^2 / (2 (pr - pl - dl w));
+# (2) the crossing of the tangent lines at both ends,
+#     (pr - pl + dl sl - dr sr) / (dl - dr), exact at a kink between two linear
+#     pieces (a polygon's medial axis, a circle's centre along a ray through it).
+# Both are kept GUARD w away from the ends; invalid models fall back to the midpoint.
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _model_steps(state: np.ndarray, i: int) -> tuple[float, float]:
+    """The two model steps (ascending) in the bracket of start i."""
+    sl, pl, dl = state[i, LEFT], state[i, LEFT + 1], state[i, LEFT + 2]
+    sr, pr, dr = state[i, RIGHT], state[i, RIGHT + 1], state[i, RIGHT + 2]
+    w = sr - sl
+    mid = sl + 0.5 * w
+    first = mid
+    if dr > 0.0:
+        if dr > dl:
+            first = sl - dl * w / (dr - dl)
+    else:
+        curvature = pr - pl - dl * w
+        if curvature > 0.0:
+            first = sl - 0.5 * dl * w * w / curvature
+    second = mid
+    if dr > dl:
+        second = (pr - pl + dl * sl - dr * sr) / (dl - dr)
+    if not np.isfinite(first):
+        first = mid
+    if not np.isfinite(second):
+        second = mid
+    lo, hi = sl + GUARD * w, sr - GUARD * w
+    first = min(max(first, lo), hi)
+    second = min(max(second, lo), hi)
+    return min(first, second), max(first, second)
+
+
+# --------------------------------------------------------------------------------------
+# One round
+# --------------------------------------------------------------------------------------
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _candidate(kind: int, tri: np.ndarray, t: int, corner: np.ndarray, state: np.ndarray,
+               i: int, x: float, y: float, dx: float, dy: float, s: float, col: int,
+               same_as: int, n: int, u: int, cand: np.ndarray, cand_i: np.ndarray,
+               points: np.ndarray) -> int:
+    """Write candidate n (point (x, y), dq/ds (dx, dy), step s, column col); returns
+    the new number of points to evaluate. A candidate at b, at a vertex of the
+    triangle whose value is known, or at the same point and derivative as
+    candidate ``same_as`` (>= 0; the same rung of the other ladder, or the
+    previous rung past the end of a path) reuses that value instead of adding a
+    point."""
+    cand[n, 0], cand[n, 1], cand[n, 2], cand[n, 3], cand[n, 4] = s, x, y, dx, dy
+    cand_i[n, 0] = col
+    if x == state[i, BEST] and y == state[i, BEST + 1]:
+        cand_i[n, 1] = AT_BEST
+        return u
+    if kind == TRIANGLE:
+        for v in range(3):
+            if x == tri[t, v, 0] and y == tri[t, v, 1] and not np.isnan(corner[t, v, 0]):
+                cand_i[n, 1] = AT_CORNER - v
+                return u
+    if (same_as >= 0 and x == cand[same_as, 1] and y == cand[same_as, 2]
+            and dx == cand[same_as, 3] and dy == cand[same_as, 4]):
+        cand_i[n, 1] = cand_i[same_as, 1]
+        return u
+    cand_i[n, 1] = u
+    points[u, 0], points[u, 1] = x, y
+    return u + 1
+
+
+@njit(cache=True, error_model="numpy")
+def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
+            linear: np.ndarray, state: np.ndarray, flags: np.ndarray, data: np.ndarray, barzilai_borwein: bool,
+            cand: np.ndarray, cand_i: np.ndarray, points: np.ndarray) -> tuple[int, int]:
+    """Candidates of every running start for this round: returns (C, U), the number
+    of candidates and of distinct points to evaluate (``points[:U]``).
+
+    tri (T, 3, 2), owner (P,): the starts' triangles (TRIANGLE); corner (T, 3, 3):
+    value and gradient of f at each vertex, NaN where unknown; linear (T,) bool: f
+    is linear over the triangle (the steepest path then runs straight to its end,
+    and only the end is evaluated). Stops the starts
+    whose projected gradient vanishes; writes the per-round columns of ``state``
+    and ``flags`` and the candidates (rows 0..C-1 of ``cand``, ``cand_i``).
+    """
+    n = u = 0
+    for i in range(len(state)):
+        flags[i, COUNT] = 0
+        if not flags[i, RUNNING]:
+            continue
+        t = owner[i] if kind == TRIANGLE else 0
+        sigma = state[i, SIGMA]
+        # The steepest path from b and its slope at the start; a zero projected
+        # gradient is a stationary point (the start stops).
+        _own_plane(kind, state, data, i)
+        _, _, dqx, dqy = _path(kind, tri, t, state, i, STEEP, PROBE * sigma)
+        if math.hypot(dqx, dqy) <= STATIONARY:
+            flags[i, RUNNING] = 0
+            continue
+        flags[i, ROUNDS] += 1
+        state[i, D0] = state[i, GRAD] * dqx + state[i, GRAD + 1] * dqy
+        # The bundle path: b's linearisation and the second plane, capped at phi(b).
+        state[i, BUNDLE:BUNDLE + 3] = state[i, BEST:BEST + 3]
+        state[i, BUNDLE + 3] = min(
+            state[i, ALT + 2] + state[i, ALT + 3] * (state[i, BEST] - state[i, ALT])
+            + state[i, ALT + 4] * (state[i, BEST + 1] - state[i, ALT + 1]), state[i, PHI])
+        state[i, BUNDLE + 4:BUNDLE + 6] = state[i, GRAD:GRAD + 2]
+        state[i, BUNDLE + 6:BUNDLE + 8] = state[i, ALT + 3:ALT + 5]
+        has_alt = state[i, ALT] != state[i, BEST] or state[i, ALT + 1] != state[i, BEST + 1]
+        if has_alt and kind == TRIANGLE:
+            has_alt = _bundle_free(tri, t, state, i, PROBE * sigma)
+
+        # The ladder's scale: sigma, or the Barzilai-Borwein step s.s / s.y from the
+        # last accepted step s = b - b_prev and the change y of the path's direction
+        # at scale sigma (exact for a locally quadratic model: it places the ladder
+        # around the step that lands on the minimum), kept within a factor BB_RANGE
+        # of sigma (next to a kink y jumps and s.s / s.y is meaningless).
+        scale = sigma
+        if barzilai_borwein:
+            _, _, vx, vy = _path(kind, tri, t, state, i, STEEP, sigma)
+            sx = state[i, BEST] - state[i, PREVIOUS]
+            sy = state[i, BEST + 1] - state[i, PREVIOUS + 1]
+            curvature = sx * (state[i, PREVIOUS + 2] - vx) + sy * (state[i, PREVIOUS + 3] - vy)
+            if flags[i, HAS_PREVIOUS] and curvature > 0.0:
+                bb = (sx * sx + sy * sy) / curvature
+                if not np.isfinite(bb):
+                    bb = sigma
+                scale = min(max(bb, sigma / BB_RANGE), sigma * BB_RANGE)
+            state[i, PREVIOUS], state[i, PREVIOUS + 1] = state[i, BEST], state[i, BEST + 1]
+            state[i, PREVIOUS + 2], state[i, PREVIOUS + 3] = vx, vy
+        state[i, SCALE] = scale
+
+        # A line search on one straight piece of its path (the same dq/ds at both ends
+        # of its bracket: a slide along an edge, or a straight gradient line), with b at an end of its bracket and the
+        # steepest path from b along the same line, needs no new ladder: the bracket
+        # still holds the first valley ahead, the model points find it.
+        ladders = True
+        if kind == TRIANGLE and flags[i, BRACKETED] and flags[i, FAILS] <= CONTINUE_FAILS:
+            lx, ly, ldx, ldy = _path(kind, tri, t, state, i, PATH, state[i, LEFT])
+            rx, ry, rdx, rdy = _path(kind, tri, t, state, i, PATH, state[i, RIGHT])
+            at_end = ((lx == state[i, BEST] and ly == state[i, BEST + 1])
+                      or (rx == state[i, BEST] and ry == state[i, BEST + 1]))
+            ux, uy = _unit(ldx, ldy)
+            wx, wy = _unit(dqx, dqy)
+            one_piece = (abs(ldx - rdx) + abs(ldy - rdy)
+                         <= PARALLEL * (abs(ldx) + abs(ldy) + abs(rdx) + abs(rdy)))
+            ladders = not (at_end and one_piece and abs(ux * wx + uy * wy) > 1.0 - PARALLEL)
+
+        # Candidates: a ladder on each path, ended on a triangle's steepest path by
+        # the path's end (the vertex or edge point where the projected ray stops;
+        # with dq/ds just before it, so that a slide that still descends there
+        # reads as descending), and two model points in the bracket.
+        start = n
+        end, end_dx, end_dy = np.inf, 0.0, 0.0
+        if kind == TRIANGLE:
+            end, end_dx, end_dy = _ray_end(tri, t, state[i, BEST], state[i, BEST + 1],
+                                           -state[i, GRAD], -state[i, GRAD + 1])
+            if end > END_REACH * scale and not linear[t]:
+                end = np.inf
+        for k in range(N_RUNGS if ladders else 0):
+            s = scale * LADDER[k] if k < N_RUNGS - 1 and not linear[t] else end
+            s = min(s, end)
+            if not np.isfinite(s):
+                break
+            x, y, dx, dy = _path(kind, tri, t, state, i, STEEP, s)
+            if s == end:
+                dx, dy = end_dx, end_dy
+            u = _candidate(kind, tri, t, corner, state, i, x, y, dx, dy, s, k, -1, n, u,
+                           cand, cand_i, points)
+            n += 1
+            if s == end:
+                break
+        steep_rungs = n - start
+        flags[i, ENDED] = steep_rungs > 0 and cand[n - 1, 0] == end
+        if has_alt and ladders and not linear[t]:
+            for k in range(N_RUNGS - 1):
+                s = scale * LADDER[k]
+                x, y, dx, dy = _path(kind, tri, t, state, i, BUNDLE, s)
+                twin = start + k if k < steep_rungs and cand[start + k, 0] == s else -1
+                u = _candidate(kind, tri, t, corner, state, i, x, y, dx, dy, s,
+                               COLUMN_BUNDLE + k, twin, n, u, cand, cand_i, points)
+                n += 1
+        if flags[i, BRACKETED]:
+            s_first, s_second = _model_steps(state, i)
+            for k in range(2):
+                s = s_first if k == 0 else s_second
+                x, y, dx, dy = _path(kind, tri, t, state, i, PATH, s)
+                u = _candidate(kind, tri, t, corner, state, i, x, y, dx, dy, s,
+                               COLUMN_MODEL + k, n - 1 if k == 1 else -1, n, u, cand, cand_i,
+                               points)
+                n += 1
+        flags[i, COUNT], flags[i, OFFSET] = n - start, start
+    return n, u
+
+
+@njit(cache=True, error_model="numpy")
+def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
+           flags: np.ndarray, data: np.ndarray, cand: np.ndarray, cand_i: np.ndarray,
+           value: np.ndarray, gradient: np.ndarray, cand_data: np.ndarray, tol: float) -> None:
+    """Update every start that proposed candidates, from the values (U,), gradients
+    (U, 2) and data (U, kd) at the evaluated points (see ``descent``'s module
+    docstring for the rules)."""
+    table = np.empty(N_COLUMNS)                         # value per column (inf: none)
+    slope = np.empty(N_COLUMNS)
+    where = np.empty(N_COLUMNS, dtype=np.int64)         # column -> candidate row
+    seen = np.empty((N_COLUMNS + 2, 5))                 # planes: point, value, gradient
+    samples = np.empty((2, N_RUNGS + 1, 3))             # per ladder: s, value, slope
+    rungs = np.empty(2, dtype=np.int64)
+    for i in range(len(state)):
+        count, offset = flags[i, COUNT], flags[i, OFFSET]
+        if count == 0:
+            continue
+        t = owner[i] if kind == TRIANGLE else 0
+        d0, scale, phi_old = state[i, D0], state[i, SCALE], state[i, PHI]
+        table[:] = np.inf
+        slope[:] = 0.0
+        where[:] = -1
+        rungs[:] = 0
+        for j in range(offset, offset + count):
+            c, src = cand_i[j, 0], cand_i[j, 1]
+            where[c] = j
+            if src == AT_BEST:
+                table[c], gx, gy = phi_old, state[i, GRAD], state[i, GRAD + 1]
+            elif src <= AT_CORNER:
+                v = AT_CORNER - src
+                table[c], gx, gy = corner[t, v, 0], corner[t, v, 1], corner[t, v, 2]
+            else:
+                table[c], gx, gy = value[src], gradient[src, 0], gradient[src, 1]
+            slope[c] = gx * cand[j, 3] + gy * cand[j, 4]
+            seen[c, 0], seen[c, 1], seen[c, 2] = cand[j, 1], cand[j, 2], table[c]
+            seen[c, 3], seen[c, 4] = gx, gy
+            if c < COLUMN_MODEL:
+                rungs[c // N_RUNGS] += 1
+
+        # On each path only the first valley counts (samples up to the first one
+        # where phi rises or its slope turns >= 0): the descent stays local, each
+        # start finds the minimum of its own basin.
+        for ladder in range(2):
+            samples[ladder, 0, 0], samples[ladder, 0, 1], samples[ladder, 0, 2] = 0.0, phi_old, d0
+            rise = rungs[ladder]
+            for k in range(1, rungs[ladder] + 1):
+                c = ladder * N_RUNGS + k - 1
+                samples[ladder, k, 0] = cand[where[c], 0]
+                samples[ladder, k, 1] = table[c]
+                samples[ladder, k, 2] = slope[c]
+                if rise == rungs[ladder] and (slope[c] >= 0.0
+                                              or table[c] > samples[ladder, k - 1, 1]):
+                    rise = k
+                if k > rise or (k == rise and ladder == 0 and k == rungs[0]
+                                and flags[i, ENDED] and slope[c] >= 0.0):
+                    table[c] = np.inf
+
+        win = np.argmin(table)
+        phi_win = table[win]
+        rounding = 4.0 * EPS * max(1.0, abs(phi_old))
+        improved = phi_win < phi_old - rounding
+        if not improved and kind != TRIANGLE:
+            # Near a smooth minimum phi stops changing in double precision long
+            # before the point stops moving; there a candidate whose value ties with
+            # b's (to rounding) is taken when it halves the stationarity measure.
+            tie, tie_win = np.inf, -1
+            for c in range(N_COLUMNS):
+                if table[c] <= phi_old + rounding and cand_i[where[c], 1] >= 0:
+                    measure = _stationarity(kind, cand_data, cand_i[where[c], 1])
+                    if measure < tie:
+                        tie, tie_win = measure, c
+            if tie_win >= 0 and tie < 0.5 * _stationarity(kind, data, i):
+                win, phi_win, improved = tie_win, table[tie_win], True
+        w = where[win]
+        moved = math.hypot(cand[w, 1] - state[i, BEST], cand[w, 2] - state[i, BEST + 1])
+        new_sigma = scale
+
+        # (a) The model samples shrink their bracket: one with phi' < 0 and phi <=
+        #     phi(s_l) becomes the left end, otherwise the right end (the second only
+        #     if it still lies inside).
+        has = flags[i, BRACKETED] != 0
+        if has:
+            for c in range(COLUMN_MODEL, N_COLUMNS):
+                s = cand[where[c], 0]
+                if state[i, LEFT] < s < state[i, RIGHT]:
+                    end = LEFT if slope[c] < 0.0 and table[c] <= state[i, LEFT + 1] else RIGHT
+                    state[i, end], state[i, end + 1], state[i, end + 2] = s, table[c], slope[c]
+            if improved and win >= COLUMN_MODEL:
+                new_sigma = max(moved, 0.25 * scale)
+
+        if improved and win < COLUMN_MODEL:
+            # (b) A ladder winner at rung k starts a new line search on its path,
+            #     bracketed by its neighbours (k - 1, k) if phi' >= 0 there, else
+            #     (k, k + 1); open (no bracket) past the last rung, where the scale
+            #     then grows (a long slide along an edge or a ridge).
+            ladder = win // N_RUNGS
+            k = win - ladder * N_RUNGS + 1
+            down = samples[ladder, k, 2] < 0.0
+            lk = k if down else k - 1
+            rk = min(k + 1 if down else k, rungs[ladder])
+            path = STEEP if ladder == 0 else BUNDLE
+            state[i, PATH:PATH + 8] = state[i, path:path + 8]
+            state[i, LEFT:LEFT + 3] = samples[ladder, lk]
+            state[i, RIGHT:RIGHT + 3] = samples[ladder, rk]
+            open_end = down and k == rungs[ladder]
+            has = not open_end
+            new_sigma = samples[ladder, k, 0] * (LADDER[-1] if open_end else 1.0)
+        elif not improved and rungs[0] == 0:
+            # (c) No decrease in a continued line search: its bracket, shrunk by the
+            #     model samples, stands; the next round brings ladders back.
+            new_sigma = scale / SHRINK
+        elif not improved:
+            # (d) No decrease: search finely around b on the steepest path next round.
+            state[i, PATH:PATH + 8] = state[i, STEEP:STEEP + 8]
+            state[i, LEFT:LEFT + 3] = samples[0, 0]
+            state[i, RIGHT:RIGHT + 3] = samples[0, 1]
+            has = d0 < 0.0
+            new_sigma = scale / SHRINK
+
+        # The next second plane: among the planes seen near the new best (this
+        # round's samples, the old best and the old second plane, within the step
+        # scale) whose gradient differs from the new best's, the one most active
+        # there, i.e. with the smallest linearisation error |f(b) - l_i(b)| (the
+        # bundle methods' rule). A different gradient close by reveals a kink (a
+        # ridge of the medial axis, or a minimum just passed); the bundle path then
+        # follows the ridge l_1 = l_2 instead of zigzagging across it. Without a
+        # decrease b's own plane is carried to the best candidate's point.
+        new_x, new_y = cand[w, 1], cand[w, 2]
+        if improved:
+            new_phi, new_gx, new_gy = phi_win, seen[win, 3], seen[win, 4]
+        else:
+            new_phi, new_gx, new_gy = phi_old, state[i, GRAD], state[i, GRAD + 1]
+        seen[N_COLUMNS, :] = state[i, BEST:BEST + 5]
+        seen[N_COLUMNS + 1, :] = state[i, ALT:ALT + 5]
+        ux, uy = _unit(new_gx, new_gy)
+        reach = max(scale, new_sigma)
+        pick, error = -1, np.inf
+        for c in range(N_COLUMNS + 2):
+            if c < N_COLUMNS and not np.isfinite(table[c]):
+                continue
+            gx, gy = seen[c, 3], seen[c, 4]
+            if (gx * ux + gy * uy) / max(math.hypot(gx, gy), TINY) >= 1.0 - KINK:
+                continue
+            if math.hypot(seen[c, 0] - new_x, seen[c, 1] - new_y) > reach:
+                continue
+            e = abs(new_phi - seen[c, 2] - gx * (new_x - seen[c, 0]) - gy * (new_y - seen[c, 1]))
+            if e < error:
+                pick, error = c, e
+        if pick >= 0:
+            state[i, ALT:ALT + 5] = seen[pick]
+        else:
+            state[i, ALT], state[i, ALT + 1], state[i, ALT + 2] = new_x, new_y, new_phi
+            state[i, ALT + 3], state[i, ALT + 4] = new_gx, new_gy
+
+        # Commit.
+        if improved:
+            state[i, BEST], state[i, BEST + 1], state[i, PHI] = new_x, new_y, phi_win
+            state[i, GRAD], state[i, GRAD + 1] = new_gx, new_gy
+            src = cand_i[w, 1]
+            if src >= 0:
+                data[i, :] = cand_data[src]
+            elif src <= AT_CORNER:
+                data[i, 0], data[i, 1] = new_gx, new_gy
+        flags[i, BRACKETED] = has and state[i, RIGHT] > state[i, LEFT]
+        state[i, SIGMA] = max(new_sigma, TINY)
+        flags[i, FAILS] = 0 if improved else flags[i, FAILS] + 1
+        flags[i, HAS_PREVIOUS] = improved
+        if flags[i, FAILS] >= 2 or (improved and moved < tol):
+            flags[i, RUNNING] = 0
