@@ -1,23 +1,27 @@
-"""The ``sdfphys`` command line (DESIGN.md): run | play.
+"""The ``sdfphys`` command line (DESIGN.md): run | play | record | check.
 
 Exit status: 0 ok, 1 a check failed, 2 bad input or usage. Bad input prints one
 line ``sdfphys: error: <file>: <key path>: <what is wrong>`` and no traceback;
-nothing half-written is left behind (video sinks write to a temporary name).
+nothing half-written is left behind (video sinks and trajectory files are written
+under a temporary name and renamed when complete).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import hashlib
 import math
 import os
 import sys
 import time
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
 from .errors import SpecError
+from .trajectory import TOLERANCES
 
 __all__ = ["main", "state_hash"]
 
@@ -46,6 +50,20 @@ def _parser() -> argparse.ArgumentParser:
     play = sub.add_parser("play", help="interactive window (needs a display)")
     play.add_argument("scene")
     _scene_options(play, seconds=False)
+
+    record = sub.add_parser("record", help="simulate a scene and write its trajectory (.npz)")
+    record.add_argument("scene")
+    record.add_argument("-o", "--output", required=True, metavar="TRAJ.npz",
+                        help="trajectory file to write (replaced atomically)")
+    _scene_options(record)
+
+    check = sub.add_parser("check", help="replay a recorded trajectory and compare (exit 1 "
+                           "if it deviates beyond the tolerances)")
+    check.add_argument("scene")
+    check.add_argument("trajectory", metavar="TRAJ.npz")
+    check.add_argument("--atol", type=float, help="one absolute tolerance for every quantity "
+                       "(default: " + ", ".join(f"{k} {v:g}" for k, v in TOLERANCES.items())
+                       + ")")
     return parser
 
 
@@ -62,7 +80,8 @@ def _scene_options(parser: argparse.ArgumentParser, seconds: bool = True) -> Non
 def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
-        return {"run": _run, "play": _play}[args.command](args)
+        commands = {"run": _run, "play": _play, "record": _record, "check": _check}
+        return commands[args.command](args)
     except (SpecError, UsageError) as err:
         print(f"sdfphys: error: {err}", file=sys.stderr)
         return 2
@@ -77,21 +96,27 @@ def _read(args):
     return read_scene(args.scene, args.overrides, quality=args.quality)
 
 
-def _run(args) -> int:
-    scene = _read(args)
+def _seconds(args, scene) -> float:
+    """``--seconds`` if given (checked > 0 and finite), else the scene's duration."""
     seconds = scene.duration if args.seconds is None else args.seconds
     if not (math.isfinite(seconds) and seconds > 0):
         raise UsageError(f"--seconds: must be a positive number, got {args.seconds}")
+    return seconds
+
+
+def _run(args) -> int:
+    scene = _read(args)
+    seconds = _seconds(args, scene)
     world = scene.build()
     dt = scene.settings.dt
     steps = max(1, round(seconds / dt))
     frames = round(seconds * scene.render.fps) if args.output else 0
     sink = renderer = surface = None
     if args.output:
+        import pygame
+
         from .render import Camera, Renderer
         from .video import open_sink
-
-        import pygame
 
         size = scene.render.size
         sink = open_sink(args.output, size, scene.render.fps)
@@ -106,7 +131,8 @@ def _run(args) -> int:
     try:
         for step in range(steps + 1):
             # Frame k shows the state at time k / fps: draw every frame due by now.
-            while sink is not None and frame < frames and frame / scene.render.fps <= step * dt + 1e-9:
+            while (sink is not None and frame < frames
+                   and frame / scene.render.fps <= step * dt + 1e-9):
                 renderer.draw(surface, world)
                 sink.write(surface)
                 frame += 1
@@ -147,6 +173,63 @@ def _play(args) -> int:
     from .play import play
 
     return play(scene.build, scene.render)
+
+
+def _record(args) -> int:
+    from .trajectory import record
+
+    output = Path(args.output)
+    if output.suffix.lower() != ".npz":
+        raise UsageError(f"-o: a trajectory file ends in .npz, got {args.output!r}")
+    if not output.parent.is_dir():
+        raise UsageError(f"{args.output}: no such directory {str(output.parent)!r}")
+    seconds = _seconds(args, _read(args))
+    start = time.perf_counter()
+    trajectory = record(args.scene, seconds, args.overrides, args.quality)
+    wall = time.perf_counter() - start
+    try:
+        trajectory.save(output)
+    except OSError as err:
+        raise UsageError(f"{args.output}: cannot write: {err.strerror or err}") from None
+    steps = trajectory.meta["steps"]
+    print(f"steps          {steps}")
+    print(f"wall time      {wall:.3f} s")
+    print(f"wrote          {args.output} ({trajectory.frames} frames x "
+          f"{trajectory.bodies} bodies)")
+    return 0
+
+
+def _check(args) -> int:
+    from .scene import read_scene
+    from .trajectory import compare, load, match_bodies, record
+
+    if args.atol is not None and not (math.isfinite(args.atol) and args.atol >= 0):
+        raise UsageError(f"--atol: must be a finite number >= 0, got {args.atol}")
+    reference = load(args.trajectory)
+    meta = reference.meta
+    scene = read_scene(args.scene, meta["overrides"], quality=meta["quality"])
+    if scene.digest != meta["scene_digest"]:
+        raise UsageError(f"{args.trajectory}: recorded from another scene: {meta['scene']} "
+                         f"(digest {meta['scene_digest'][:12]}), not {args.scene} (digest "
+                         f"{scene.digest[:12]})")
+    try:
+        match_bodies(reference.name, [b.name for b in scene.bodies])
+    except SpecError as err:
+        raise err.in_file(args.trajectory) from None
+    changed = [key for key, value in dataclasses.asdict(scene.settings).items()
+               if meta["settings"].get(key) != value]
+    if changed:
+        print(f"note: settings changed since the recording: {', '.join(changed)}")
+    replay = record(args.scene, meta["seconds"], meta["overrides"], meta["quality"])
+    tolerances = None if args.atol is None else dict.fromkeys(TOLERANCES, args.atol)
+    try:
+        deviation = compare(reference, replay, tolerances)
+    except SpecError as err:
+        raise err.in_file(args.trajectory) from None
+    print(f"replayed       {replay.frames} frames x {replay.bodies} bodies")
+    print(deviation)
+    print("check          " + ("passed" if deviation.ok else "FAILED"))
+    return 0 if deviation.ok else 1
 
 
 class _Progress:
