@@ -1,65 +1,199 @@
-"""Every accuracy knob in one place, with its unit, effect and default.
+"""Every accuracy knob in one place, with its unit, effect, default and valid range.
 
 The defaults are the ``balanced`` preset (Box2D v3's soft-step defaults, see
-SOLVER.md). A scene's ``[sim]`` table and ``--set`` override any knob by name.
+SOLVER.md). A scene's ``[sim]`` table and ``--set`` override any knob by name;
+``Settings.check(name, value, path)`` validates one value and names the key path
+in its error, as the scene loader reports errors. ``Settings.table()`` lists every
+knob (the README and ``sdfphys bench`` print it).
+
+Presets (``PRESETS``) were chosen from ``sdfphys bench`` measurements: see
+``sdfphys.bench`` for the study and the reasons next to ``PRESETS`` below.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
 
-__all__ = ["PRESETS", "Settings", "preset"]
+from .errors import SpecError, check_int, check_number
+from .sdf.gradient import METHODS
+
+__all__ = ["FIELD_REPRESENTATIONS", "GRADIENT_METHODS", "PRESETS", "Settings", "preset"]
+
+#: Values of ``Settings.gradient``: the fields' own analytic gradients, or a numeric
+#: scheme of ``sdfphys.sdf.gradient`` (NumericGradientField) for SDF shapes.
+GRADIENT_METHODS = ("analytic",) + METHODS
+#: Values of ``Settings.field_representation``: SDF shapes' fields as built, or
+#: baked on a grid (``sdfphys.sdf.grid.GridField``, operator ``bake``).
+FIELD_REPRESENTATIONS = ("analytic", "grid")
+
+
+def _knob(default: Any, unit: str, doc: str, *, low: float | None = None,
+          low_open: bool = False, high: float | None = None,
+          choices: tuple[str, ...] = ()) -> Any:
+    """A Settings field: default, unit ("" when dimensionless), effect, valid range."""
+    return field(default=default, metadata={"unit": unit, "doc": doc, "low": low,
+                                            "low_open": low_open, "high": high,
+                                            "choices": choices})
 
 
 @dataclass(frozen=True)
 class Settings:
-    """Simulation settings (SI units). Frozen: derive variants with ``replace``."""
+    """Simulation settings (SI units). Frozen: derive variants with ``with_values``.
 
-    dt: float = 1.0 / 60.0
-    """Seconds per step. Smaller: more accurate, proportionally slower."""
-    substeps: int = 4
-    """Solver substeps per step (h = dt / substeps). More: stiffer, more accurate contacts."""
-    relax_passes: int = 1
-    """Rigid (bias-free) velocity passes per substep after the biased solve."""
-    warm_starting: bool = True
-    """Start each step from last step's contact impulses (matched by feature key)."""
-    contact_hertz: float = 30.0
-    """Soft contact stiffness, Hz (capped at 0.25 x substep rate; doubled against static)."""
-    contact_damping_ratio: float = 10.0
-    """Soft contact damping ratio (dimensionless)."""
-    max_push_out: float = 3.0
-    """Cap on the speed at which overlap is removed, m/s."""
-    linear_slop: float = 0.005
-    """Length tolerance, m: contact reduction's merge distance; time of impact stops a fast
-    body between 1 and 2 slop short of the obstacle. (The soft solver pushes out to s = 0.)"""
-    speculative_distance: float = 0.02
-    """Contacts are kept while separation < this, m (4 x slop)."""
-    restitution_threshold: float = 1.0
-    """Approach speed below which restitution is ignored, m/s."""
-    restitution_passes: int = 2
-    """Restitution velocity passes after the substeps (one overshoots at e = 1)."""
-    descent_iterations: int = 16
-    """Maximum descent iterations per start in triangle-field and field-field queries."""
-    descent_starts: int = 7
-    """Starts per triangle (3 vertices, 3 edge midpoints, centroid) or per field pair."""
-    contacts_per_pair: int = 4
-    """Contacts kept per body pair after reduction (the deepest plus the most spread)."""
-    time_of_impact: bool = True
-    """Conservative advancement for bodies moving more than half their extent per step."""
-    max_linear_speed: float = 400.0
-    """Speeds above this (m/s) are clamped in position integration."""
+    Every value is validated on construction (``check``): an invalid value raises
+    SpecError naming the knob.
+    """
 
-    def with_values(self, **values) -> Settings:
+    dt: float = _knob(
+        1.0 / 60.0, "s", "Seconds per step. Smaller: more accurate, proportionally more "
+        "steps per simulated second.", low=0.0, low_open=True, high=1.0)
+    substeps: int = _knob(
+        4, "", "Solver substeps per step (h = dt / substeps). More: stiffer contacts, "
+        "smaller integration error; cost grows with the solver's share of a step.",
+        low=1, high=256)
+    relax_passes: int = _knob(
+        1, "", "Rigid (bias-free) velocity passes per substep after the biased solve; "
+        "they remove the energy the soft bias added.", low=0, high=64)
+    warm_starting: bool = _knob(
+        True, "", "Start each step from last step's contact impulses (matched by "
+        "feature key): steadier stacks at no cost.")
+    contact_hertz: float = _knob(
+        30.0, "Hz", "Soft contact stiffness (capped at 0.25 x substep rate; doubled "
+        "against static bodies). Higher: less overlap, more bounce.", low=0.0,
+        low_open=True)
+    contact_damping_ratio: float = _knob(
+        10.0, "", "Soft contact damping ratio. Higher: overlap removed without "
+        "oscillation, more slowly.", low=0.0)
+    max_push_out: float = _knob(
+        3.0, "m/s", "Cap on the speed at which overlap is removed (no popping).",
+        low=0.0, low_open=True)
+    linear_slop: float = _knob(
+        0.005, "m", "Length tolerance: contact reduction's merge distance; time of "
+        "impact stops a fast body between 1 and 2 slop short of the obstacle.",
+        low=0.0, low_open=True, high=1.0)
+    speculative_distance: float = _knob(
+        0.02, "m", "Contacts are kept while separation < this (plus the pair's reach "
+        "at its speed). Larger: fewer late contacts, more contact rows.", low=0.0,
+        high=10.0)
+    restitution_threshold: float = _knob(
+        1.0, "m/s", "Approach speed below which restitution is ignored.", low=0.0)
+    restitution_passes: int = _knob(
+        2, "", "Restitution velocity passes after the substeps (one overshoots at "
+        "e = 1; 0 disables restitution).", low=0, high=64)
+    descent_iterations: int = _knob(
+        16, "", "Triangle-field queries (mesh-mesh, mesh-sdf): maximum descent "
+        "iterations per start. More: deeper points found exactly, more field "
+        "evaluations.", low=1, high=1024)
+    descent_starts: int = _knob(
+        7, "", "Triangle-field queries: starts per triangle, taken in the order "
+        "centroid, 3 edge midpoints, 3 vertices. Fewer: cheaper, may miss a second "
+        "local minimum.", low=1, high=7)
+    field_descent_iterations: int = _knob(
+        16, "", "Field-field queries (sdf-sdf): maximum descent iterations per start.",
+        low=1, high=1024)
+    field_descent_starts: int = _knob(
+        7, "", "Field-field queries: Halton starts over the overlap region per pair. "
+        "More: more separate contact regions found.", low=1, high=1024)
+    contacts_per_pair: int = _knob(
+        4, "", "Contacts kept per body pair after reduction (the deepest plus the "
+        "most spread).", low=1, high=64)
+    time_of_impact: bool = _knob(
+        True, "", "Conservative advancement for bodies moving more than half their "
+        "extent per step (no tunnelling).")
+    max_linear_speed: float = _knob(
+        400.0, "m/s", "Speeds above this are clamped in position integration.",
+        low=0.0, low_open=True)
+    gradient: str = _knob(
+        "analytic", "", "Gradient of SDF shapes' fields: their analytic gradient, or "
+        "a numeric one (central: 4 extra evaluations, O(h^2); three_point: 2, O(h); "
+        "angle_bisection: 19, the seed report's). Circles and meshes stay analytic.",
+        choices=GRADIENT_METHODS)
+    field_representation: str = _knob(
+        "analytic", "", "SDF shapes' fields as built (analytic), or baked on a grid of "
+        "grid_cell and interpolated bilinearly (grid: 4 look-ups per query, value "
+        "error up to cell / sqrt(2) at kinks). Unbounded fields stay analytic; time "
+        "of impact always traces the analytic field.",
+        choices=FIELD_REPRESENTATIONS)
+    grid_cell: float = _knob(
+        0.02, "m", "Node spacing of baked fields (field_representation = grid).",
+        low=1e-4, high=1.0)
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            self.check(f.name, getattr(self, f.name))
+
+    def with_values(self, **values: Any) -> Settings:
         """A copy with the given knobs replaced (unknown names raise TypeError)."""
         return replace(self, **values)
 
     @classmethod
     def names(cls) -> list[str]:
+        """Knob names, in declaration order."""
         return [f.name for f in fields(cls)]
+
+    @classmethod
+    def check(cls, name: str, value: Any, path: str | None = None) -> Any:
+        """``value`` validated for knob ``name`` (ints stay ints, numbers become floats).
+
+        Raises SpecError naming ``path`` (default: the knob's name), e.g.
+        ``sim.substeps: must be >= 1, got 0``, for a wrong type, a value out of the
+        knob's range or an unknown choice; KeyError for an unknown knob.
+        """
+        spec = {f.name: f for f in fields(cls)}
+        if name not in spec:
+            raise KeyError(f"unknown setting {name!r}")
+        f = spec[name]
+        meta, path = f.metadata, name if path is None else path
+        kind = f.type if isinstance(f.type, str) else f.type.__name__
+        if kind == "bool":
+            if not isinstance(value, bool):
+                raise SpecError(path, f"must be true or false, got {value!r}")
+            return value
+        if kind == "str":
+            if not isinstance(value, str) or value not in meta["choices"]:
+                raise SpecError(path, f"must be one of {', '.join(meta['choices'])}; "
+                                      f"got {value!r}")
+            return value
+        if kind == "int":
+            return check_int(value, path, low=meta["low"], high=meta["high"])
+        return check_number(value, path, low=meta["low"], low_open=meta["low_open"],
+                            high=meta["high"])
+
+    @classmethod
+    def describe(cls, name: str) -> str:
+        """One line for knob ``name``: unit, effect, default and range."""
+        f = {f.name: f for f in fields(cls)}[name]
+        meta = f.metadata
+        unit = f" [{meta['unit']}]" if meta["unit"] else ""
+        if meta["choices"]:
+            valid = " | ".join(meta["choices"])
+        elif meta["low"] is not None or meta["high"] is not None:
+            low = "" if meta["low"] is None else (
+                f"{meta['low']:g} {'<' if meta['low_open'] else '<='} ")
+            high = "" if meta["high"] is None else f" <= {meta['high']:g}"
+            valid = f"{low}{name}{high}"
+        else:
+            valid = "true | false"
+        return f"{name}{unit}: {meta['doc']} Default {f.default!r}; valid: {valid}."
+
+    @classmethod
+    def table(cls) -> str:
+        """A markdown table of every knob: name, unit, default, balanced/fast/accurate
+        values, effect."""
+        rows = ["| knob | unit | fast | balanced (default) | accurate | effect |",
+                "|---|---|---|---|---|---|"]
+        for f in fields(cls):
+            values = [PRESETS[q].get(f.name, f.default) for q in ("fast", "balanced",
+                                                                     "accurate")]
+            shown = [f"{v:.6g}" if isinstance(v, float) else str(v) for v in values]
+            rows.append(f"| {f.name} | {f.metadata['unit'] or '-'} | "
+                        + " | ".join(shown) + f" | {f.metadata['doc']} |")
+        return "\n".join(rows)
 
 
 #: Quality presets: knob overrides of the defaults (``balanced`` is the defaults).
-PRESETS: dict[str, dict[str, float | int | bool]] = {
+PRESETS: dict[str, dict[str, Any]] = {
     "fast": {"substeps": 2, "descent_iterations": 8, "descent_starts": 4},
     "balanced": {},
     "accurate": {"substeps": 8, "relax_passes": 2, "descent_iterations": 32},

@@ -36,8 +36,11 @@ from .errors import SpecError, check_number, check_points, check_vec2
 from .geometry import field_mass_properties, polygon_mass_properties, triangulate, validate_polygon
 from .sdf import Field, field
 from .sdf.build import suggest
+from .sdf.gradient import NumericGradientField
+from .sdf.grid import GridField
 
-__all__ = ["SHAPE_TYPES", "Circle", "SdfShape", "Shape", "TriangleMesh", "shape_from_spec"]
+__all__ = ["SHAPE_TYPES", "Circle", "SdfShape", "Shape", "TriangleMesh", "collision_shape",
+           "shape_from_spec"]
 
 #: Accepted shape types and their keys (besides ``type``).
 SHAPE_TYPES: dict[str, tuple[str, ...]] = {
@@ -234,6 +237,8 @@ class SdfShape(Shape):
         if cell is not None:
             self.spec["cell"] = cell
         self.cell = cell
+        self.variants: dict[tuple[str, str, float], Shape] = {}
+        """Field variants built by ``collision_shape``, by (gradient, representation, cell)."""
 
     @cached_property
     def _mass(self) -> tuple[float, np.ndarray, float]:
@@ -286,6 +291,70 @@ class SdfShape(Shape):
         if not self.bounded:
             return self._user_bounds.copy()
         return self._user_bounds - np.concatenate([self._centroid, self._centroid])
+
+
+class _FieldVariant(Shape):
+    """An SdfShape seen through another field (baked, numeric gradient): same body
+    frame, bounds, radius and mass properties; only ``field`` differs."""
+
+    kind = "sdf"
+
+    def __init__(self, base: SdfShape, variant_field: Field):
+        self.base = base
+        self.spec = base.spec
+        self._field = variant_field
+
+    @property
+    def field(self) -> Field:
+        return self._field
+
+    @property
+    def origin(self) -> np.ndarray:
+        return self.base.origin
+
+    @property
+    def radius(self) -> float:
+        return self.base.radius
+
+    @property
+    def area(self) -> float:
+        return self.base.area
+
+    @property
+    def second_moment(self) -> float:
+        return self.base.second_moment
+
+    def bounds(self) -> np.ndarray:
+        return self.base.bounds()
+
+
+def collision_shape(shape: Shape, gradient: str = "analytic",
+                    representation: str = "analytic", cell: float = 0.02) -> Shape:
+    """The shape collisions use under the ``gradient`` / ``field_representation`` knobs.
+
+    Circles and meshes, and SDF shapes under ("analytic", "analytic"), are returned
+    as they are. Otherwise an SDF shape's body-frame field is baked on a grid of
+    spacing ``cell`` (m; ``representation="grid"``, bounded fields only: an
+    unbounded one stays analytic) and then, for a numeric ``gradient`` (a method
+    of ``sdf.gradient.METHODS``), wrapped in ``NumericGradientField``. The variant
+    keeps the shape's frame, bounds and mass properties, and is cached, so equal
+    knobs give the same object (instancing in the narrowphase is kept).
+    """
+    if representation == "grid" and isinstance(shape, SdfShape) and not shape.bounded:
+        representation = "analytic"
+    if not isinstance(shape, SdfShape) or (gradient, representation) == ("analytic",
+                                                                          "analytic"):
+        return shape
+    key = (gradient, representation, float(cell) if representation == "grid" else 0.0)
+    variant = shape.variants.get(key)
+    if variant is None:
+        variant_field = shape.field
+        if representation == "grid":
+            variant_field = GridField(variant_field, cell)
+        if gradient != "analytic":
+            variant_field = NumericGradientField(variant_field, gradient)
+        variant = shape.variants[key] = _FieldVariant(shape, variant_field)
+    return variant
 
 
 _CACHE: dict[str, Shape] = {}

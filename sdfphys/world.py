@@ -27,8 +27,9 @@ from typing import Any
 import numpy as np
 
 from .collide import Contacts, find_contacts
+from .collide.narrowphase import PAIR_FUNCTIONS
 from .settings import Settings
-from .shapes import Shape, shape_from_spec
+from .shapes import Shape, collision_shape, shape_from_spec
 from .solver import (
     BodyState,
     ContactConstraints,
@@ -40,16 +41,21 @@ from .solver import (
 )
 from .toi import fast_bodies, time_of_impact
 
-__all__ = ["KINDS", "STAGES", "World"]
+__all__ = ["KINDS", "PAIR_STAGES", "STAGES", "World"]
 
 #: Body kinds, in the order of their integer codes.
 KINDS = ("dynamic", "static", "kinematic")
 _DYNAMIC, _STATIC, _KINEMATIC = range(3)
 
+#: Narrowphase stages, one per pair kind (``collide.narrowphase.PAIR_FUNCTIONS``):
+#: ``circle_circle``, ``circle_mesh``, ..., ``sdf_sdf``, counted once per step in which
+#: that pair function ran (some candidate pair of that kind was near enough).
+PAIR_STAGES = tuple(f"{a}_{b}" for a, b in PAIR_FUNCTIONS)
+
 #: The stages of ``World.step``, as counted in ``World.stage_counts``.
-STAGES = ("collide", "prepare", "integrate_velocities", "warm_start", "solve",
-          "integrate_positions", "relax", "friction", "restitution", "time_of_impact",
-          "store_impulses")
+STAGES = ("collide",) + PAIR_STAGES + (
+    "prepare", "integrate_velocities", "warm_start", "solve", "integrate_positions",
+    "relax", "friction", "restitution", "time_of_impact", "store_impulses")
 
 # Per-body arrays: name -> (trailing shape, dtype). Capacity grows by doubling.
 _ARRAYS: dict[str, tuple[tuple[int, ...], Any]] = {
@@ -84,8 +90,11 @@ class World:
 
     gravity: (2,) m/s^2 (settable attribute). settings: every knob (Settings).
     ``stage_counts``: how many times each stage of ``step()`` ran (STAGES); a stage
-    with nothing to do (no contacts, no friction, no restitution, no fast body) is
-    skipped and not counted.
+    with nothing to do (no pair of a kind, no contacts, no friction, no restitution,
+    no fast body) is skipped and not counted. Contact queries see each SDF shape
+    through the ``gradient`` and ``field_representation`` knobs
+    (``shapes.collision_shape``); time of impact keeps the shapes' own fields (a baked
+    field is not a distance bound, which conservative advancement needs).
     """
 
     def __init__(self, gravity: Any = (0.0, -9.81), settings: Settings | None = None):
@@ -267,14 +276,24 @@ class World:
                          v("inv_mass"), v("inv_inertia"), v("linear_damping"),
                          v("angular_damping"))
 
+    def _collision_shapes(self) -> list[Shape]:
+        """The distinct shapes as collisions see them under the field knobs."""
+        s = self.settings
+        return [collision_shape(shape, s.gradient, s.field_representation, s.grid_cell)
+                for shape in self._shapes]
+
     def _collide(self, bodies: BodyState) -> Contacts:
         """Stage 1: every contact closer than the speculative distance plus the pair's
-        reach at the step's starting velocities (``sdfphys.collide``), once per step."""
-        self._contacts = find_contacts(self._shapes, self._view("shape_id"), bodies.com,
-                                       bodies.angle, self._view("kind") == _DYNAMIC,
-                                       self.settings, bodies.velocity,
-                                       bodies.angular_velocity)
+        reach at the step's starting velocities (``sdfphys.collide``), once per step;
+        each pair kind whose narrowphase ran is counted (PAIR_STAGES)."""
+        ran: set[tuple[str, str]] = set()
+        self._contacts = find_contacts(self._collision_shapes(), self._view("shape_id"),
+                                       bodies.com, bodies.angle,
+                                       self._view("kind") == _DYNAMIC, self.settings,
+                                       bodies.velocity, bodies.angular_velocity, ran)
         self.stage_counts["collide"] += 1
+        for a, b in ran:
+            self.stage_counts[f"{a}_{b}"] += 1
         return self._contacts
 
     def _prepare(self, contacts: Contacts, bodies: BodyState) -> ContactConstraints:

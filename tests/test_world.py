@@ -16,7 +16,7 @@ from sdfphys.scene import load_scene
 from sdfphys.sdf import Field
 from sdfphys.settings import Settings
 from sdfphys.shapes import SdfShape
-from sdfphys.world import STAGES, World
+from sdfphys.world import PAIR_STAGES, STAGES, World
 
 G = 9.81
 GROUND = {"type": "box", "size": [100.0, 20.0]}     # top face at y = 0 when centred at -10
@@ -176,6 +176,46 @@ def test_stage_counts_skip_friction_restitution_and_time_of_impact_when_not_need
     for _ in range(60):
         world.step()
     assert world.stage_counts["friction"] > 0 and world.stage_counts["restitution"] == 2
+
+
+def _pair_stages_run(bodies: list[tuple[dict, tuple, str]], friction: float,
+                     steps: int = 30) -> dict[str, int]:
+    """stage_counts after ``steps`` of bodies (shape, position, kind), all of ``friction``."""
+    world = World()
+    for shape, position, kind in bodies:
+        world.add_body(shape, position=position, kind=kind, friction=friction)
+    for _ in range(steps):
+        world.step()
+    return world.stage_counts
+
+
+def test_only_the_pair_kinds_and_features_a_scene_needs_run():
+    """Circles on a static circle, frictionless: only circle_circle, no friction rows;
+    boxes on a box: only mesh_mesh; sdf bodies on an sdf ground: sdf_sdf (and mesh_sdf
+    once a box joins), no circle or mesh-mesh machinery."""
+    assert PAIR_STAGES == ("circle_circle", "circle_mesh", "circle_sdf", "mesh_mesh",
+                           "mesh_sdf", "sdf_sdf")
+    hill = {"type": "circle", "radius": 50.0}
+    circles = _pair_stages_run([(hill, (0.0, -50.0), "static"), (BALL, (0.0, 0.5), "dynamic"),
+                                (BALL, (0.2, 1.8), "dynamic")], friction=0.0)
+    assert circles["circle_circle"] == 30 and circles["solve"] > 0
+    assert all(circles[k] == 0 for k in PAIR_STAGES if k != "circle_circle")
+    assert circles["friction"] == 0 and circles["restitution"] == 0
+
+    boxes = _pair_stages_run([(GROUND, (0.0, -10.0), "static"),
+                              (UNIT_BOX, (0.0, 0.5), "dynamic"),
+                              (UNIT_BOX, (0.1, 1.5), "dynamic")], friction=0.5)
+    assert boxes["mesh_mesh"] == 30 and boxes["friction"] > 0
+    assert all(boxes[k] == 0 for k in PAIR_STAGES if k != "mesh_mesh")
+
+    sdf_ground = {"type": "sdf", "field": {"type": "box", "size": [20.0, 1.0]}}
+    sdf_disc = {"type": "sdf", "field": {"type": "circle", "radius": 0.5}}
+    fields = _pair_stages_run([(sdf_ground, (0.0, -0.5), "static"),
+                               (sdf_disc, (0.0, 0.5), "dynamic"),
+                               (UNIT_BOX, (3.0, 0.5), "dynamic")], friction=0.5, steps=5)
+    assert fields["sdf_sdf"] == 5 and fields["mesh_sdf"] == 5
+    assert all(fields[k] == 0 for k in ("circle_circle", "circle_mesh", "circle_sdf",
+                                        "mesh_mesh"))
 
 
 def test_kinematic_body_moves_with_its_velocity_and_lifts_a_ball():

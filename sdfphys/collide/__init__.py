@@ -83,14 +83,15 @@ def speculative_reach(radius: np.ndarray, velocity: np.ndarray,
 
 def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
                  pose: np.ndarray, margin: float, reach: np.ndarray,
-                 settings: Settings) -> Contacts:
+                 settings: Settings, ran: set[tuple[str, str]] | None = None) -> Contacts:
     """Contacts of the candidate ``pairs`` (P, 2), reduced and sorted (see module doc).
 
     shapes: distinct Shape objects; body_shape: (B,) index into them per body;
     pose: (B, 3) centre-of-mass poses (x, y, angle); margin: m, the speculative
     distance; reach: (B,) m per body, a pair keeping contacts with depth >
     -(margin + reach_a + reach_b). Each pair-function call gets its group's largest
-    pair margin; contacts beyond their own pair's margin are then dropped.
+    pair margin; contacts beyond their own pair's margin are then dropped. ``ran``,
+    if given, receives the (kind_a, kind_b) of every pair function called.
     """
     kind_rank = np.array([KIND_ORDER.index(s.kind) for s in shapes], np.int64)
     sa, sb = body_shape[pairs[:, 0]], body_shape[pairs[:, 1]]
@@ -109,6 +110,8 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
         shape_a = shapes[body_shape[first[lo]]]
         shape_b = shapes[body_shape[second[lo]]]
         fn = PAIR_FUNCTIONS[(shape_a.kind, shape_b.kind)]
+        if ran is not None:
+            ran.add((shape_a.kind, shape_b.kind))
         a, b = first[lo:hi], second[lo:hi]
         group_margin = margin + float(np.max(reach[a] + reach[b]))
         parts.append(fn(shape_a, shape_b, a, b, pose[a], pose[b], group_margin, settings))
@@ -134,7 +137,8 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
 def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.ndarray,
                   angle: np.ndarray, movable: np.ndarray, settings: Settings,
                   velocity: np.ndarray | None = None,
-                  angular_velocity: np.ndarray | None = None) -> Contacts:
+                  angular_velocity: np.ndarray | None = None,
+                  ran: set[tuple[str, str]] | None = None) -> Contacts:
     """All contacts of B bodies this step, sorted by (body_a, body_b, feature).
 
     shapes: Shape objects; shape_id: (B,) int index into ``shapes`` per body;
@@ -142,6 +146,8 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     movable: (B,) bool (pairs of two immovable bodies are skipped);
     velocity: (B, 2) m/s and angular_velocity: (B,) rad/s at the start of the step
     (None: at rest), which widen each pair's margin by its bodies' reach (module doc).
+    ran: if given, receives the (kind_a, kind_b) of every pair function called
+    (``PAIR_FUNCTIONS`` keys): which narrowphase machinery this query needed.
     Returns contacts with body_a < body_b, depth > -(settings.speculative_distance +
     reach_a + reach_b), at most settings.contacts_per_pair per pair.
     """
@@ -162,7 +168,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                          0.5 * margin + reach)
     pairs = candidate_pairs(boxes, np.asarray(movable, bool))
     pose = np.column_stack([position, angle])
-    return _narrowphase(distinct, body_shape, pairs, pose, margin, reach, settings)
+    return _narrowphase(distinct, body_shape, pairs, pose, margin, reach, settings, ran)
 
 
 def collide(shape_a: Any, pose_a: Sequence[float], shape_b: Any, pose_b: Sequence[float],

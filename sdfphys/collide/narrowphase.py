@@ -196,10 +196,11 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     """Sdf-sdf: ``descent.field_field_contacts`` (Liu et al. 2024; MuJoCo's SDF-SDF).
 
     Each pair is solved in a's body frame: b placed by the relative pose (angle
-    a_b - a_a, offset R_a^T (x_b - x_a)), ``settings.descent_starts`` Halton starts
-    over the overlap of the two bounds (grown by the margin), descent on
-    max(f_a, f_b). Points, normals (a toward b) and depths come back in a's frame
-    and are rotated to the world; keys are (source 3, start id).
+    a_b - a_a, offset R_a^T (x_b - x_a)), ``settings.field_descent_starts`` Halton
+    starts over the overlap of the two bounds (grown by the margin), at most
+    ``settings.field_descent_iterations`` descent iterations on max(f_a, f_b).
+    Points, normals (a toward b) and depths come back in a's frame and are rotated
+    to the world; keys are (source 3, start id).
 
     Cost: ``field_field_contacts`` takes one pose, so this loops over the group's
     pairs in Python, two field evaluations per descent iteration per pair. It is
@@ -215,7 +216,8 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     for k in range(len(angle)):
         point, depth, normal, start = field_field_contacts(
             sdf_a.field, sdf_b.field, (offset[k, 0], offset[k, 1], angle[k]), region[k],
-            n_starts=settings.descent_starts, iterations=settings.descent_iterations,
+            n_starts=settings.field_descent_starts,
+            iterations=settings.field_descent_iterations,
             margin=margin)
         rot = np.full(len(depth), pose_a[k, 2])
         parts.append(Contacts(np.full(len(depth), body_a[k]), np.full(len(depth), body_b[k]),
