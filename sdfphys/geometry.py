@@ -572,10 +572,13 @@ def field_mass_properties(field: Field, cell: float, path: str = "field"
         local = np.column_stack([gx.ravel(), gy.ravel()])
         f, gradient = field.evaluate(local + origin)
         w, m, n = _cell_moments(f, gradient, h)
+        # Sums in numpy's own pairwise order, never BLAS dot products: OpenBLAS splits
+        # a long dot product across threads, so its rounding (and the bodies' masses,
+        # hence whole trajectories) would depend on the thread count.
         s0 += w.sum()
-        s1 += w @ local + h * (m @ n)
-        s2 += (w @ (local * local).sum(axis=1) + 2.0 * h * (m @ (local * n).sum(axis=1))
-               + h * h * w.sum() / 6.0)
+        s1 += (w[:, None] * local + h * m[:, None] * n).sum(axis=0)
+        s2 += ((w * (local * local).sum(axis=1)).sum()
+               + 2.0 * h * (m * (local * n).sum(axis=1)).sum() + h * h * w.sum() / 6.0)
     if s0 == 0.0:
         raise SpecError(path, f"has no inside (f <= 0) on a grid of cell {h:g}")
     area = s0 * h * h

@@ -143,14 +143,6 @@ for name in sys.argv[1:]:
 print(json.dumps(hashes))
 """
 
-#: Scenes whose SDF bodies' mass properties change in the last bits with the number
-#: of BLAS threads: sdfphys/geometry.py, field_mass_properties, sums its cell moments
-#: with BLAS dot products (``w @ local``, ``m @ n``, ``w @ (local * local).sum(1)``)
-#: over up to 2^17 grid points, which OpenBLAS splits across threads, changing the
-#: order of the additions. Summing in a fixed order (``(w[:, None] * local).sum(0)``
-#: etc.) makes every scene independent of the thread count; then drop this set.
-BLAS_THREAD_DEPENDENT = {"csg_bodies", "sdf_primitives", "showcase"}
-
 _CPUS = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
 
 
@@ -166,11 +158,9 @@ def built_on_one_and_two_blas_threads() -> tuple[dict, dict]:
 
 
 @pytest.mark.skipif(_CPUS < 2, reason="BLAS runs on one thread whatever is asked")
-@pytest.mark.parametrize("name", [
-    pytest.param(name, marks=pytest.mark.xfail(
-        name in BLAS_THREAD_DEPENDENT, strict=True,
-        reason="geometry.field_mass_properties: BLAS dot products (see BLAS_THREAD_DEPENDENT)"))
-    for name in SCENES])
+@pytest.mark.parametrize("name", SCENES)
 def test_built_world_does_not_depend_on_blas_threads(name, built_on_one_and_two_blas_threads):
+    """geometry.field_mass_properties sums in numpy's own order, not with BLAS dot
+    products (OpenBLAS splits those across threads, changing the rounding)."""
     one, two = built_on_one_and_two_blas_threads
     assert one[name] == two[name]
