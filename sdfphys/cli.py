@@ -64,6 +64,14 @@ def _parser() -> argparse.ArgumentParser:
     check.add_argument("--atol", type=float, help="one absolute tolerance for every quantity "
                        "(default: " + ", ".join(f"{k} {v:g}" for k, v in TOLERANCES.items())
                        + ")")
+
+    compare = sub.add_parser("compare", help="the same scene in pymunk: contact and "
+                             "trajectory differences (exit 2 if pymunk cannot model it)")
+    compare.add_argument("scene")
+    compare.add_argument("--seconds", type=float, help="simulated seconds (default: the "
+                         "scene's sim.duration)")
+    compare.add_argument("--set", dest="overrides", action="append", default=[],
+                         metavar="KEY=VALUE", help="override a scene value")
     return parser
 
 
@@ -80,7 +88,8 @@ def _scene_options(parser: argparse.ArgumentParser, seconds: bool = True) -> Non
 def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
-        commands = {"run": _run, "play": _play, "record": _record, "check": _check}
+        commands = {"run": _run, "play": _play, "record": _record, "check": _check,
+                    "compare": _compare}
         return commands[args.command](args)
     except (SpecError, UsageError) as err:
         print(f"sdfphys: error: {err}", file=sys.stderr)
@@ -88,6 +97,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("sdfphys: interrupted", file=sys.stderr)
         return 130
+
+
+def _compare(args) -> int:
+    from .reference import compare_main
+
+    return compare_main(args.scene, args.seconds, args.overrides)
 
 
 def _read(args):

@@ -86,3 +86,14 @@ def test_every_scene_runs_to_the_end(path):
         world.step()
         assert np.all(np.isfinite(world.position)) and np.all(np.isfinite(world.velocity))
     assert np.max(np.abs(world.position - start)) < 100.0
+
+
+def test_compare_reports_and_refuses_what_pymunk_cannot_model():
+    result = run_cli("compare", "scenes/ball_drop.toml", "--seconds", "1")
+    assert result.returncode == 0, result.stderr
+    assert "contacts at sdfphys's poses" in result.stdout
+    assert "trajectories from the same initial state" in result.stdout
+    result = run_cli("compare", "scenes/csg_bodies.toml")
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "pymunk cannot model" in lines[0] and "csg0" in lines[0]
