@@ -17,11 +17,12 @@ State of P starts, updated in place (columns named by the constants below):
   the second plane of the bundle (point, value, gradient), the path of the line
   search in progress (``PATH``: 8 parameters, see ``_proximal_step``) and its
   bracket ends (s, value, slope), the step scale sigma (path units), the
-  Barzilai-Borwein memory (last b, last direction), and per round the steepest
-  and bundle paths from b, the slope at s = 0 and the ladder's scale.
-- ``flags`` (P, N_FLAGS) int64: running, bracketed, rounds without decrease in a
-  row, rounds run, BB memory usable, and per round the number and offset of the
-  start's candidates.
+  Barzilai-Borwein memory (last b, last direction), and per round the slope of
+  the steepest path at s = 0 and the ladder's scale.
+- ``flags`` (P, N_FLAGS) int64: bracketed, rounds without decrease in a row,
+  rounds run, BB memory usable, and per round the number and offset of the
+  start's candidates and whether its steepest ladder ended at the path's end.
+- ``running`` (P,) int64: the indices of the running starts (the leading R).
 - ``data`` (P, kd): the problem's data at b (TRIANGLE: the gradient).
 
 Candidates of a round: ``cand`` (C, 5) float64 (step s, point, dq/ds),
@@ -81,21 +82,18 @@ LEFT = 18         # its bracket: s, value, slope at the left end
 RIGHT = 21        # ... and at the right end
 SIGMA = 24        # step scale
 PREVIOUS = 25     # Barzilai-Borwein memory: last b (2), last direction (2)
-STEEP = 29        # this round's steepest path from b (8)
-BUNDLE = 37       # this round's bundle path from b (8)
-D0 = 45           # this round's slope of the steepest path at s = 0
-SCALE = 46        # this round's ladder scale
-N_STATE = 47
+D0 = 29           # this round's slope of the steepest path at s = 0
+SCALE = 30        # this round's ladder scale
+N_STATE = 31
 # Columns of ``flags``.
-RUNNING = 0
-BRACKETED = 1
-FAILS = 2
-ROUNDS = 3
-HAS_PREVIOUS = 4
-COUNT = 5
-OFFSET = 6
-ENDED = 7
-N_FLAGS = 8
+BRACKETED = 0
+FAILS = 1
+ROUNDS = 2
+HAS_PREVIOUS = 3
+COUNT = 4
+OFFSET = 5
+ENDED = 6
+N_FLAGS = 7
 # Sources of candidates that need no evaluation.
 AT_BEST = -1
 AT_CORNER = -2
@@ -143,12 +141,50 @@ def _proximal_step(f1: float, f2: float, g1x: float, g1y: float, g2x: float, g2y
     return -tau * dx, -tau * dy, -dx, -dy
 
 
-# Projection onto a triangle and its derivative (Bertsekas' projection arc): the
-# closest point of the three edges (clamped foot of the perpendicular, the vertex
-# itself where clamped; the first edge on ties) unless x is on the inner side of
-# all three edges (either orientation; never for a degenerate triangle, which is
-# searched as its edges). D Proj_T(x) u is u inside, the component of u along the
-# edge when the closest point is inside an edge, and 0 at a vertex.
+# Projection onto a triangle and its derivative (Bertsekas' projection arc).
+# D Proj_T(x) u is u inside, the component of u along the edge when the closest
+# point is inside an edge, and 0 at a vertex. The closest point is found by
+# Voronoi regions (Ericson, "Real-Time Collision Detection", 5.1.5), with
+# ab = b - a, ac = c - a and the dot products d1 = ab.ap, d2 = ac.ap (p - a),
+# d3 = ab.bp, d4 = ac.bp, d5 = ab.cp, d6 = ac.cp: vertex a when d1, d2 <= 0,
+# b when d3 >= 0 and d4 <= d3, c when d6 >= 0 and d5 <= d6; edge ab at
+# t = d1 / (d1 - d3) when vc = d1 d4 - d3 d2 <= 0, d1 >= 0, d3 <= 0; edge ac at
+# t = d2 / (d2 - d6) when vb = d5 d2 - d1 d6 <= 0, d2 >= 0, d6 <= 0; edge bc at
+# t = (d4 - d3) / ((d4 - d3) + (d5 - d6)) when va = d3 d6 - d5 d4 <= 0 and both
+# differences >= 0; else inside (in 2D the face region is the triangle). Vertices
+# are returned exactly. A degenerate (collinear) triangle has no inside and is
+# searched as its three edges (the closest clamped foot, the first on ties).
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _on_edge(px: float, py: float, ex: float, ey: float, t: float, ux: float, uy: float
+             ) -> tuple[float, float, float, float]:
+    """p + t e and the component of u along e."""
+    along = (ux * ex + uy * ey) / (ex * ex + ey * ey)
+    return px + t * ex, py + t * ey, along * ex, along * ey
+
+
+@njit(cache=True, error_model="numpy")
+def _project_edges(tri: np.ndarray, t: int, x: float, y: float, ux: float, uy: float
+                   ) -> tuple[float, float, float, float]:
+    """``project`` onto the three edges of triangle tri[t] (a degenerate triangle)."""
+    best = np.inf
+    qx = qy = dqx = dqy = 0.0
+    for k in range(3):
+        px, py = tri[t, k, 0], tri[t, k, 1]
+        nx, ny = tri[t, (k + 1) % 3, 0], tri[t, (k + 1) % 3, 1]
+        ex, ey = nx - px, ny - py
+        along = ((x - px) * ex + (y - py) * ey) / max(ex * ex + ey * ey, TINY)
+        if along <= 0.0:
+            fx, fy, fdx, fdy = px, py, 0.0, 0.0
+        elif along >= 1.0:
+            fx, fy, fdx, fdy = nx, ny, 0.0, 0.0
+        else:
+            fx, fy, fdx, fdy = _on_edge(px, py, ex, ey, along, ux, uy)
+        d2 = (x - fx) * (x - fx) + (y - fy) * (y - fy)
+        if d2 < best:
+            best, qx, qy, dqx, dqy = d2, fx, fy, fdx, fdy
+    return qx, qy, dqx, dqy
+
 
 @njit(cache=True, inline="always", error_model="numpy")
 def project(tri: np.ndarray, t: int, x: float, y: float, ux: float, uy: float
@@ -157,42 +193,28 @@ def project(tri: np.ndarray, t: int, x: float, y: float, ux: float, uy: float
     ax, ay = tri[t, 0, 0], tri[t, 0, 1]
     bx, by = tri[t, 1, 0], tri[t, 1, 1]
     cx, cy = tri[t, 2, 0], tri[t, 2, 1]
-    e0x, e0y, e1x, e1y, e2x, e2y = bx - ax, by - ay, cx - bx, cy - by, ax - cx, ay - cy
-    area = e0x * (-e2y) - e0y * (-e2x)
-    c0 = e0x * (y - ay) - e0y * (x - ax)
-    c1 = e1x * (y - by) - e1y * (x - bx)
-    c2 = e2x * (y - cy) - e2y * (x - cx)
-    if area > 0.0 and c0 >= 0.0 and c1 >= 0.0 and c2 >= 0.0:
-        return x, y, ux, uy
-    if area < 0.0 and c0 <= 0.0 and c1 <= 0.0 and c2 <= 0.0:
-        return x, y, ux, uy
-    best = np.inf
-    qx = qy = dqx = dqy = 0.0
-    for k in range(3):
-        if k == 0:
-            px, py, ex, ey, nx, ny = ax, ay, e0x, e0y, bx, by
-        elif k == 1:
-            px, py, ex, ey, nx, ny = bx, by, e1x, e1y, cx, cy
-        else:
-            px, py, ex, ey, nx, ny = cx, cy, e2x, e2y, ax, ay
-        length2 = max(ex * ex + ey * ey, TINY)
-        along = ((x - px) * ex + (y - py) * ey) / length2
-        if along <= 0.0:
-            fx, fy = px, py
-        elif along >= 1.0:
-            fx, fy = nx, ny
-        else:
-            fx, fy = px + along * ex, py + along * ey
-        d2 = (x - fx) * (x - fx) + (y - fy) * (y - fy)
-        if d2 < best:
-            best = d2
-            qx, qy = fx, fy
-            if 0.0 < along < 1.0:
-                slide = (ux * ex + uy * ey) / length2
-                dqx, dqy = slide * ex, slide * ey
-            else:
-                dqx = dqy = 0.0
-    return qx, qy, dqx, dqy
+    abx, aby, acx, acy = bx - ax, by - ay, cx - ax, cy - ay
+    if abx * acy - aby * acx == 0.0:
+        return _project_edges(tri, t, x, y, ux, uy)
+    d1 = abx * (x - ax) + aby * (y - ay)
+    d2 = acx * (x - ax) + acy * (y - ay)
+    if d1 <= 0.0 and d2 <= 0.0:
+        return ax, ay, 0.0, 0.0
+    d3 = abx * (x - bx) + aby * (y - by)
+    d4 = acx * (x - bx) + acy * (y - by)
+    if d3 >= 0.0 and d4 <= d3:
+        return bx, by, 0.0, 0.0
+    if d1 * d4 - d3 * d2 <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        return _on_edge(ax, ay, abx, aby, d1 / (d1 - d3), ux, uy)
+    d5 = abx * (x - cx) + aby * (y - cy)
+    d6 = acx * (x - cx) + acy * (y - cy)
+    if d6 >= 0.0 and d5 <= d6:
+        return cx, cy, 0.0, 0.0
+    if d5 * d2 - d1 * d6 <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        return _on_edge(ax, ay, acx, acy, d2 / (d2 - d6), ux, uy)
+    if d3 * d6 - d5 * d4 <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:
+        return _on_edge(bx, by, cx - bx, cy - by, (d4 - d3) / ((d4 - d3) + (d5 - d6)), ux, uy)
+    return x, y, ux, uy
 
 
 # Where the projected ray Proj_T(b + s u) stops. For large s, b + s u lies in the
@@ -236,27 +258,31 @@ def _ray_end(tri: np.ndarray, t: int, bx: float, by: float, ux: float, uy: float
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _path(kind: int, tri: np.ndarray, t: int, state: np.ndarray, i: int, col: int, s: float
+def _path(kind: int, tri: np.ndarray, t: int, p: np.ndarray, s: float
           ) -> tuple[float, float, float, float]:
-    """Point and dq/ds at step s of the path state[i, col:col + 8]."""
-    dx, dy, ddx, ddy = _proximal_step(state[i, col + 2], state[i, col + 3], state[i, col + 4],
-                                      state[i, col + 5], state[i, col + 6], state[i, col + 7], s)
+    """Point and dq/ds at step s of the path with parameters p (8,)."""
+    dx, dy, ddx, ddy = _proximal_step(p[2], p[3], p[4], p[5], p[6], p[7], s)
     if kind == TRIANGLE:
-        return project(tri, t, state[i, col] + dx, state[i, col + 1] + dy, ddx, ddy)
-    return state[i, col] + dx, state[i, col + 1] + dy, ddx, ddy
+        return project(tri, t, p[0] + dx, p[1] + dy, ddx, ddy)
+    return p[0] + dx, p[1] + dy, ddx, ddy
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _norm(x: float, y: float) -> float:
+    return math.sqrt(x * x + y * y)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _unit(x: float, y: float) -> tuple[float, float]:
-    norm = math.hypot(x, y)
+    norm = _norm(x, y)
     if norm > TINY:
         return x / norm, y / norm
     return 0.0, 0.0
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _bundle_free(tri: np.ndarray, t: int, state: np.ndarray, i: int, probe: float) -> bool:
-    """The bundle path enters triangle t: its first direction (-g1) or its ridge
+def _bundle_free(tri: np.ndarray, t: int, p: np.ndarray, probe: float) -> bool:
+    """The bundle path p (8,) enters triangle t: its first direction (-g1) or its ridge
     direction (-m, the min-norm element of the two gradients' hull) is not cut by
     the projection at b.
 
@@ -264,8 +290,7 @@ def _bundle_free(tri: np.ndarray, t: int, state: np.ndarray, i: int, probe: floa
     kink is then a 1D V along the edge, which the steepest path's bracket resolves
     exactly, and a projected bundle path would only add breakpoints.
     """
-    g1x, g1y = state[i, BUNDLE + 4], state[i, BUNDLE + 5]
-    g2x, g2y = state[i, BUNDLE + 6], state[i, BUNDLE + 7]
+    g1x, g1y, g2x, g2y = p[4], p[5], p[6], p[7]
     wx, wy = g1x - g2x, g1y - g2y
     ww = max(wx * wx + wy * wy, TINY)
     g2w = (g2x * wx + g2y * wy) / ww
@@ -274,31 +299,42 @@ def _bundle_free(tri: np.ndarray, t: int, state: np.ndarray, i: int, probe: floa
             ux, uy = _unit(-g1x, -g1y)
         else:
             ux, uy = _unit(-(g2x - g2w * wx), -(g2y - g2w * wy))
-        _, _, dqx, dqy = project(tri, t, state[i, BEST] + probe * ux,
-                                 state[i, BEST + 1] + probe * uy, ux, uy)
+        _, _, dqx, dqy = project(tri, t, p[0] + probe * ux, p[1] + probe * uy, ux, uy)
         if (dqx - ux) ** 2 + (dqy - uy) ** 2 <= STATIONARY * STATIONARY:
             return True
     return False
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _own_plane(kind: int, state: np.ndarray, data: np.ndarray, i: int) -> None:
-    """The steepest path from b (``STEEP``): the linearisation at b twice (TRIANGLE),
-    or the two planes whose max is phi (PAIR: phi = max(A, B) with
+def _steep_path(kind: int, state: np.ndarray, data: np.ndarray, i: int, out: np.ndarray
+                ) -> None:
+    """out (8,) = the steepest path from b: the linearisation at b twice
+    (TRIANGLE), or the two planes whose max is phi (PAIR: phi = max(A, B) with
     A, B = (1/2 +- k) f_a + (1/2 -+ k) f_b, k = IMBALANCE)."""
-    state[i, STEEP], state[i, STEEP + 1] = state[i, BEST], state[i, BEST + 1]
+    out[0], out[1] = state[i, BEST], state[i, BEST + 1]
     if kind == TRIANGLE:
-        state[i, STEEP + 2] = state[i, STEEP + 3] = state[i, PHI]
-        state[i, STEEP + 4] = state[i, STEEP + 6] = state[i, GRAD]
-        state[i, STEEP + 5] = state[i, STEEP + 7] = state[i, GRAD + 1]
+        out[2] = out[3] = state[i, PHI]
+        out[4] = out[6] = state[i, GRAD]
+        out[5] = out[7] = state[i, GRAD + 1]
         return
     high, low = 0.5 + IMBALANCE, 0.5 - IMBALANCE
-    state[i, STEEP + 2] = high * data[i, 0] + low * data[i, 1]
-    state[i, STEEP + 3] = low * data[i, 0] + high * data[i, 1]
-    state[i, STEEP + 4] = high * data[i, 2] + low * data[i, 4]
-    state[i, STEEP + 5] = high * data[i, 3] + low * data[i, 5]
-    state[i, STEEP + 6] = low * data[i, 2] + high * data[i, 4]
-    state[i, STEEP + 7] = low * data[i, 3] + high * data[i, 5]
+    out[2] = high * data[i, 0] + low * data[i, 1]
+    out[3] = low * data[i, 0] + high * data[i, 1]
+    out[4] = high * data[i, 2] + low * data[i, 4]
+    out[5] = high * data[i, 3] + low * data[i, 5]
+    out[6] = low * data[i, 2] + high * data[i, 4]
+    out[7] = low * data[i, 3] + high * data[i, 5]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _bundle_path(state: np.ndarray, i: int, out: np.ndarray) -> None:
+    """out (8,) = the bundle path from b: b's linearisation and the second plane,
+    capped at phi(b)."""
+    out[0], out[1], out[2] = state[i, BEST], state[i, BEST + 1], state[i, PHI]
+    out[3] = min(state[i, ALT + 2] + state[i, ALT + 3] * (state[i, BEST] - state[i, ALT])
+                 + state[i, ALT + 4] * (state[i, BEST + 1] - state[i, ALT + 1]), state[i, PHI])
+    out[4], out[5] = state[i, GRAD], state[i, GRAD + 1]
+    out[6], out[7] = state[i, ALT + 3], state[i, ALT + 4]
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -313,7 +349,7 @@ def _stationarity(kind: int, data: np.ndarray, i: int) -> float:
     mx, my = 0.5 * (data[i, 2] + data[i, 4]), 0.5 * (data[i, 3] + data[i, 5])
     ww = max(wx * wx + wy * wy, TINY)
     c = (mx * wx + my * wy) / ww
-    return abs(data[i, 0] - data[i, 1]) + math.hypot(mx - c * wx, my - c * wy)
+    return abs(data[i, 0] - data[i, 1]) + _norm(mx - c * wx, my - c * wy)
 
 
 @njit(cache=True, error_model="numpy")
@@ -401,45 +437,57 @@ def _candidate(kind: int, tri: np.ndarray, t: int, corner: np.ndarray, state: np
 
 
 @njit(cache=True, error_model="numpy")
+def bound(kind: int, owner: np.ndarray, linear: np.ndarray, state: np.ndarray,
+          flags: np.ndarray, running: np.ndarray) -> int:
+    """Most candidates ``propose`` can write this round (the buffers' size)."""
+    total = 0
+    for i in running:
+        flat = kind == TRIANGLE and linear[owner[i]]
+        total += 1 if flat else N_RUNGS
+        if not flat and (state[i, ALT] != state[i, BEST]
+                         or state[i, ALT + 1] != state[i, BEST + 1]):
+            total += N_RUNGS - 1
+        if flags[i, BRACKETED]:
+            total += 2
+    return total
+
+
+@njit(cache=True, error_model="numpy")
 def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
-            linear: np.ndarray, state: np.ndarray, flags: np.ndarray, data: np.ndarray, barzilai_borwein: bool,
-            cand: np.ndarray, cand_i: np.ndarray, points: np.ndarray) -> tuple[int, int]:
-    """Candidates of every running start for this round: returns (C, U), the number
-    of candidates and of distinct points to evaluate (``points[:U]``).
+            linear: np.ndarray, state: np.ndarray, flags: np.ndarray, data: np.ndarray,
+            barzilai_borwein: bool, running: np.ndarray, cand: np.ndarray, cand_i: np.ndarray,
+            points: np.ndarray) -> tuple[int, int, int]:
+    """Candidates of the running starts (``running``: their indices) for this round.
+
+    Returns (C, U, R): the number of candidates, of distinct points to evaluate
+    (``points[:U]``) and of starts that proposed some (``running[:R]`` on return).
 
     tri (T, 3, 2), owner (P,): the starts' triangles (TRIANGLE); corner (T, 3, 3):
     value and gradient of f at each vertex, NaN where unknown; linear (T,) bool: f
     is linear over the triangle (the steepest path then runs straight to its end,
-    and only the end is evaluated). Stops the starts
-    whose projected gradient vanishes; writes the per-round columns of ``state``
-    and ``flags`` and the candidates (rows 0..C-1 of ``cand``, ``cand_i``).
+    and only the end is evaluated). Stops the starts whose projected gradient
+    vanishes; writes the per-round columns of ``state`` and ``flags`` and the
+    candidates (rows 0..C-1 of ``cand``, ``cand_i``).
     """
-    n = u = 0
-    for i in range(len(state)):
-        flags[i, COUNT] = 0
-        if not flags[i, RUNNING]:
-            continue
+    steep, bundle, line = np.empty(8), np.empty(8), np.empty(8)
+    n = u = kept = 0
+    for i in running:
         t = owner[i] if kind == TRIANGLE else 0
         sigma = state[i, SIGMA]
         # The steepest path from b and its slope at the start; a zero projected
         # gradient is a stationary point (the start stops).
-        _own_plane(kind, state, data, i)
-        _, _, dqx, dqy = _path(kind, tri, t, state, i, STEEP, PROBE * sigma)
-        if math.hypot(dqx, dqy) <= STATIONARY:
-            flags[i, RUNNING] = 0
+        _steep_path(kind, state, data, i, steep)
+        _, _, dqx, dqy = _path(kind, tri, t, steep, PROBE * sigma)
+        if _norm(dqx, dqy) <= STATIONARY:
             continue
+        running[kept] = i
+        kept += 1
         flags[i, ROUNDS] += 1
         state[i, D0] = state[i, GRAD] * dqx + state[i, GRAD + 1] * dqy
-        # The bundle path: b's linearisation and the second plane, capped at phi(b).
-        state[i, BUNDLE:BUNDLE + 3] = state[i, BEST:BEST + 3]
-        state[i, BUNDLE + 3] = min(
-            state[i, ALT + 2] + state[i, ALT + 3] * (state[i, BEST] - state[i, ALT])
-            + state[i, ALT + 4] * (state[i, BEST + 1] - state[i, ALT + 1]), state[i, PHI])
-        state[i, BUNDLE + 4:BUNDLE + 6] = state[i, GRAD:GRAD + 2]
-        state[i, BUNDLE + 6:BUNDLE + 8] = state[i, ALT + 3:ALT + 5]
+        _bundle_path(state, i, bundle)
         has_alt = state[i, ALT] != state[i, BEST] or state[i, ALT + 1] != state[i, BEST + 1]
         if has_alt and kind == TRIANGLE:
-            has_alt = _bundle_free(tri, t, state, i, PROBE * sigma)
+            has_alt = _bundle_free(tri, t, bundle, PROBE * sigma)
 
         # The ladder's scale: sigma, or the Barzilai-Borwein step s.s / s.y from the
         # last accepted step s = b - b_prev and the change y of the path's direction
@@ -448,7 +496,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
         # of sigma (next to a kink y jumps and s.s / s.y is meaningless).
         scale = sigma
         if barzilai_borwein:
-            _, _, vx, vy = _path(kind, tri, t, state, i, STEEP, sigma)
+            _, _, vx, vy = _path(kind, tri, t, steep, sigma)
             sx = state[i, BEST] - state[i, PREVIOUS]
             sy = state[i, BEST + 1] - state[i, PREVIOUS + 1]
             curvature = sx * (state[i, PREVIOUS + 2] - vx) + sy * (state[i, PREVIOUS + 3] - vy)
@@ -465,10 +513,11 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
         # of its bracket: a slide along an edge, or a straight gradient line), with b at an end of its bracket and the
         # steepest path from b along the same line, needs no new ladder: the bracket
         # still holds the first valley ahead, the model points find it.
+        line[:] = state[i, PATH:PATH + 8]
         ladders = True
         if kind == TRIANGLE and flags[i, BRACKETED] and flags[i, FAILS] <= CONTINUE_FAILS:
-            lx, ly, ldx, ldy = _path(kind, tri, t, state, i, PATH, state[i, LEFT])
-            rx, ry, rdx, rdy = _path(kind, tri, t, state, i, PATH, state[i, RIGHT])
+            lx, ly, ldx, ldy = _path(kind, tri, t, line, state[i, LEFT])
+            rx, ry, rdx, rdy = _path(kind, tri, t, line, state[i, RIGHT])
             at_end = ((lx == state[i, BEST] and ly == state[i, BEST + 1])
                       or (rx == state[i, BEST] and ry == state[i, BEST + 1]))
             ux, uy = _unit(ldx, ldy)
@@ -493,7 +542,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             s = min(s, end)
             if not np.isfinite(s):
                 break
-            x, y, dx, dy = _path(kind, tri, t, state, i, STEEP, s)
+            x, y, dx, dy = _path(kind, tri, t, steep, s)
             if s == end:
                 dx, dy = end_dx, end_dy
             u = _candidate(kind, tri, t, corner, state, i, x, y, dx, dy, s, k, -1, n, u,
@@ -506,7 +555,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
         if has_alt and ladders and not linear[t]:
             for k in range(N_RUNGS - 1):
                 s = scale * LADDER[k]
-                x, y, dx, dy = _path(kind, tri, t, state, i, BUNDLE, s)
+                x, y, dx, dy = _path(kind, tri, t, bundle, s)
                 twin = start + k if k < steep_rungs and cand[start + k, 0] == s else -1
                 u = _candidate(kind, tri, t, corner, state, i, x, y, dx, dy, s,
                                COLUMN_BUNDLE + k, twin, n, u, cand, cand_i, points)
@@ -515,32 +564,33 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             s_first, s_second = _model_steps(state, i)
             for k in range(2):
                 s = s_first if k == 0 else s_second
-                x, y, dx, dy = _path(kind, tri, t, state, i, PATH, s)
+                x, y, dx, dy = _path(kind, tri, t, line, s)
                 u = _candidate(kind, tri, t, corner, state, i, x, y, dx, dy, s,
                                COLUMN_MODEL + k, n - 1 if k == 1 else -1, n, u, cand, cand_i,
                                points)
                 n += 1
         flags[i, COUNT], flags[i, OFFSET] = n - start, start
-    return n, u
+    return n, u, kept
 
 
 @njit(cache=True, error_model="numpy")
 def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
            flags: np.ndarray, data: np.ndarray, cand: np.ndarray, cand_i: np.ndarray,
-           value: np.ndarray, gradient: np.ndarray, cand_data: np.ndarray, tol: float) -> None:
-    """Update every start that proposed candidates, from the values (U,), gradients
-    (U, 2) and data (U, kd) at the evaluated points (see ``descent``'s module
-    docstring for the rules)."""
+           value: np.ndarray, gradient: np.ndarray, cand_data: np.ndarray, tol: float,
+           running: np.ndarray) -> int:
+    """Update the starts that proposed candidates (``running``) from the values (U,),
+    gradients (U, 2) and data (U, kd) at the evaluated points (see ``descent``'s
+    module docstring for the rules). Returns R, the number of starts still running
+    (``running[:R]`` on return)."""
     table = np.empty(N_COLUMNS)                         # value per column (inf: none)
     slope = np.empty(N_COLUMNS)
     where = np.empty(N_COLUMNS, dtype=np.int64)         # column -> candidate row
     seen = np.empty((N_COLUMNS + 2, 5))                 # planes: point, value, gradient
     samples = np.empty((2, N_RUNGS + 1, 3))             # per ladder: s, value, slope
     rungs = np.empty(2, dtype=np.int64)
-    for i in range(len(state)):
+    kept = 0
+    for i in running:
         count, offset = flags[i, COUNT], flags[i, OFFSET]
-        if count == 0:
-            continue
         t = owner[i] if kind == TRIANGLE else 0
         d0, scale, phi_old = state[i, D0], state[i, SCALE], state[i, PHI]
         table[:] = np.inf
@@ -598,7 +648,7 @@ def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
             if tie_win >= 0 and tie < 0.5 * _stationarity(kind, data, i):
                 win, phi_win, improved = tie_win, table[tie_win], True
         w = where[win]
-        moved = math.hypot(cand[w, 1] - state[i, BEST], cand[w, 2] - state[i, BEST + 1])
+        moved = _norm(cand[w, 1] - state[i, BEST], cand[w, 2] - state[i, BEST + 1])
         new_sigma = scale
 
         # (a) The model samples shrink their bracket: one with phi' < 0 and phi <=
@@ -624,8 +674,10 @@ def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
             down = samples[ladder, k, 2] < 0.0
             lk = k if down else k - 1
             rk = min(k + 1 if down else k, rungs[ladder])
-            path = STEEP if ladder == 0 else BUNDLE
-            state[i, PATH:PATH + 8] = state[i, path:path + 8]
+            if ladder == 0:
+                _steep_path(kind, state, data, i, state[i, PATH:PATH + 8])
+            else:
+                _bundle_path(state, i, state[i, PATH:PATH + 8])
             state[i, LEFT:LEFT + 3] = samples[ladder, lk]
             state[i, RIGHT:RIGHT + 3] = samples[ladder, rk]
             open_end = down and k == rungs[ladder]
@@ -637,7 +689,7 @@ def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
             new_sigma = scale / SHRINK
         elif not improved:
             # (d) No decrease: search finely around b on the steepest path next round.
-            state[i, PATH:PATH + 8] = state[i, STEEP:STEEP + 8]
+            _steep_path(kind, state, data, i, state[i, PATH:PATH + 8])
             state[i, LEFT:LEFT + 3] = samples[0, 0]
             state[i, RIGHT:RIGHT + 3] = samples[0, 1]
             has = d0 < 0.0
@@ -665,9 +717,9 @@ def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
             if c < N_COLUMNS and not np.isfinite(table[c]):
                 continue
             gx, gy = seen[c, 3], seen[c, 4]
-            if (gx * ux + gy * uy) / max(math.hypot(gx, gy), TINY) >= 1.0 - KINK:
+            if (gx * ux + gy * uy) / max(_norm(gx, gy), TINY) >= 1.0 - KINK:
                 continue
-            if math.hypot(seen[c, 0] - new_x, seen[c, 1] - new_y) > reach:
+            if _norm(seen[c, 0] - new_x, seen[c, 1] - new_y) > reach:
                 continue
             e = abs(new_phi - seen[c, 2] - gx * (new_x - seen[c, 0]) - gy * (new_y - seen[c, 1]))
             if e < error:
@@ -691,5 +743,97 @@ def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
         state[i, SIGMA] = max(new_sigma, TINY)
         flags[i, FAILS] = 0 if improved else flags[i, FAILS] + 1
         flags[i, HAS_PREVIOUS] = improved
-        if flags[i, FAILS] >= 2 or (improved and moved < tol):
-            flags[i, RUNNING] = 0
+        if flags[i, FAILS] < 2 and not (improved and moved < tol):
+            running[kept] = i
+            kept += 1
+    return kept
+
+
+# --------------------------------------------------------------------------------------
+# Set-up
+# --------------------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def triangle_starts(tri: np.ndarray, weights: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Starts of triangles tri (T, 3, 2) at barycentric weights (K, 3).
+
+    Returns points (T K, 2) (a start with weight 1 on a vertex is that vertex
+    exactly), owner (T K,), sigma (T K,): the triangle's longest edge (the first
+    ladder's scale, at least TINY), and at_vertex (T, 3): the start placed at each
+    vertex, -1 if none.
+    """
+    n_tri, n_start = len(tri), len(weights)
+    points = np.empty((n_tri * n_start, 2))
+    owner = np.empty(n_tri * n_start, dtype=np.int64)
+    sigma = np.empty(n_tri * n_start)
+    at_vertex = np.full((n_tri, 3), -1, dtype=np.int64)
+    for t in range(n_tri):
+        longest = 0.0
+        for v in range(3):
+            w = (v + 1) % 3
+            longest = max(longest, _norm(tri[t, w, 0] - tri[t, v, 0], tri[t, w, 1] - tri[t, v, 1]))
+        for k in range(n_start):
+            i = t * n_start + k
+            owner[i], sigma[i] = t, max(longest, TINY)
+            points[i, 0] = points[i, 1] = 0.0
+            for v in range(3):
+                corner = (weights[k, v] == 1.0 and weights[k, (v + 1) % 3] == 0.0
+                          and weights[k, (v + 2) % 3] == 0.0)
+                if corner and at_vertex[t, v] < 0:
+                    at_vertex[t, v] = i
+                points[i, 0] += weights[k, v] * tri[t, v, 0]
+                points[i, 1] += weights[k, v] * tri[t, v, 1]
+    return points, owner, sigma, at_vertex
+
+
+@njit(cache=True, error_model="numpy")
+def triangle_known(at_vertex: np.ndarray, points: np.ndarray, phi: np.ndarray,
+                   grad: np.ndarray, n_start: int, spanning: bool, linear_tol: float
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """What the starts tell of each triangle (see ``descent._TriangleProblem.known``).
+
+    Returns corner (T, 3, 3): value and gradient at each vertex, NaN where no
+    start is there, and linear (T,) bool.
+    """
+    n_tri = len(at_vertex)
+    corner = np.full((n_tri, 3, 3), np.nan)
+    linear = np.zeros(n_tri, dtype=np.bool_)
+    for t in range(n_tri):
+        for v in range(3):
+            i = at_vertex[t, v]
+            if i >= 0:
+                corner[t, v, 0], corner[t, v, 1], corner[t, v, 2] = phi[i], grad[i, 0], grad[i, 1]
+        if not spanning:
+            continue
+        o = t * n_start
+        size = 1.0 + abs(points[o, 0]) + abs(points[o, 1]) + abs(phi[o])
+        flat = True
+        for k in range(1, n_start):
+            i = o + k
+            size = max(size, 1.0 + abs(points[o, 0]) + abs(points[o, 1]) + abs(phi[o])
+                       + abs(points[i, 0] - points[o, 0]) + abs(points[i, 1] - points[o, 1]))
+            flat = flat and grad[i, 0] == grad[o, 0] and grad[i, 1] == grad[o, 1]
+        for k in range(1, n_start):
+            i = o + k
+            plane = phi[o] + grad[o, 0] * (points[i, 0] - points[o, 0]) \
+                + grad[o, 1] * (points[i, 1] - points[o, 1])
+            flat = flat and abs(phi[i] - plane) <= linear_tol * size
+        linear[t] = flat
+    return corner, linear
+
+
+@njit(cache=True, error_model="numpy")
+def initialize(points: np.ndarray, phi: np.ndarray, grad: np.ndarray, sigma: np.ndarray,
+               state: np.ndarray, flags: np.ndarray) -> None:
+    """Fill ``state`` and ``flags`` (all rows) for starts at points (P, 2) with
+    values (P,), gradients (P, 2) and initial step scales (P,): running, no second
+    plane (b's own), no line search."""
+    for i in range(len(state)):
+        state[i, :] = 0.0
+        flags[i, :] = 0
+        state[i, BEST], state[i, BEST + 1], state[i, PHI] = points[i, 0], points[i, 1], phi[i]
+        state[i, GRAD], state[i, GRAD + 1] = grad[i, 0], grad[i, 1]
+        state[i, ALT:ALT + 5] = state[i, BEST:BEST + 5]
+        state[i, SIGMA] = sigma[i]
+        state[i, PREVIOUS], state[i, PREVIOUS + 1] = points[i, 0], points[i, 1]

@@ -191,11 +191,12 @@ class _TriangleProblem:
     barzilai_borwein = False
 
     def __init__(self, field: Field, triangles: np.ndarray, owner: np.ndarray,
-                 at_vertex: np.ndarray, spanning: bool):
+                 at_vertex: np.ndarray, n_start: int, spanning: bool):
         self.field = field
         self.triangles = triangles
         self.owner = owner
         self.at_vertex = at_vertex
+        self.n_start = n_start
         self.spanning = spanning
 
     def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -213,17 +214,31 @@ class _TriangleProblem:
         straight to its end (the minimising vertex, or the foot on an edge normal to
         the gradient), where f is lowest.
         """
-        n_tri = len(self.triangles)
-        values = np.column_stack([phi, grad])
-        corner = np.where((self.at_vertex >= 0)[..., None], values[self.at_vertex], np.nan)
-        if not self.spanning:
-            return corner, np.zeros(n_tri, dtype=bool)
-        x, f, g = (a.reshape(n_tri, -1, *a.shape[1:]) for a in (points, phi, grad))
-        plane = f[:, :1] + np.einsum("tkd,td->tk", x - x[:, :1], g[:, 0])
-        size = (np.abs(x - x[:, :1]).max(axis=(1, 2)) + np.abs(x[:, 0]).max(axis=1) + 1.0)[:, None]
-        linear = (np.all(g == g[:, :1], axis=(1, 2))
-                  & np.all(np.abs(f - plane) <= _LINEAR * (size + np.abs(f[:, :1])), axis=1))
-        return corner, linear
+        return kernels.triangle_known(self.at_vertex, points, phi, grad, self.n_start,
+                                      self.spanning, _LINEAR)
+
+
+class _Workspace:
+    """Work arrays kept between calls, grown geometrically; a call uses leading rows.
+
+    Fresh arrays of tens of megabytes (10^4 triangles) cost their page faults on
+    every call, as much time as the descent itself; the physics step and the
+    benchmarks query again and again.
+    """
+
+    def __init__(self) -> None:
+        self._arrays: dict[str, np.ndarray] = {}
+
+    def rows(self, name: str, n: int, width: int, dtype: type = np.float64) -> np.ndarray:
+        """(n, width) C-contiguous rows of the array ``name``, contents undefined."""
+        array = self._arrays.get(name)
+        if array is None or len(array) < n:
+            size = max(n, 2 * len(array) if array is not None else n, 64)
+            array = self._arrays[name] = np.empty((size, width), dtype=dtype)
+        return array[:n]
+
+
+_WORK = _Workspace()
 
 
 def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, iterations: int,
@@ -238,33 +253,35 @@ def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, itera
     the best point (P, 2), its objective (P,), its data (P, kd) and the number of
     rounds each start ran (P,).
     """
-    points = np.array(points, dtype=np.float64, order="C")
+    points = np.ascontiguousarray(points, dtype=np.float64)
     phi, grad, data = (np.array(a, dtype=np.float64, order="C")
                        for a in problem.evaluate(points))
     n_points = len(points)
-    state = np.zeros((n_points, kernels.N_STATE))
-    state[:, kernels.BEST:kernels.BEST + 2] = points
-    state[:, kernels.PHI] = phi
-    state[:, kernels.GRAD:kernels.GRAD + 2] = grad
-    state[:, kernels.ALT:kernels.ALT + 5] = state[:, kernels.BEST:kernels.BEST + 5]
-    state[:, kernels.SIGMA] = sigma
-    state[:, kernels.PREVIOUS:kernels.PREVIOUS + 2] = points
-    flags = np.zeros((n_points, kernels.N_FLAGS), dtype=np.int64)
-    flags[:, kernels.RUNNING] = 1
+    state = _WORK.rows("state", n_points, kernels.N_STATE)
+    flags = _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64)
+    kernels.initialize(points, phi, grad, np.ascontiguousarray(sigma, dtype=np.float64),
+                       state, flags)
     corner, linear = problem.known(points, phi, grad)
-    size = n_points * kernels.N_COLUMNS
-    cand, cand_i = np.empty((size, 5)), np.empty((size, 2), dtype=np.int64)
-    candidates = np.empty((size, 2))
+    running = _WORK.rows("running", n_points, 1, np.int64)[:, 0]
+    running[:] = np.arange(n_points)
+    n_running = n_points
     for _ in range(iterations):
-        n, n_eval = kernels.propose(problem.kind, problem.triangles, problem.owner, corner,
-                                    linear, state, flags, data, problem.barzilai_borwein, cand, cand_i,
-                                    candidates)
+        size = kernels.bound(problem.kind, problem.owner, linear, state, flags,
+                             running[:n_running])
+        if size == 0:
+            break
+        cand = _WORK.rows("cand", size, 5)
+        cand_i = _WORK.rows("cand_i", size, 2, np.int64)
+        candidates = _WORK.rows("points", size, 2)
+        n, n_eval, n_running = kernels.propose(
+            problem.kind, problem.triangles, problem.owner, corner, linear, state, flags, data,
+            problem.barzilai_borwein, running[:n_running], cand, cand_i, candidates)
         if n == 0:
             break
         value, gradient, cand_data = (np.ascontiguousarray(a, dtype=np.float64)
                                       for a in problem.evaluate(candidates[:n_eval]))
-        kernels.accept(problem.kind, problem.owner, corner, state, flags, data, cand, cand_i,
-                       value, gradient, cand_data, tol)
+        n_running = kernels.accept(problem.kind, problem.owner, corner, state, flags, data, cand,
+                                   cand_i, value, gradient, cand_data, tol, running[:n_running])
     return (state[:, kernels.BEST:kernels.BEST + 2].copy(), state[:, kernels.PHI].copy(), data,
             flags[:, kernels.ROUNDS].copy())
 
@@ -283,21 +300,11 @@ def _triangle_minima(field: Field, triangles: np.ndarray, iterations: int,
     n_tri, n_start = len(tri), len(weights)
     if n_tri == 0:
         return np.zeros((0, n_start, 2)), np.zeros((0, n_start)), np.zeros((0, n_start), int)
-    points = np.einsum("kj,tjd->tkd", weights, tri).reshape(-1, 2)
-    owner = np.repeat(np.arange(n_tri), n_start)
-    # Starts exactly at a vertex: their evaluations are reused where paths end there.
-    at_vertex = np.full((n_tri, 3), -1, dtype=np.int64)
-    for v in range(3):
-        hits = np.flatnonzero(np.all(weights == np.eye(3)[v], axis=1))
-        if len(hits):
-            at_vertex[:, v] = np.arange(n_tri) * n_start + hits[0]
-            points.reshape(n_tri, n_start, 2)[:, hits] = tri[:, v, None]
-    edge = np.roll(tri, -1, axis=1) - tri
-    longest = np.sqrt(np.einsum("tkd,tkd->tk", edge, edge).max(axis=1))
-    problem = _TriangleProblem(field, tri, owner, at_vertex,
-                               np.linalg.matrix_rank(weights) == 3)
-    best, value, _, rounds = _descend(problem, points, iterations,
-                                      np.maximum(longest[owner], _TINY), tol)
+    points, owner, sigma, at_vertex = kernels.triangle_starts(np.ascontiguousarray(tri),
+                                                              np.ascontiguousarray(weights))
+    problem = _TriangleProblem(field, tri, owner, at_vertex, n_start,
+                               bool(np.linalg.matrix_rank(weights) == 3))
+    best, value, _, rounds = _descend(problem, points, iterations, sigma, tol)
     return (best.reshape(n_tri, n_start, 2), value.reshape(n_tri, n_start),
             rounds.reshape(n_tri, n_start))
 
