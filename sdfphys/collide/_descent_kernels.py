@@ -21,7 +21,8 @@ State of P starts, updated in place (columns named by the constants below):
   the steepest path at s = 0 and the ladder's scale.
 - ``flags`` (P, N_FLAGS) int64: bracketed, rounds without decrease in a row,
   rounds run, BB memory usable, and per round the number and offset of the
-  start's candidates and whether its steepest ladder ended at the path's end.
+  start's candidates, whether its steepest ladder ended at the path's end, and
+  whether the minimiser of its triangle's cone was tried.
 - ``running`` (P,) int64: the indices of the running starts (the leading R).
 - ``data`` (P, kd): the problem's data at b (TRIANGLE: the gradient).
 
@@ -93,7 +94,12 @@ HAS_PREVIOUS = 3
 COUNT = 4
 OFFSET = 5
 ENDED = 6
-N_FLAGS = 7
+MODEL = 7         # a cone's minimiser: 0 not tried, 1 tried this round, 2 tried
+N_FLAGS = 8
+# What f is over a triangle (``triangle_known``).
+GENERAL = 0
+PLANE = 1
+CONE = 2
 # Sources of candidates that need no evaluation.
 AT_BEST = -1
 AT_CORNER = -2
@@ -437,12 +443,13 @@ def _candidate(kind: int, tri: np.ndarray, t: int, corner: np.ndarray, state: np
 
 
 @njit(cache=True, error_model="numpy")
-def bound(kind: int, owner: np.ndarray, linear: np.ndarray, state: np.ndarray,
+def bound(kind: int, owner: np.ndarray, shape: np.ndarray, state: np.ndarray,
           flags: np.ndarray, running: np.ndarray) -> int:
     """Most candidates ``propose`` can write this round (the buffers' size)."""
     total = 0
     for i in running:
-        flat = kind == TRIANGLE and linear[owner[i]]
+        code = shape[owner[i], 0] if kind == TRIANGLE else GENERAL
+        flat = code == PLANE or (code == CONE and flags[i, MODEL] == 0)
         total += 1 if flat else N_RUNGS
         if not flat and (state[i, ALT] != state[i, BEST]
                          or state[i, ALT + 1] != state[i, BEST + 1]):
@@ -454,7 +461,7 @@ def bound(kind: int, owner: np.ndarray, linear: np.ndarray, state: np.ndarray,
 
 @njit(cache=True, error_model="numpy")
 def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
-            linear: np.ndarray, state: np.ndarray, flags: np.ndarray, data: np.ndarray,
+            shape: np.ndarray, state: np.ndarray, flags: np.ndarray, data: np.ndarray,
             barzilai_borwein: bool, running: np.ndarray, cand: np.ndarray, cand_i: np.ndarray,
             points: np.ndarray) -> tuple[int, int, int]:
     """Candidates of the running starts (``running``: their indices) for this round.
@@ -463,16 +470,19 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
     (``points[:U]``) and of starts that proposed some (``running[:R]`` on return).
 
     tri (T, 3, 2), owner (P,): the starts' triangles (TRIANGLE); corner (T, 3, 3):
-    value and gradient of f at each vertex, NaN where unknown; linear (T,) bool: f
-    is linear over the triangle (the steepest path then runs straight to its end,
-    and only the end is evaluated). Stops the starts whose projected gradient
+    value and gradient of f at each vertex, NaN where unknown; shape (T, 3): what
+    f is over the triangle (``triangle_known``): on a plane the steepest path runs
+    straight to its end and only the end is evaluated; on a cone the start tries
+    the cone's minimiser first. Stops the starts whose projected gradient
     vanishes; writes the per-round columns of ``state`` and ``flags`` and the
     candidates (rows 0..C-1 of ``cand``, ``cand_i``).
     """
     steep, bundle, line = np.empty(8), np.empty(8), np.empty(8)
     n = u = kept = 0
+    shared_t = shared_source = -1                     # the last cone minimiser evaluated
     for i in running:
         t = owner[i] if kind == TRIANGLE else 0
+        code = shape[t, 0] if kind == TRIANGLE else GENERAL
         sigma = state[i, SIGMA]
         # The steepest path from b and its slope at the start; a zero projected
         # gradient is a stationary point (the start stops).
@@ -483,6 +493,20 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
         running[kept] = i
         kept += 1
         flags[i, ROUNDS] += 1
+        if code == CONE and flags[i, MODEL] == 0:
+            # The cone's minimiser, shared by the starts of the triangle.
+            flags[i, MODEL] = 1
+            x, y = shape[t, 1], shape[t, 2]
+            if shared_t == t and shared_source != AT_BEST:
+                cand[n, 0], cand[n, 1], cand[n, 2], cand[n, 3], cand[n, 4] = 0.0, x, y, 0.0, 0.0
+                cand_i[n, 0], cand_i[n, 1] = 0, shared_source
+            else:
+                u = _candidate(kind, tri, t, corner, state, i, x, y, 0.0, 0.0, 0.0, 0, -1, n, u,
+                               cand, cand_i, points)
+                shared_t, shared_source = t, cand_i[n, 1]
+            flags[i, COUNT], flags[i, OFFSET] = 1, n
+            n += 1
+            continue
         state[i, D0] = state[i, GRAD] * dqx + state[i, GRAD + 1] * dqy
         _bundle_path(state, i, bundle)
         has_alt = state[i, ALT] != state[i, BEST] or state[i, ALT + 1] != state[i, BEST + 1]
@@ -535,10 +559,10 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
         if kind == TRIANGLE:
             end, end_dx, end_dy = _ray_end(tri, t, state[i, BEST], state[i, BEST + 1],
                                            -state[i, GRAD], -state[i, GRAD + 1])
-            if end > END_REACH * scale and not linear[t]:
+            if end > END_REACH * scale and code != PLANE:
                 end = np.inf
         for k in range(N_RUNGS if ladders else 0):
-            s = scale * LADDER[k] if k < N_RUNGS - 1 and not linear[t] else end
+            s = scale * LADDER[k] if k < N_RUNGS - 1 and code != PLANE else end
             s = min(s, end)
             if not np.isfinite(s):
                 break
@@ -552,7 +576,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 break
         steep_rungs = n - start
         flags[i, ENDED] = steep_rungs > 0 and cand[n - 1, 0] == end
-        if has_alt and ladders and not linear[t]:
+        if has_alt and ladders and code != PLANE:
             for k in range(N_RUNGS - 1):
                 s = scale * LADDER[k]
                 x, y, dx, dy = _path(kind, tri, t, bundle, s)
@@ -577,11 +601,12 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
 def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
            flags: np.ndarray, data: np.ndarray, cand: np.ndarray, cand_i: np.ndarray,
            value: np.ndarray, gradient: np.ndarray, cand_data: np.ndarray, tol: float,
-           running: np.ndarray) -> int:
+           running: np.ndarray, shape: np.ndarray, shape_tol: float) -> int:
     """Update the starts that proposed candidates (``running``) from the values (U,),
     gradients (U, 2) and data (U, kd) at the evaluated points (see ``descent``'s
     module docstring for the rules). Returns R, the number of starts still running
-    (``running[:R]`` on return)."""
+    (``running[:R]`` on return). A start that tried its cone's minimiser stops
+    there when f has the value the cone predicts (to ``shape_tol``)."""
     table = np.empty(N_COLUMNS)                         # value per column (inf: none)
     slope = np.empty(N_COLUMNS)
     where = np.empty(N_COLUMNS, dtype=np.int64)         # column -> candidate row
@@ -593,6 +618,29 @@ def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
         count, offset = flags[i, COUNT], flags[i, OFFSET]
         t = owner[i] if kind == TRIANGLE else 0
         d0, scale, phi_old = state[i, D0], state[i, SCALE], state[i, PHI]
+        if flags[i, MODEL] == 1:
+            # The cone's minimiser: taken when lower (the start is then done, as
+            # when it is there already); else the descent goes on.
+            flags[i, MODEL] = 2
+            src = cand_i[offset, 1]
+            if src == AT_BEST:
+                continue
+            if src <= AT_CORNER:
+                v = AT_CORNER - src
+                value_m, gx, gy = corner[t, v, 0], corner[t, v, 1], corner[t, v, 2]
+            else:
+                value_m, gx, gy = value[src], gradient[src, 0], gradient[src, 1]
+            if value_m < phi_old - 4.0 * EPS * max(1.0, abs(phi_old)):
+                state[i, BEST], state[i, BEST + 1] = cand[offset, 1], cand[offset, 2]
+                state[i, PHI], state[i, GRAD], state[i, GRAD + 1] = value_m, gx, gy
+                state[i, ALT:ALT + 5] = state[i, BEST:BEST + 5]
+                data[i, 0], data[i, 1] = gx, gy
+                size = 1.0 + abs(cand[offset, 1]) + abs(cand[offset, 2]) + abs(value_m)
+                if abs(value_m - shape[t, 3]) <= shape_tol * size:
+                    continue                                 # the cone's minimum: done
+            running[kept] = i
+            kept += 1
+            continue
         table[:] = np.inf
         slope[:] = 0.0
         where[:] = -1
@@ -711,15 +759,16 @@ def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
         seen[N_COLUMNS, :] = state[i, BEST:BEST + 5]
         seen[N_COLUMNS + 1, :] = state[i, ALT:ALT + 5]
         ux, uy = _unit(new_gx, new_gy)
-        reach = max(scale, new_sigma)
+        reach2 = max(scale, new_sigma) ** 2
         pick, error = -1, np.inf
         for c in range(N_COLUMNS + 2):
             if c < N_COLUMNS and not np.isfinite(table[c]):
                 continue
             gx, gy = seen[c, 3], seen[c, 4]
-            if (gx * ux + gy * uy) / max(_norm(gx, gy), TINY) >= 1.0 - KINK:
+            along = gx * ux + gy * uy               # cosine >= 1 - KINK: the same plane
+            if along > 0.0 and along * along >= (1.0 - KINK) ** 2 * (gx * gx + gy * gy):
                 continue
-            if _norm(seen[c, 0] - new_x, seen[c, 1] - new_y) > reach:
+            if (seen[c, 0] - new_x) ** 2 + (seen[c, 1] - new_y) ** 2 > reach2:
                 continue
             e = abs(new_phi - seen[c, 2] - gx * (new_x - seen[c, 0]) - gy * (new_y - seen[c, 1]))
             if e < error:
@@ -787,18 +836,34 @@ def triangle_starts(tri: np.ndarray, weights: np.ndarray
     return points, owner, sigma, at_vertex
 
 
+# What the starts of a triangle tell of f over it. With K >= 3 starts spanning
+# the triangle, x_k, f_k, g_k:
+#
+# - a plane when all g_k are equal and f_k = f_0 + g_0 . (x_k - x_0) to rounding:
+#   f is then linear over the triangle (all samples in one face's region of a
+#   polygon, exact where that region is convex);
+# - a cone when all gradient lines meet in one point c (f = |x - c| + const: a
+#   circle's field, a polygon's field near a corner, outside): c minimises
+#   sum_k |(I - g_k g_k^T)(c - x_k)|^2, i.e. solves
+#   sum_k (I - g_k g_k^T) c = sum_k (I - g_k g_k^T) x_k, and is accepted when
+#   every g_k is the unit vector (x_k - c) / |x_k - c| and every f_k - |x_k - c|
+#   is the same, to ``tol``. Over the triangle f is then lowest at the point
+#   closest to c, Proj_T(c): the one minimum of a convex function on a convex set.
+
 @njit(cache=True, error_model="numpy")
-def triangle_known(at_vertex: np.ndarray, points: np.ndarray, phi: np.ndarray,
-                   grad: np.ndarray, n_start: int, spanning: bool, linear_tol: float
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """What the starts tell of each triangle (see ``descent._TriangleProblem.known``).
+def triangle_known(tri: np.ndarray, at_vertex: np.ndarray, points: np.ndarray,
+                   phi: np.ndarray, grad: np.ndarray, n_start: int, spanning: bool,
+                   tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """What the starts (P = T K, in triangle order) tell of each triangle tri (T, 3, 2).
 
     Returns corner (T, 3, 3): value and gradient at each vertex, NaN where no
-    start is there, and linear (T,) bool.
+    start is there; shape (T, 4): code (GENERAL, PLANE or CONE) and, for a cone,
+    the point of the triangle where f is lowest and the value f should have
+    there.
     """
     n_tri = len(at_vertex)
     corner = np.full((n_tri, 3, 3), np.nan)
-    linear = np.zeros(n_tri, dtype=np.bool_)
+    shape = np.zeros((n_tri, 4))
     for t in range(n_tri):
         for v in range(3):
             i = at_vertex[t, v]
@@ -808,19 +873,50 @@ def triangle_known(at_vertex: np.ndarray, points: np.ndarray, phi: np.ndarray,
             continue
         o = t * n_start
         size = 1.0 + abs(points[o, 0]) + abs(points[o, 1]) + abs(phi[o])
-        flat = True
+        plane = True
         for k in range(1, n_start):
             i = o + k
             size = max(size, 1.0 + abs(points[o, 0]) + abs(points[o, 1]) + abs(phi[o])
                        + abs(points[i, 0] - points[o, 0]) + abs(points[i, 1] - points[o, 1]))
-            flat = flat and grad[i, 0] == grad[o, 0] and grad[i, 1] == grad[o, 1]
+            plane = plane and grad[i, 0] == grad[o, 0] and grad[i, 1] == grad[o, 1]
         for k in range(1, n_start):
             i = o + k
-            plane = phi[o] + grad[o, 0] * (points[i, 0] - points[o, 0]) \
+            linear = phi[o] + grad[o, 0] * (points[i, 0] - points[o, 0]) \
                 + grad[o, 1] * (points[i, 1] - points[o, 1])
-            flat = flat and abs(phi[i] - plane) <= linear_tol * size
-        linear[t] = flat
-    return corner, linear
+            plane = plane and abs(phi[i] - linear) <= tol * size
+        if plane:
+            shape[t, 0] = PLANE
+            continue
+        a00 = a01 = a11 = b0 = b1 = 0.0
+        for k in range(n_start):
+            i = o + k
+            gx, gy = grad[i, 0], grad[i, 1]
+            m00, m01, m11 = 1.0 - gx * gx, -gx * gy, 1.0 - gy * gy
+            a00, a01, a11 = a00 + m00, a01 + m01, a11 + m11
+            b0 += m00 * points[i, 0] + m01 * points[i, 1]
+            b1 += m01 * points[i, 0] + m11 * points[i, 1]
+        det = a00 * a11 - a01 * a01
+        if not det > tol * n_start * n_start:
+            continue
+        cx, cy = (a11 * b0 - a01 * b1) / det, (a00 * b1 - a01 * b0) / det
+        cone = True
+        offset = 0.0
+        for k in range(n_start):
+            i = o + k
+            dx, dy = points[i, 0] - cx, points[i, 1] - cy
+            d = _norm(dx, dy)
+            if not d > tol * size:
+                cone = False
+                break
+            if k == 0:
+                offset = phi[i] - d
+            cone = (cone and abs(dx / d - grad[i, 0]) <= tol and abs(dy / d - grad[i, 1]) <= tol
+                    and abs(phi[i] - d - offset) <= tol * size)
+        if cone:
+            shape[t, 0] = CONE
+            shape[t, 1], shape[t, 2], _, _ = project(tri, t, cx, cy, 0.0, 0.0)
+            shape[t, 3] = offset + _norm(shape[t, 1] - cx, shape[t, 2] - cy)
+    return corner, shape
 
 
 @njit(cache=True, error_model="numpy")

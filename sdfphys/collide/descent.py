@@ -111,9 +111,9 @@ _MERGE = 1e-3
 #: Thickness of the sliver measuring a flat patch, as a fraction of the region's diagonal.
 _SLIVER = 1e-9
 _TINY = 1e-300
-#: f is linear over a triangle when the starts' values stay within this fraction of
-#: the coordinates' and values' size from one plane (and the gradients are equal).
-_LINEAR = 1e-13
+#: Tolerance of the plane and cone fits of ``_descent_kernels.triangle_known``
+#: (unit gradients; values relative to the coordinates' and values' size).
+_SHAPE_TOL = 1e-12
 
 # --------------------------------------------------------------------------------------
 # Triangle geometry
@@ -208,14 +208,15 @@ class _TriangleProblem:
         """What the starts (P, 2) with values (P,), gradients (P, 2) tell of each triangle.
 
         corner (T, 3, 3): value and gradient at each vertex, NaN where no start is
-        there. linear (T,) bool: f is linear over the triangle, i.e. the starts
-        span it (``spanning``) and all see the same gradient, with values on that
-        plane (to rounding). A linear field's steepest path needs no ladder: it runs
-        straight to its end (the minimising vertex, or the foot on an edge normal to
-        the gradient), where f is lowest.
+        there. shape (T, 4): with starts spanning the triangle (``spanning``),
+        whether f is a plane or a cone over it, and the cone's minimiser (see
+        ``_descent_kernels.triangle_known``). On a plane the steepest path needs no
+        ladder: it runs straight to its end (the minimising vertex, or the foot on
+        an edge normal to the gradient), where f is lowest. On a cone every start
+        first tries the point closest to its apex.
         """
-        return kernels.triangle_known(self.at_vertex, points, phi, grad, self.n_start,
-                                      self.spanning, _LINEAR)
+        return kernels.triangle_known(self.triangles, self.at_vertex, points, phi, grad,
+                                      self.n_start, self.spanning, _SHAPE_TOL)
 
 
 class _Workspace:
@@ -261,12 +262,12 @@ def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, itera
     flags = _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64)
     kernels.initialize(points, phi, grad, np.ascontiguousarray(sigma, dtype=np.float64),
                        state, flags)
-    corner, linear = problem.known(points, phi, grad)
+    corner, shape = problem.known(points, phi, grad)
     running = _WORK.rows("running", n_points, 1, np.int64)[:, 0]
     running[:] = np.arange(n_points)
     n_running = n_points
     for _ in range(iterations):
-        size = kernels.bound(problem.kind, problem.owner, linear, state, flags,
+        size = kernels.bound(problem.kind, problem.owner, shape, state, flags,
                              running[:n_running])
         if size == 0:
             break
@@ -274,14 +275,15 @@ def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, itera
         cand_i = _WORK.rows("cand_i", size, 2, np.int64)
         candidates = _WORK.rows("points", size, 2)
         n, n_eval, n_running = kernels.propose(
-            problem.kind, problem.triangles, problem.owner, corner, linear, state, flags, data,
+            problem.kind, problem.triangles, problem.owner, corner, shape, state, flags, data,
             problem.barzilai_borwein, running[:n_running], cand, cand_i, candidates)
         if n == 0:
             break
         value, gradient, cand_data = (np.ascontiguousarray(a, dtype=np.float64)
                                       for a in problem.evaluate(candidates[:n_eval]))
         n_running = kernels.accept(problem.kind, problem.owner, corner, state, flags, data, cand,
-                                   cand_i, value, gradient, cand_data, tol, running[:n_running])
+                                   cand_i, value, gradient, cand_data, tol, running[:n_running],
+                                   shape, _SHAPE_TOL)
     return (state[:, kernels.BEST:kernels.BEST + 2].copy(), state[:, kernels.PHI].copy(), data,
             flags[:, kernels.ROUNDS].copy())
 
@@ -378,8 +380,8 @@ class _PairProblem:
 
     def known(self, points: np.ndarray, phi: np.ndarray, grad: np.ndarray
               ) -> tuple[np.ndarray, np.ndarray]:
-        """No triangle: no vertex values (1, 3, 3) NaN, not linear (1,)."""
-        return np.full((1, 3, 3), np.nan), np.zeros(1, dtype=bool)
+        """No triangle: no vertex values (1, 3, 3) NaN, no known shape (1, 4)."""
+        return np.full((1, 3, 3), np.nan), np.zeros((1, 4))
 
     def values(self, points: np.ndarray) -> np.ndarray:
         """(N, 6): f_a, f_b, grad f_a, grad f_b at points (N, 2) of a's frame."""
