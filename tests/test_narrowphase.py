@@ -3,15 +3,19 @@
 import itertools
 import math
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+import sdfphys
 from sdfphys.collide import collide, find_contacts
 from sdfphys.collide.narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from sdfphys.collide.reduce import reduce_contacts
 from sdfphys.sdf import Field, field
 from sdfphys.settings import Settings
+
+ROOT = Path(__file__).resolve().parents[1]
 from sdfphys.shapes import SdfShape, shape_from_spec
 
 BALL = {"type": "circle", "radius": 0.5}
@@ -434,3 +438,19 @@ def test_mesh_box_resting_on_an_sdf_ground():
         np.testing.assert_allclose(point, [[-0.2, 0.495], [0.8, 0.495]], atol=1e-6)
         np.testing.assert_allclose(normal, [[0.0, sign], [0.0, sign]], atol=1e-6)
         np.testing.assert_allclose(depth, [0.01, 0.01], atol=1e-6)
+
+
+def test_first_per_key_of_no_rows_is_empty():
+    """Regression: a mesh whose reference faces all fail measured no vertex and crashed
+    (IndexError) in scenes/concave_polygons.toml at step 45."""
+    from sdfphys.collide.mesh_contacts import _first_per_key
+
+    empty = np.zeros(0, np.int64)
+    assert _first_per_key(empty, empty, empty).shape == (0,)
+
+
+def test_concave_polygons_scene_steps_past_the_former_crash():
+    world = sdfphys.load_scene(ROOT / "scenes" / "concave_polygons.toml")
+    for _ in range(50):
+        world.step()
+    assert np.all(np.isfinite(world.position))

@@ -102,6 +102,8 @@ def _barycentric(triangle: np.ndarray, point: np.ndarray) -> np.ndarray:
 
 def _first_per_key(*keys: np.ndarray) -> np.ndarray:
     """Sorted indices of the first row (in input order) of each distinct key tuple."""
+    if len(keys[0]) == 0:
+        return np.zeros(0, np.int64)
     order = np.lexsort((np.arange(len(keys[0])),) + keys[::-1])
     sorted_keys = np.stack([k[order] for k in keys], axis=1)
     new = np.r_[True, np.any(sorted_keys[1:] != sorted_keys[:-1], axis=1)]

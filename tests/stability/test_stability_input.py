@@ -43,17 +43,7 @@ def test_advance_stops_at_the_first_non_finite_state():
         next(steps)
 
 
-EMPTY_CANDIDATES = pytest.mark.xfail(strict=True, reason=(
-    "crashes at step 45 (0.73 s): for a polygon pair with two speculative candidates "
-    "(depths -0.039 and -0.016 m, velocity-aware margin 0.19 m) "
-    "collide.mesh_contacts.mesh_in_field's _reference_faces rejects both and measures no "
-    "vertex, then _first_per_key of zero rows raises IndexError (np.r_[True, ...] has "
-    "length 1)"))
-
-
-@pytest.mark.parametrize("path", [
-    pytest.param(p, marks=EMPTY_CANDIDATES, id=p.stem) if p.stem == "concave_polygons"
-    else pytest.param(p, id=p.stem) for p in SCENES])
+@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
 def test_every_scene_stays_finite_for_two_seconds(path):
     """Every scene of scenes/ (valid input) keeps a finite state over 2 s."""
     world = sdfphys.load_scene(path)
