@@ -120,7 +120,7 @@ class _Counting:
     """A field wrapper counting the points evaluated."""
 
     def __init__(self, f):
-        self.f, self.points = f, 0
+        self.f, self.points, self.spec = f, 0, f.spec
 
     def evaluate(self, points):
         self.points += len(points)

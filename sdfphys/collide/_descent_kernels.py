@@ -54,8 +54,6 @@ N_COLUMNS = 2 * N_RUNGS + 2
 END_REACH = 16.0
 #: Two unit directions with |cosine| above 1 - PARALLEL are along one line.
 PARALLEL = 1e-12
-#: A line search continues without ladders after at most this many rounds without decrease.
-CONTINUE_FAILS = 0
 #: sigma is divided by this after a round without decrease.
 SHRINK = 64.0
 #: Model points stay this fraction of the bracket away from its ends.
@@ -94,12 +92,14 @@ HAS_PREVIOUS = 3
 COUNT = 4
 OFFSET = 5
 ENDED = 6
-MODEL = 7         # a cone's minimiser: 0 not tried, 1 tried this round, 2 tried
-N_FLAGS = 8
+MODEL = 7         # a model's minimiser: 0 not tried, 1 tried this round, 2 tried
+SLOW = 8          # the last round continued a line search that shrank less than half
+N_FLAGS = 9
 # What f is over a triangle (``triangle_known``).
 GENERAL = 0
 PLANE = 1
 CONE = 2
+CUTS = 3
 # Sources of candidates that need no evaluation.
 AT_BEST = -1
 AT_CORNER = -2
@@ -442,14 +442,27 @@ def _candidate(kind: int, tri: np.ndarray, t: int, corner: np.ndarray, state: np
     return u + 1
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _code(kind: int, shape: np.ndarray, t: int, state: np.ndarray, i: int) -> int:
+    """What is known of f around start i: its triangle's shape code, except that a
+    start no longer on its triangle's plane (another gradient at b: the plane was
+    read from the starts alone) descends as on a GENERAL triangle."""
+    if kind != TRIANGLE:
+        return GENERAL
+    code = int(shape[t, 0])
+    if code == PLANE and (state[i, GRAD] != shape[t, 1] or state[i, GRAD + 1] != shape[t, 2]):
+        return GENERAL
+    return code
+
+
 @njit(cache=True, error_model="numpy")
 def bound(kind: int, owner: np.ndarray, shape: np.ndarray, state: np.ndarray,
           flags: np.ndarray, running: np.ndarray) -> int:
     """Most candidates ``propose`` can write this round (the buffers' size)."""
     total = 0
     for i in running:
-        code = shape[owner[i], 0] if kind == TRIANGLE else GENERAL
-        flat = code == PLANE or (code == CONE and flags[i, MODEL] == 0)
+        code = _code(kind, shape, owner[i] if kind == TRIANGLE else 0, state, i)
+        flat = code == PLANE or (code >= CONE and flags[i, MODEL] == 0)
         total += 1 if flat else N_RUNGS
         if not flat and (state[i, ALT] != state[i, BEST]
                          or state[i, ALT + 1] != state[i, BEST + 1]):
@@ -482,7 +495,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
     shared_t = shared_source = -1                     # the last cone minimiser evaluated
     for i in running:
         t = owner[i] if kind == TRIANGLE else 0
-        code = shape[t, 0] if kind == TRIANGLE else GENERAL
+        code = _code(kind, shape, t, state, i)
         sigma = state[i, SIGMA]
         # The steepest path from b and its slope at the start; a zero projected
         # gradient is a stationary point (the start stops).
@@ -493,8 +506,8 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
         running[kept] = i
         kept += 1
         flags[i, ROUNDS] += 1
-        if code == CONE and flags[i, MODEL] == 0:
-            # The cone's minimiser, shared by the starts of the triangle.
+        if code >= CONE and flags[i, MODEL] == 0:
+            # The model's minimiser, shared by the starts of the triangle.
             flags[i, MODEL] = 1
             x, y = shape[t, 1], shape[t, 2]
             if shared_t == t and shared_source != AT_BEST:
@@ -539,7 +552,8 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
         # still holds the first valley ahead, the model points find it.
         line[:] = state[i, PATH:PATH + 8]
         ladders = True
-        if kind == TRIANGLE and flags[i, BRACKETED] and flags[i, FAILS] <= CONTINUE_FAILS:
+        if kind == TRIANGLE and flags[i, BRACKETED] and not flags[i, FAILS] \
+                and not flags[i, SLOW]:
             lx, ly, ldx, ldy = _path(kind, tri, t, line, state[i, LEFT])
             rx, ry, rdx, rdy = _path(kind, tri, t, line, state[i, RIGHT])
             at_end = ((lx == state[i, BEST] and ly == state[i, BEST + 1])
@@ -703,6 +717,7 @@ def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
         #     phi(s_l) becomes the left end, otherwise the right end (the second only
         #     if it still lies inside).
         has = flags[i, BRACKETED] != 0
+        width = state[i, RIGHT] - state[i, LEFT]
         if has:
             for c in range(COLUMN_MODEL, N_COLUMNS):
                 s = cand[where[c], 0]
@@ -711,6 +726,9 @@ def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
                     state[i, end], state[i, end + 1], state[i, end + 2] = s, table[c], slope[c]
             if improved and win >= COLUMN_MODEL:
                 new_sigma = max(moved, 0.25 * scale)
+        # A continued line search whose models failed to halve the bracket gets
+        # ladders again next round (the bracket holds more than one kink or bend).
+        flags[i, SLOW] = rungs[0] == 0 and state[i, RIGHT] - state[i, LEFT] > 0.5 * width
 
         if improved and win < COLUMN_MODEL:
             # (b) A ladder winner at rung k starts a new line search on its path,
@@ -848,18 +866,100 @@ def triangle_starts(tri: np.ndarray, weights: np.ndarray
 #   sum_k (I - g_k g_k^T) c = sum_k (I - g_k g_k^T) x_k, and is accepted when
 #   every g_k is the unit vector (x_k - c) / |x_k - c| and every f_k - |x_k - c|
 #   is the same, to ``tol``. Over the triangle f is then lowest at the point
-#   closest to c, Proj_T(c): the one minimum of a convex function on a convex set.
+#   closest to c, Proj_T(c): the one minimum of a convex function on a convex set;
+# - else, for a field known to be convex (``convex``), cuts: the starts' tangent
+#   planes l_k(x) = f_k + g_k . (x - x_k) are then lower bounds of f, and so is
+#   their maximum m(x) = max_k l_k(x) (Kelley's cutting-plane model). Its minimum
+#   over the triangle is at p* (a linear programme, solved by enumerating the
+#   candidates: the vertices, where the lines l_j = l_k cross the edges, and where
+#   three planes meet inside), and f(p*) = m(p*) certifies p* as the minimum of f
+#   over the triangle: m(p*) <= min f <= f(p*). That is exact where f is the max
+#   of planes (a convex polygon's interior near its medial axis); a curved field
+#   fails the check at p* and descends. (Without convexity tangent planes may lie
+#   above f, in concave pieces or past the end of a polygon's edge, and the
+#   check proves nothing.)
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _model_value(planes: np.ndarray, m: int, x: float, y: float) -> float:
+    """max of the planes (m, 3) (value at the origin, gradient) at (x, y)."""
+    top = -np.inf
+    for j in range(m):
+        top = max(top, planes[j, 0] + planes[j, 1] * x + planes[j, 2] * y)
+    return top
+
+
+@njit(cache=True, error_model="numpy")
+def _cuts(tri: np.ndarray, t: int, points: np.ndarray, phi: np.ndarray, grad: np.ndarray,
+          o: int, n_start: int, tol: float, shape: np.ndarray) -> bool:
+    """The cutting-plane model of triangle t from starts o..o+n_start-1 (see above).
+
+    Returns False when the samples contradict convexity (a sample below another's
+    tangent plane: rounding, or a field that is not convex after all); else
+    writes the model's minimiser over the triangle and its value to shape[t, 1:4].
+    """
+    planes = np.empty((n_start, 3))
+    m = 0
+    for k in range(n_start):
+        i = o + k
+        a = phi[i] - grad[i, 0] * points[i, 0] - grad[i, 1] * points[i, 1]
+        same = False
+        for j in range(m):
+            same = same or (planes[j, 1] == grad[i, 0] and planes[j, 2] == grad[i, 1]
+                            and abs(planes[j, 0] - a) <= tol)
+        if not same:
+            planes[m, 0], planes[m, 1], planes[m, 2] = a, grad[i, 0], grad[i, 1]
+            m += 1
+    for k in range(n_start):
+        i = o + k
+        if _model_value(planes, m, points[i, 0], points[i, 1]) > phi[i] + tol:
+            return False
+    best, bx, by = np.inf, 0.0, 0.0
+    for v in range(3):
+        value = _model_value(planes, m, tri[t, v, 0], tri[t, v, 1])
+        if value < best:
+            best, bx, by = value, tri[t, v, 0], tri[t, v, 1]
+    for j in range(m):
+        for k in range(j + 1, m):
+            da, dgx, dgy = planes[j, 0] - planes[k, 0], planes[j, 1] - planes[k, 1], \
+                planes[j, 2] - planes[k, 2]
+            for v in range(3):
+                px, py = tri[t, v, 0], tri[t, v, 1]
+                ex, ey = tri[t, (v + 1) % 3, 0] - px, tri[t, (v + 1) % 3, 1] - py
+                rate = dgx * ex + dgy * ey
+                if rate == 0.0:
+                    continue
+                along = -(da + dgx * px + dgy * py) / rate
+                if 0.0 < along < 1.0:
+                    x, y = px + along * ex, py + along * ey
+                    value = _model_value(planes, m, x, y)
+                    if value < best:
+                        best, bx, by = value, x, y
+            for q in range(k + 1, m):
+                ex, ey = planes[j, 1] - planes[q, 1], planes[j, 2] - planes[q, 2]
+                det = dgx * ey - dgy * ex
+                if det == 0.0:
+                    continue
+                eb = planes[q, 0] - planes[j, 0]
+                x, y = (-da * ey - eb * dgy) / det, (dgx * eb + ex * da) / det
+                qx, qy, _, _ = project(tri, t, x, y, 0.0, 0.0)
+                if qx == x and qy == y:
+                    value = _model_value(planes, m, x, y)
+                    if value < best:
+                        best, bx, by = value, x, y
+    shape[t, 1], shape[t, 2], shape[t, 3] = bx, by, best
+    return True
+
 
 @njit(cache=True, error_model="numpy")
 def triangle_known(tri: np.ndarray, at_vertex: np.ndarray, points: np.ndarray,
                    phi: np.ndarray, grad: np.ndarray, n_start: int, spanning: bool,
-                   tol: float) -> tuple[np.ndarray, np.ndarray]:
+                   convex: bool, tol: float) -> tuple[np.ndarray, np.ndarray]:
     """What the starts (P = T K, in triangle order) tell of each triangle tri (T, 3, 2).
 
     Returns corner (T, 3, 3): value and gradient at each vertex, NaN where no
-    start is there; shape (T, 4): code (GENERAL, PLANE or CONE) and, for a cone,
-    the point of the triangle where f is lowest and the value f should have
-    there.
+    start is there; shape (T, 4): code (GENERAL, PLANE, CONE or CUTS) and, for a
+    plane, its gradient; for a cone or cuts, the point of the triangle where f is
+    lowest and the value f should have there.
     """
     n_tri = len(at_vertex)
     corner = np.full((n_tri, 3, 3), np.nan)
@@ -885,7 +985,7 @@ def triangle_known(tri: np.ndarray, at_vertex: np.ndarray, points: np.ndarray,
                 + grad[o, 1] * (points[i, 1] - points[o, 1])
             plane = plane and abs(phi[i] - linear) <= tol * size
         if plane:
-            shape[t, 0] = PLANE
+            shape[t, 0], shape[t, 1], shape[t, 2] = PLANE, grad[o, 0], grad[o, 1]
             continue
         a00 = a01 = a11 = b0 = b1 = 0.0
         for k in range(n_start):
@@ -896,12 +996,10 @@ def triangle_known(tri: np.ndarray, at_vertex: np.ndarray, points: np.ndarray,
             b0 += m00 * points[i, 0] + m01 * points[i, 1]
             b1 += m01 * points[i, 0] + m11 * points[i, 1]
         det = a00 * a11 - a01 * a01
-        if not det > tol * n_start * n_start:
-            continue
+        cone = det > tol * n_start * n_start
         cx, cy = (a11 * b0 - a01 * b1) / det, (a00 * b1 - a01 * b0) / det
-        cone = True
         offset = 0.0
-        for k in range(n_start):
+        for k in range(n_start if cone else 0):
             i = o + k
             dx, dy = points[i, 0] - cx, points[i, 1] - cy
             d = _norm(dx, dy)
@@ -916,6 +1014,9 @@ def triangle_known(tri: np.ndarray, at_vertex: np.ndarray, points: np.ndarray,
             shape[t, 0] = CONE
             shape[t, 1], shape[t, 2], _, _ = project(tri, t, cx, cy, 0.0, 0.0)
             shape[t, 3] = offset + _norm(shape[t, 1] - cx, shape[t, 2] - cy)
+            continue
+        if convex and _cuts(tri, t, points, phi, grad, o, n_start, tol * size, shape):
+            shape[t, 0] = CUTS
     return corner, shape
 
 

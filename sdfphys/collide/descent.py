@@ -179,6 +179,38 @@ def triangle_cull(field: Field, triangles: np.ndarray, margin: float = 0.0) -> n
 # The line-search descent engine
 # --------------------------------------------------------------------------------------
 
+#: Primitives whose exact field is a convex function (the signed distance to a
+#: convex set); a polygon also when its points turn one way only.
+_CONVEX_PRIMITIVES = frozenset({
+    "box", "capsule", "circle", "cut_disk", "ellipse", "equilateral_triangle", "half_plane",
+    "hexagon", "isosceles_triangle", "octagon", "oriented_box", "parallelogram", "pentagon",
+    "rhombus", "rounded_box", "segment", "trapezoid", "triangle", "uneven_capsule", "vesica"})
+#: Operators that keep convex fields convex: placements, uniform scaling, f - r, max.
+_CONVEX_OPERATORS = frozenset({"rotate", "round", "scale", "transform", "translate",
+                               "intersection"})
+
+
+def _convex(spec: dict | None) -> bool:
+    """True when a field spec (``Field.spec``) describes a convex function of the point.
+
+    Conservative: unknown fields (no spec), bounds (``exact = False`` primitives
+    are left out by name) and any operator not in ``_CONVEX_OPERATORS`` give False.
+    """
+    if not isinstance(spec, dict):
+        return False
+    if "type" in spec:
+        if spec["type"] == "polygon":
+            p = np.asarray(spec["points"], dtype=np.float64)
+            e = np.roll(p, -1, axis=0) - p
+            turn = e[:, 0] * np.roll(e, -1, axis=0)[:, 1] - e[:, 1] * np.roll(e, -1, axis=0)[:, 0]
+            return bool(np.all(turn >= 0.0) or np.all(turn <= 0.0))
+        return spec["type"] in _CONVEX_PRIMITIVES
+    if spec.get("op") not in _CONVEX_OPERATORS:
+        return False
+    parts = spec["of"] if isinstance(spec["of"], list) else [spec["of"]]
+    return all(_convex(part) for part in parts)
+
+
 class _TriangleProblem:
     """f restricted to triangles (T, 3, 2); start i belongs to triangle ``owner[i]``.
 
@@ -192,6 +224,7 @@ class _TriangleProblem:
 
     def __init__(self, field: Field, triangles: np.ndarray, owner: np.ndarray,
                  at_vertex: np.ndarray, n_start: int, spanning: bool):
+        self.convex = _convex(getattr(field, "spec", None))
         self.field = field
         self.triangles = triangles
         self.owner = owner
@@ -209,14 +242,15 @@ class _TriangleProblem:
 
         corner (T, 3, 3): value and gradient at each vertex, NaN where no start is
         there. shape (T, 4): with starts spanning the triangle (``spanning``),
-        whether f is a plane or a cone over it, and the cone's minimiser (see
+        whether f is a plane or a cone over it, or (for a field known convex) the
+        minimum of its cutting-plane model, and the model's minimiser (see
         ``_descent_kernels.triangle_known``). On a plane the steepest path needs no
         ladder: it runs straight to its end (the minimising vertex, or the foot on
         an edge normal to the gradient), where f is lowest. On a cone every start
         first tries the point closest to its apex.
         """
         return kernels.triangle_known(self.triangles, self.at_vertex, points, phi, grad,
-                                      self.n_start, self.spanning, _SHAPE_TOL)
+                                      self.n_start, self.spanning, self.convex, _SHAPE_TOL)
 
 
 class _Workspace:
