@@ -20,11 +20,18 @@ State of P starts, updated in place (columns named by the constants below):
   Barzilai-Borwein memory (last b, last direction), and per round the slope of
   the steepest path at s = 0 and the ladder's scale.
 - ``flags`` (P, N_FLAGS) int64: bracketed, rounds without decrease in a row,
-  rounds run, BB memory usable, and per round the number and offset of the
-  start's candidates, whether its steepest ladder ended at the path's end, and
-  whether the minimiser of its triangle's cone was tried.
+  rounds run, BB memory usable, per round the number and offset of the start's
+  candidates and whether its steepest ladder ended at the path's end, whether
+  the minimiser of its triangle's model (cone or cuts) was tried, and whether
+  its last continued line search shrank its bracket less than half.
 - ``running`` (P,) int64: the indices of the running starts (the leading R).
 - ``data`` (P, kd): the problem's data at b (TRIANGLE: the gradient).
+
+Per triangle (TRIANGLE; one dummy row for PAIR), from the starts
+(``triangle_starts``, ``triangle_known``): ``corner`` (T, 3, 3), f and its
+gradient at each vertex where a start was placed (NaN elsewhere), and ``shape``
+(T, 4), what f is over the triangle (GENERAL, PLANE with its gradient, CONE or
+CUTS with the model's minimiser and its predicted value).
 
 Candidates of a round: ``cand`` (C, 5) float64 (step s, point, dq/ds),
 ``cand_i`` (C, 2) int64 (column, source: the row of the evaluated points, or

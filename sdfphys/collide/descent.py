@@ -11,28 +11,35 @@ field's own frame; sign convention of ``sdfphys.sdf``: f < 0 inside):
   each other, found by descent on max(f_a, f_b) from starts spread over the
   overlap of their bounds.
 
-The fields are Python objects, so every descent iteration gathers the candidate
-points of ALL active starts into ONE ``field.evaluate`` call; the only Python loop
-is over iterations, and a start leaves the batch as soon as it has converged.
+The fields are Python objects, so every descent round gathers the candidate
+points of ALL running starts into ONE ``field.evaluate`` call, between two
+compiled kernels (``_descent_kernels.propose`` writes the candidates, ``accept``
+takes their values): a round costs a constant number of Python calls whatever
+the batch, and a start leaves the batch as soon as it has converged. A candidate
+whose value is already known (b itself, a triangle vertex where a start was
+placed, the same point on another rung) is not evaluated again.
 
 The descent (shared by the triangle and the field-field problems)
 -----------------------------------------------------------------
 Both minimise a piecewise smooth, 1-Lipschitz function phi: f over a triangle,
 or a balance of f_a and f_b over the plane (see ``_PairProblem``). From the
 current best point b, a *path* q(s), s >= 0, leaves b downhill. It is the
-proximal path of two linear models (``_proximal_path``): while one model is
-clearly larger, steepest descent of it; from where they balance on, along the
-line where they are equal. With the linearisation of phi at b as both models it
-is plain steepest descent. For a triangle the path is projected onto it:
-Proj_T(b + delta(s)) runs straight, slides along an edge, may stop at a vertex
-(Bertsekas' projection arc, equivalent to projected descent in barycentric
-coordinates with the Euclidean metric). Along a path phi is a 1D function whose
-slope phi'(s) = grad phi(q) . dq/ds is known at every sample, so each iteration
-evaluates, in one batch:
+proximal path of two linear models (``_descent_kernels._proximal_step``): while
+one model is clearly larger, steepest descent of it; from where they balance
+on, along the line where they are equal. With the linearisation of phi at b as
+both models it is plain steepest descent. For a triangle the path is projected
+onto it: Proj_T(b + delta(s)) runs straight, slides along an edge, may stop at a
+vertex (Bertsekas' projection arc, equivalent to projected descent in
+barycentric coordinates with the Euclidean metric). Along a path phi is a 1D
+function whose slope phi'(s) = grad phi(q) . dq/ds is known at every sample, so
+each round evaluates, in one batch:
 
-1. a geometric ladder s = scale * (1/16, 1/4, 1, 4) on the steepest path from b;
+1. a geometric ladder s = scale * (1/16, 1/4, 1, 4) on the steepest path from b,
+   on a triangle ended by the path's end when that is within 16 scales (the
+   vertex, or the point of an edge, where the projected ray stops: a slide that
+   still descends there reaches it in one round);
 2. the same ladder on the *bundle* path, whose second model is the plane of a
-   point seen nearby with a clearly different gradient (cosine < 1 - _KINK),
+   point seen nearby with a clearly different gradient (cosine < 1 - KINK),
    the most active one (smallest linearisation error at b, as in bundle
    methods). Two such planes meet along a ridge of the medial axis (or through
    the apex of a cone, the centre of a circle); the bundle path follows it where
@@ -46,29 +53,60 @@ evaluates, in one batch:
    - the crossing of the tangent lines at s_l and s_r, exact at a kink between
      two linear pieces (a polygon's medial axis, or a circle's centre along a
      ray through it: f(c + t u) = |t| - r is V-shaped);
-   both kept a fraction ``_GUARD`` of the bracket away from its ends.
+   both kept a fraction ``GUARD`` of the bracket away from its ends.
+
+On a triangle, a line search whose bracket lies on one straight piece of its
+path (a slide along an edge, a straight gradient line), with b at an end of it
+and the steepest path from b along the same line, is continued with its two
+model points only (no ladders) until a round fails to halve its bracket.
 
 On each ladder only the first valley counts (samples up to the first one where
-phi rises or its slope turns >= 0): a start finds the minimum of its own basin
-rather than jumping over a hill into a deeper one, which is what lets several
-starts report several minima. The best candidate replaces b when it lowers phi;
-the bracket is then rebuilt from the winner's ladder neighbours, or shrunk by
-the model samples. The scale is that of the accepted step (16 times larger when
-the last ladder sample still descends); for the field pair it is the
-Barzilai-Borwein step s.s / s.y of the last two iterations, which makes the
-slide along a contact's tangent converge superlinearly. A round without
-decrease divides the scale by 64 and brackets the first ladder step, so the
-next round searches finely around b; a second such round ends the descent, as
-does a zero projected gradient (b is a vertex whose normal cone contains
--grad f, or the two fields' gradients are antiparallel and balanced) or an
-accepted step shorter than ``tol``. phi never increases: whatever the budget,
-the returned point is the best one seen.
+phi rises or its slope turns >= 0; the path's end only if phi still falls into
+it): a start finds the minimum of its own basin rather than jumping over a hill
+into a deeper one, which is what lets several starts report several minima. The
+best candidate replaces b when it lowers phi; the bracket is then rebuilt from
+the winner's ladder neighbours, or shrunk by the model samples. The scale is
+that of the accepted step (16 times larger when the last ladder sample still
+descends); for the field pair it is the Barzilai-Borwein step s.s / s.y of the
+last two iterations, which makes the slide along a contact's tangent converge
+superlinearly. A round without decrease divides the scale by 64 and brackets
+the first ladder step, so the next round searches finely around b; a second
+such round ends the descent, as does a zero projected gradient (b is a vertex
+whose normal cone contains -grad f, or the two fields' gradients are
+antiparallel and balanced) or an accepted step shorter than ``tol``. phi never
+increases: whatever the budget, the returned point is the best one seen.
+
+What the starts of a triangle tell
+----------------------------------
+All starts of a triangle are evaluated before the first round; when they span
+it (``_descent_kernels.triangle_known``):
+
+- all on one plane (same gradient, values on it): f is taken as linear over the
+  triangle, and each start's first rounds evaluate only the end of its steepest
+  path (the lowest vertex, or its foot on an edge normal to the gradient);
+- all on one cone (gradient lines through one point c, f = |x - c| + const: a
+  circle, a polygon's corner seen from outside): every start first tries the
+  point of the triangle closest to c, and stops there if f has the value the
+  cone predicts;
+- for a field convex by construction (its spec: a convex primitive, placed,
+  rounded, scaled or intersected; see ``_convex``): the maximum of the starts'
+  tangent planes is a lower bound of f (Kelley's cutting-plane model); every
+  start first tries the model's minimiser p* over the triangle, and stops there
+  if f(p*) equals the bound, which proves p* the minimum over the triangle
+  (exact where f is the max of planes: a convex polygon's interior near its
+  medial axis, where descent would follow ridges for dozens of rounds).
+
+The plane and cone readings rest on the starts alone: a feature of f between
+them that none of them sees is missed (as it can be by the descent). On them all
+starts of a triangle report the same, single minimum.
 
 Limits: a start that reaches an interior vertex of a polygon's medial axis
 where three faces are equally near, but which is not a minimum, can stop there
 (a bundle of two planes cannot describe three; about 1 start in 1000 on random
 triangles deep inside a pentagon); the other starts of the triangle usually
-reach the deeper point.
+reach the deeper point. In non-convex fields whose medial axis winds (a
+difference of shapes, an L-shaped polygon's inside), some 1% of starts on
+random triangles do not converge within 16 rounds; 32 suffice.
 
 References: M. Macklin et al., "Local Optimization for Robust Signed Distance
 Field Collision", Proc. ACM Comput. Graph. Interact. Tech. 3(1), 2020 (projected
@@ -81,6 +119,7 @@ intersection of the bounding boxes, normal from grad f_a - grad f_b).
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Sequence
 
 import numpy as np
@@ -173,8 +212,6 @@ def triangle_cull(field: Field, triangles: np.ndarray, margin: float = 0.0) -> n
     return field.distance(centre) < radius + margin
 
 
-
-
 # --------------------------------------------------------------------------------------
 # The line-search descent engine
 # --------------------------------------------------------------------------------------
@@ -193,8 +230,9 @@ _CONVEX_OPERATORS = frozenset({"rotate", "round", "scale", "transform", "transla
 def _convex(spec: dict | None) -> bool:
     """True when a field spec (``Field.spec``) describes a convex function of the point.
 
-    Conservative: unknown fields (no spec), bounds (``exact = False`` primitives
-    are left out by name) and any operator not in ``_CONVEX_OPERATORS`` give False.
+    Conservative: unknown fields (no spec), primitives not in
+    ``_CONVEX_PRIMITIVES`` (bounds, non-convex shapes) and operators not in
+    ``_CONVEX_OPERATORS`` (union, difference, smooth blends, onion) give False.
     """
     if not isinstance(spec, dict):
         return False
@@ -216,7 +254,9 @@ class _TriangleProblem:
 
     Point data: the gradient of f. The paths are projected onto the start's
     triangle. ``at_vertex`` (T, 3): the start placed at each vertex, -1 if none
-    (its value is reused wherever a path reaches that vertex).
+    (its value is reused wherever a path reaches that vertex). ``spanning``: the
+    starts' weights have rank 3 (they can show f to be a plane or a cone).
+    ``convex``: f is convex by construction (``_convex`` of its spec).
     """
 
     kind = kernels.TRIANGLE
@@ -224,8 +264,8 @@ class _TriangleProblem:
 
     def __init__(self, field: Field, triangles: np.ndarray, owner: np.ndarray,
                  at_vertex: np.ndarray, n_start: int, spanning: bool):
-        self.convex = _convex(getattr(field, "spec", None))
         self.field = field
+        self.convex = _convex(getattr(field, "spec", None))
         self.triangles = triangles
         self.owner = owner
         self.at_vertex = at_vertex
@@ -253,12 +293,13 @@ class _TriangleProblem:
                                       self.n_start, self.spanning, self.convex, _SHAPE_TOL)
 
 
-class _Workspace:
+class _Workspace(threading.local):
     """Work arrays kept between calls, grown geometrically; a call uses leading rows.
 
     Fresh arrays of tens of megabytes (10^4 triangles) cost their page faults on
     every call, as much time as the descent itself; the physics step and the
-    benchmarks query again and again.
+    benchmarks query again and again. One set per thread (a descent fills them
+    from start to end of a call; nothing is read that the call did not write).
     """
 
     def __init__(self) -> None:
@@ -289,8 +330,9 @@ def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, itera
     rounds each start ran (P,).
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
-    phi, grad, data = (np.array(a, dtype=np.float64, order="C")
-                       for a in problem.evaluate(points))
+    phi, grad, data = problem.evaluate(points)
+    phi, grad = np.ascontiguousarray(phi, np.float64), np.ascontiguousarray(grad, np.float64)
+    data = np.array(data, dtype=np.float64, order="C")              # updated in place
     n_points = len(points)
     state = _WORK.rows("state", n_points, kernels.N_STATE)
     flags = _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64)
@@ -362,7 +404,9 @@ def triangle_deepest(field: Field, triangles: np.ndarray, iterations: int = 16,
     reached: a local minimum of f over the triangle for analytic fields (to 1e-9 m
     typically, see the module docstring), never worse than the start itself.
     value[t, k] = f(point[t, k]) (m; < 0 inside the field's shape). Several starts
-    may reach the same minimum: ``merge_minima`` keeps one.
+    may reach the same minimum: ``merge_minima`` keeps one. Where the starts show f
+    to be a plane, a cone or (for a field convex by construction) a max of planes
+    over the triangle, every start reports the triangle's one minimum.
     """
     point, value, _ = _triangle_minima(field, triangles, iterations, starts, tol)
     return point, value
@@ -396,7 +440,7 @@ class _PairProblem:
 
     Point data: f_a, f_b, grad f_a, grad f_b (6 columns, a's frame). Path
     parameters: origin and its data; the path is the proximal min-max path of
-    the two fields' linearisations (``_proximal_path``): steepest descent of the
+    the two fields' linearisations (``_descent_kernels._proximal_step``): steepest descent of the
     larger field until the linear models balance, then along the line where they
     are equal, down the min-norm element of {grad f_a, grad f_b} - the contact's
     tangent, where the sum f_a + f_b (minus the depth) decreases.

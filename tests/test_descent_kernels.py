@@ -1,0 +1,158 @@
+"""Tests of sdfphys.collide._descent_kernels: the geometry the descent builds on, what
+the starts of a triangle are read to show, and the batch independence of results.
+
+The descent's answers themselves are tested against exact answers and a brute
+force in tests/test_descent.py.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_descent import brute_minimum, closest_on_triangle
+
+from sdfphys.collide import _descent_kernels as kernels
+from sdfphys.collide import descent
+from sdfphys.sdf import field
+
+
+def random_triangles(count: int, rng: np.random.Generator) -> np.ndarray:
+    return rng.uniform(-1.0, 1.0, (count, 1, 2)) + rng.uniform(-0.5, 0.5, (count, 3, 2))
+
+
+def closest_point(tri: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Closest point of triangle tri (3, 2) to x (2,); degenerate triangles allowed."""
+    (ux, uy), (vx, vy) = tri[1] - tri[0], tri[2] - tri[0]
+    area = ux * vy - uy * vx
+    if area != 0.0:
+        return closest_on_triangle(tri, x[None])[0]
+    feet = []
+    for a, b in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
+        e = b - a
+        t = np.clip((x - a) @ e / (e @ e), 0.0, 1.0) if e @ e > 0.0 else 0.0
+        feet.append(a + t * e)
+    return min(feet, key=lambda q: np.sum((x - q) ** 2))
+
+
+def test_projection_is_the_closest_point_with_its_derivative():
+    rng = np.random.default_rng(1)
+    tri = random_triangles(200, rng)
+    tri[:10, 2] = 0.5 * (tri[:10, 0] + tri[:10, 1])                # collinear
+    tri[10:15] = tri[10:15, :1]                                     # points
+    h = 1e-7
+    for t in range(len(tri)):
+        for x in rng.uniform(-2.0, 2.0, (10, 2)):
+            u = rng.normal(size=2)
+            q = np.array(kernels.project(tri, t, x[0], x[1], u[0], u[1]))
+            expected = closest_point(tri[t], x)
+            np.testing.assert_allclose(q[:2], expected, atol=1e-12)
+            ahead = closest_point(tri[t], x + h * u)
+            behind = closest_point(tri[t], x - h * u)
+            one_sided = [(ahead - expected) / h, (expected - behind) / h]
+            # dq is the derivative along u (one-sided where x sits on a region border).
+            assert min(np.abs(q[2:] - d).max() for d in one_sided) < 1e-5, (t, x, u)
+
+
+def test_projection_returns_vertices_exactly():
+    tri = np.array([[[0.1, 0.2], [1.3, -0.4], [0.7, 0.9]]])
+    for v in range(3):
+        outward = tri[0, v] - tri[0].mean(axis=0)
+        x = tri[0, v] + 3.0 * outward
+        q = kernels.project(tri, 0, x[0], x[1], 1.0, 0.0)
+        assert (q[0], q[1]) == (tri[0, v, 0], tri[0, v, 1])
+        assert (q[2], q[3]) == (0.0, 0.0)
+
+
+def test_the_projected_ray_stops_at_its_computed_end():
+    """Checked against ``project`` (itself checked above against a brute force, whose
+    rounding far from the triangle would blur the last 1e-7 m of a grazing slide)."""
+    rng = np.random.default_rng(2)
+    tri = random_triangles(300, rng)
+    for t in range(len(tri)):
+        w = rng.dirichlet(np.ones(3))
+        b = w @ tri[t]
+        u = rng.normal(size=2)
+        end, dx, dy = kernels._ray_end(tri, t, b[0], b[1], u[0], u[1])
+        at_end = np.array(kernels.project(tri, t, *(b + end * u), *u))
+        np.testing.assert_allclose(at_end[:2], closest_point(tri[t], b + end * u), atol=1e-12)
+        for later in (1.5, 4.0, 100.0):
+            after = kernels.project(tri, t, *(b + later * end * u), *u)
+            np.testing.assert_allclose(after[:2], at_end[:2], atol=1e-12)
+        if end > 1e-6:
+            # Just before the end the path still moves, with dq/ds as returned.
+            s = end * (1.0 - 1e-6)
+            before = np.array(kernels.project(tri, t, *(b + s * u), *u))
+            np.testing.assert_allclose((at_end[:2] - before[:2]) / (end - s), [dx, dy],
+                                       atol=1e-6)
+            np.testing.assert_allclose(before[2:], [dx, dy], atol=1e-12)
+
+
+def known(spec: dict, tri: np.ndarray) -> np.ndarray:
+    f = field(spec)
+    weights = descent.START_BARYCENTRIC
+    points, _, _, at_vertex = kernels.triangle_starts(tri, weights)
+    d, g = f.evaluate(points)
+    _, shape = kernels.triangle_known(tri, at_vertex, points, d, np.ascontiguousarray(g),
+                                      len(weights), True, descent._convex(f.spec), 1e-12)
+    return shape
+
+
+BOX = {"type": "box", "size": [2.0, 1.0], "angle": 0.3}
+
+
+def test_what_the_starts_show():
+    # Above the long face of the box: one plane. Beyond a corner: a cone.
+    face = np.array([[[-0.2, 0.8], [0.3, 0.8], [0.0, 1.1]]])
+    face = face @ np.array([[np.cos(0.3), np.sin(0.3)], [-np.sin(0.3), np.cos(0.3)]])
+    assert known(BOX, face)[0, 0] == kernels.PLANE
+    corner = np.array([[[1.3, 0.7], [1.6, 0.9], [1.4, 1.2]]])
+    shape = known({"type": "box", "size": [2.0, 1.0]}, corner)
+    assert shape[0, 0] == kernels.CONE
+    np.testing.assert_allclose(shape[0, 1:3], [1.3, 0.7], atol=1e-12)   # nearest the corner
+    circle = np.array([[[1.0, 0.2], [1.6, -0.3], [1.4, 0.6]]])
+    shape = known({"type": "circle", "radius": 0.8}, circle)
+    assert shape[0, 0] == kernels.CONE
+    np.testing.assert_allclose(shape[0, 3], field({"type": "circle", "radius": 0.8}).distance(
+        shape[0, 1:3][None])[0], atol=1e-12)
+    # Inside the box across its medial axis: cuts, whose minimum is exact.
+    inside = np.array([[[0.3, -0.3], [0.9, 0.1], [0.6, 0.35]]])
+    shape = known({"type": "box", "size": [2.0, 1.0]}, inside)
+    assert shape[0, 0] == kernels.CUTS
+    f = field({"type": "box", "size": [2.0, 1.0]})
+    assert f.distance(shape[0, 1:3][None])[0] == pytest.approx(shape[0, 3], abs=1e-12)
+    assert shape[0, 3] == pytest.approx(brute_minimum(f, inside[0]), abs=1e-9)
+
+
+def test_no_cutting_planes_for_fields_not_known_convex():
+    inside = np.array([[[0.3, -0.3], [0.9, 0.1], [0.6, 0.35]]])
+    union = {"op": "union", "of": [{"type": "box", "size": [2.0, 1.0]},
+                                   {"type": "circle", "radius": 0.1, "offset": [5.0, 5.0]}]}
+    assert known(union, inside)[0, 0] == kernels.GENERAL
+    assert descent._convex(field(BOX).spec)
+    assert descent._convex(field({"op": "round", "r": 0.1, "of": BOX}).spec)
+    assert descent._convex(field({"type": "polygon",
+                                  "points": [[0, 0], [1, 0], [1, 1], [0, 1]]}).spec)
+    assert not descent._convex(field({"type": "polygon",
+                                      "points": [[0, 0], [2, 0], [2, 1], [1, 0.3], [0, 1]]}).spec)
+    assert not descent._convex(field(union).spec)
+    assert not descent._convex(None)
+
+
+@pytest.mark.parametrize("spec", [BOX, {"type": "circle", "radius": 0.8}, {
+    "op": "smooth_union", "k": 0.3, "of": [
+        {"type": "circle", "radius": 0.6, "offset": [-0.5, 0.0]},
+        {"type": "box", "size": [1.0, 0.6], "offset": [0.5, 0.1], "angle": 0.5}]}])
+def test_a_triangles_answer_does_not_depend_on_its_batch(spec):
+    """Bit for bit: alone, at another place of another batch, or after a larger call
+    (the work arrays are reused between calls)."""
+    f = field(spec)
+    tri = random_triangles(300, np.random.default_rng(4))
+    point, value = descent.triangle_deepest(f, tri)
+    for t in (0, 17, 299):
+        alone_point, alone_value = descent.triangle_deepest(f, tri[t:t + 1])
+        np.testing.assert_array_equal(alone_point[0], point[t])
+        np.testing.assert_array_equal(alone_value[0], value[t])
+    shuffled = np.random.default_rng(5).permutation(len(tri))
+    point2, value2 = descent.triangle_deepest(f, tri[shuffled])
+    np.testing.assert_array_equal(point2, point[shuffled])
+    np.testing.assert_array_equal(value2, value[shuffled])
