@@ -506,6 +506,9 @@ def polygon_bounds(points: Any) -> np.ndarray:
 # --------------------------------------------------------------------------------------
 
 _CHUNK_POINTS = 1 << 17
+#: Most grid cells field_mass_properties integrates (about a minute of work): beyond,
+#: the field is too large or too elongated for its cell, and the caller is told so.
+_MAX_CELLS = 1 << 26
 _TINY_GRADIENT = 1e-12
 
 
@@ -561,6 +564,10 @@ def field_mass_properties(field: Field, cell: float, path: str = "field"
     x_min, y_min, x_max, y_max = bounds - np.array([h, h, -h, -h])
     nx = math.ceil((x_max - x_min) / h)
     ny = math.ceil((y_max - y_min) / h)
+    if nx * ny > _MAX_CELLS:
+        raise SpecError(path, f"spans {x_max - x_min:g} x {y_max - y_min:g} m: too large to "
+                        f"integrate its mass on cells of {h:g} m ({nx * ny:.3g} cells, at "
+                        f"most {_MAX_CELLS}); give the shape a coarser cell or split it into bodies")
     origin = 0.5 * (bounds[:2] + bounds[2:])
     xs = x_min + (np.arange(nx) + 0.5) * h - origin[0]
     ys = y_min + (np.arange(ny) + 0.5) * h - origin[1]

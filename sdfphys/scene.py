@@ -87,10 +87,13 @@ class Scene:
 
         world = World(gravity=self.gravity, settings=self.settings)
         for b in self.bodies:
-            world.add_body(b.shape, position=b.position, angle=b.angle, velocity=b.velocity,
-                           angular_velocity=b.angular_velocity, density=b.density,
-                           mass=b.mass, friction=b.friction, restitution=b.restitution,
-                           kind=b.kind, name=b.name)
+            try:     # an SDF shape integrates its mass properties on first use, here
+                world.add_body(b.shape, position=b.position, angle=b.angle,
+                               velocity=b.velocity, angular_velocity=b.angular_velocity,
+                               density=b.density, mass=b.mass, friction=b.friction,
+                               restitution=b.restitution, kind=b.kind, name=b.name)
+            except SpecError as err:
+                raise err.in_file(self.source) from None
         world.scene = self
         return world
 

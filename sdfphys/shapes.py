@@ -360,6 +360,13 @@ def collision_shape(shape: Shape, gradient: str = "analytic",
 _CACHE: dict[str, Shape] = {}
 
 
+#: Smallest circle radius or box side, m. The solver's length scales are the 5 mm
+#: contact slop and the soft contact's resting sag g / (2 pi 60 Hz)^2 = 69 um: a body of
+#: 1e-9 m rests tens of thousands of its own radii deep and is thrown out of contact.
+#: A millimetre is still 14 sags.
+MIN_SIZE = 1e-3
+
+
 def shape_from_spec(spec: Any, path: str = "shape") -> Shape:
     """The Shape for a scene shape dict (the same object for equal canonical specs).
 
@@ -391,11 +398,12 @@ def shape_from_spec(spec: Any, path: str = "shape") -> Shape:
 
     if kind == "circle":
         canonical = {"type": "circle",
-                     "radius": check_number(spec["radius"], f"{path}.radius", low=0.0,
-                                            low_open=True)}
+                     "radius": check_number(spec["radius"], f"{path}.radius", low=MIN_SIZE)}
     elif kind == "box":
-        canonical = {"type": "box",
-                     "size": list(check_vec2(spec["size"], f"{path}.size", positive=True))}
+        size = check_vec2(spec["size"], f"{path}.size", positive=True)
+        for i, side in enumerate(size):
+            check_number(side, f"{path}.size[{i}]", low=MIN_SIZE)
+        canonical = {"type": "box", "size": list(size)}
     elif kind == "polygon":
         canonical = {"type": "polygon", "points": [
             list(p) for p in check_points(spec["points"], f"{path}.points", minimum=3)]}

@@ -62,7 +62,7 @@ BAD = [
     (mutated("render.fps", 0), "render.fps: must be >= 1"),
     (mutated("render.scale", float("inf")), "render.scale: must be finite"),
     (mutated("body", []), "body: a scene needs at least one [[body]]"),
-    (mutated("body.1.shape.radius", -1.0), "body[1].shape.radius: must be > 0, got -1"),
+    (mutated("body.1.shape.radius", -1.0), "body[1].shape.radius: must be >= 0.001, got -1"),
     (mutated("body.1.shape.type", "circel"), "body[1].shape.type: unknown"),
     (mutated("body.1.shape", None, delete=True), "body[1].shape: is required"),
     (mutated("body.1.positon", [0, 0]), "body[1].positon: unknown key (did you mean 'position'?)"),
@@ -122,7 +122,7 @@ def test_scene_file_errors_name_the_file(tmp_path):
     path.write_text("version = 1\n[[body]]\nshape = { type = 'circle', radius = 0 }\n")
     with pytest.raises(SpecError) as err:
         read_scene(path)
-    assert str(err.value) == f"{path}: body[0].shape.radius: must be > 0, got 0"
+    assert str(err.value) == f"{path}: body[0].shape.radius: must be >= 0.001, got 0"
     path.write_text("version = = 1")
     with pytest.raises(SpecError, match="not valid TOML"):
         read_scene(path)
@@ -138,7 +138,7 @@ def test_cli_bad_scene_exit_2_one_line_no_output(tmp_path):
                             capture_output=True, text=True, check=False)
     assert result.returncode == 2
     assert result.stderr.strip().splitlines() == [
-        f"sdfphys: error: {path}: body[0].shape.radius: must be > 0, got -1"]
+        f"sdfphys: error: {path}: body[0].shape.radius: must be >= 0.001, got -1"]
     assert "Traceback" not in result.stderr
     assert not out.exists()
 
@@ -182,3 +182,12 @@ def test_mutated_scenes_never_raise_anything_but_spec_error(mutations):
 def test_load_scene_is_the_public_entry_point():
     world = sdfphys.load_scene(GOOD)
     assert world.position.shape == (3, 2)
+
+
+def test_a_field_too_large_to_integrate_is_one_line_naming_the_body():
+    """Found by the mutation test: a 1.6e10 m box inside a smooth union asked for
+    trillions of quadrature cells (a 2 TiB allocation)."""
+    scene = mutated("body.2.shape.field.of.1.size", [1.6e10, 0.4])
+    with pytest.raises(SpecError) as err:
+        read_scene(scene).build()
+    assert str(err.value).startswith("<scene>: body[2].shape.field: spans 1.6e+10")

@@ -119,7 +119,7 @@ def test_equal_specs_share_one_shape():
 
 @pytest.mark.parametrize("spec, path, message", [
     ({"type": "cirlce", "radius": 1}, "body[2].shape.type", "did you mean 'circle'"),
-    ({"type": "circle", "radius": -1.0}, "body[2].shape.radius", "must be > 0"),
+    ({"type": "circle", "radius": -1.0}, "body[2].shape.radius", "must be >= 0.001"),
     ({"type": "circle", "radius": 1, "size": 2}, "body[2].shape.size", "unknown key"),
     ({"type": "box", "sise": [1, 1]}, "body[2].shape.sise", "did you mean 'size'"),
     ({"type": "box"}, "body[2].shape.size", "required"),

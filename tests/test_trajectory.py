@@ -74,8 +74,8 @@ def test_record_meta_names_the_scene_settings_and_versions(drop):
 
 
 def test_record_seconds_and_overrides():
-    short = record(DROP, seconds=0.05, overrides=["sim.substeps=8"], quality="fast")
-    assert short.frames == 4
+    short = record(DROP, seconds=0.1, overrides=["sim.substeps=8"], quality="fast")
+    assert short.frames == 4                                    # 3 steps of the fast 1/30 s
     assert short.meta["settings"]["substeps"] == 8
     assert short.meta["settings"]["descent_starts"] == 4       # from the fast preset
     assert short.meta["overrides"] == ["sim.substeps=8"] and short.meta["quality"] == "fast"

@@ -19,14 +19,7 @@ pytestmark = pytest.mark.slow
 SCENES = sorted((Path(__file__).resolve().parents[2] / "scenes").glob("*.toml"))
 
 
-@pytest.mark.parametrize("name", [
-    pytest.param(name, marks=pytest.mark.xfail(strict=True, reason=(
-        "shapes.shape_from_spec checks a radius only for > 0 (errors.check_number); nothing "
-        "compares a size with the solver's length scales: a 1e-9 m circle rests 69 um "
-        "(g / (2 pi 60 Hz)^2, the soft contact's sag) inside the ground, 69,000 radii "
-        "deep, and two such circles touching were thrown out at the 400 m/s speed clamp "
-        "within 5 s"))) if name == "radius 1e-9" else name
-    for name in cases.DEGENERATE])
+@pytest.mark.parametrize("name", cases.DEGENERATE)
 def test_degenerate_input_is_a_spec_error_naming_its_key(name):
     """load_scene rejects the bad value with a SpecError whose key path is the value's."""
     assert cases.rejected_naming_key(name), cases.load_outcome(name)
