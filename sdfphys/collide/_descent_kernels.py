@@ -462,20 +462,36 @@ def _code(kind: int, shape: np.ndarray, t: int, state: np.ndarray, i: int) -> in
     return code
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _moving(kind: int, tri: np.ndarray, t: int, steep: np.ndarray, sigma: float
+            ) -> tuple[bool, float, float]:
+    """Whether the steepest path ``steep`` leaves b (a projected gradient that does
+    not vanish), and its dq/ds there (read at s = PROBE sigma, past any corner)."""
+    _, _, dqx, dqy = _path(kind, tri, t, steep, PROBE * sigma)
+    return _norm(dqx, dqy) > STATIONARY, dqx, dqy
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _most_candidates(kind: int, owner: np.ndarray, shape: np.ndarray, state: np.ndarray,
+                     flags: np.ndarray, i: int) -> int:
+    """Most candidates ``propose`` can write for start i next round."""
+    code = _code(kind, shape, owner[i] if kind == TRIANGLE else 0, state, i)
+    flat = code == PLANE or (code >= CONE and flags[i, MODEL] == 0)
+    total = 1 if flat else N_RUNGS
+    if not flat and (state[i, ALT] != state[i, BEST] or state[i, ALT + 1] != state[i, BEST + 1]):
+        total += N_RUNGS - 1
+    if flags[i, BRACKETED]:
+        total += 2
+    return total
+
+
 @njit(cache=True, error_model="numpy")
 def bound(kind: int, owner: np.ndarray, shape: np.ndarray, state: np.ndarray,
           flags: np.ndarray, running: np.ndarray) -> int:
     """Most candidates ``propose`` can write this round (the buffers' size)."""
     total = 0
     for i in running:
-        code = _code(kind, shape, owner[i] if kind == TRIANGLE else 0, state, i)
-        flat = code == PLANE or (code >= CONE and flags[i, MODEL] == 0)
-        total += 1 if flat else N_RUNGS
-        if not flat and (state[i, ALT] != state[i, BEST]
-                         or state[i, ALT + 1] != state[i, BEST + 1]):
-            total += N_RUNGS - 1
-        if flags[i, BRACKETED]:
-            total += 2
+        total += _most_candidates(kind, owner, shape, state, flags, i)
     return total
 
 
@@ -507,8 +523,8 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
         # The steepest path from b and its slope at the start; a zero projected
         # gradient is a stationary point (the start stops).
         _steep_path(kind, state, data, i, steep)
-        _, _, dqx, dqy = _path(kind, tri, t, steep, PROBE * sigma)
-        if _norm(dqx, dqy) <= STATIONARY:
+        moving, dqx, dqy = _moving(kind, tri, t, steep, sigma)
+        if not moving:
             continue
         running[kept] = i
         kept += 1
@@ -528,10 +544,12 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             n += 1
             continue
         state[i, D0] = state[i, GRAD] * dqx + state[i, GRAD + 1] * dqy
-        _bundle_path(state, i, bundle)
-        has_alt = state[i, ALT] != state[i, BEST] or state[i, ALT + 1] != state[i, BEST + 1]
-        if has_alt and kind == TRIANGLE:
-            has_alt = _bundle_free(tri, t, bundle, PROBE * sigma)
+        has_alt = code != PLANE and (state[i, ALT] != state[i, BEST]
+                                     or state[i, ALT + 1] != state[i, BEST + 1])
+        if has_alt:
+            _bundle_path(state, i, bundle)
+            if kind == TRIANGLE:
+                has_alt = _bundle_free(tri, t, bundle, PROBE * sigma)
 
         # The ladder's scale: sigma, or the Barzilai-Borwein step s.s / s.y from the
         # last accepted step s = b - b_prev and the change y of the path's direction
@@ -553,11 +571,14 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             state[i, PREVIOUS + 2], state[i, PREVIOUS + 3] = vx, vy
         state[i, SCALE] = scale
 
-        # A line search on one straight piece of its path (the same dq/ds at both ends
-        # of its bracket: a slide along an edge, or a straight gradient line), with b at an end of its bracket and the
-        # steepest path from b along the same line, needs no new ladder: the bracket
-        # still holds the first valley ahead, the model points find it.
-        line[:] = state[i, PATH:PATH + 8]
+        # A line search on one straight piece of its path (the same dq/ds at both
+        # ends of its bracket: a slide along an edge, or a straight gradient line),
+        # with b at an end of its bracket and the steepest path from b along the
+        # same line, needs no new ladder: the bracket still holds the first valley
+        # ahead, the model points find it.
+        if flags[i, BRACKETED]:
+            for c in range(8):
+                line[c] = state[i, PATH + c]
         ladders = True
         if kind == TRIANGLE and flags[i, BRACKETED] and not flags[i, FAILS] \
                 and not flags[i, SLOW]:
@@ -597,7 +618,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 break
         steep_rungs = n - start
         flags[i, ENDED] = steep_rungs > 0 and cand[n - 1, 0] == end
-        if has_alt and ladders and code != PLANE:
+        if has_alt and ladders:
             for k in range(N_RUNGS - 1):
                 s = scale * LADDER[k]
                 x, y, dx, dy = _path(kind, tri, t, bundle, s)
@@ -619,22 +640,26 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
 
 
 @njit(cache=True, error_model="numpy")
-def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
+def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
+           state: np.ndarray,
            flags: np.ndarray, data: np.ndarray, cand: np.ndarray, cand_i: np.ndarray,
            value: np.ndarray, gradient: np.ndarray, cand_data: np.ndarray, tol: float,
-           running: np.ndarray, shape: np.ndarray, shape_tol: float) -> int:
+           running: np.ndarray, shape: np.ndarray, shape_tol: float) -> tuple[int, int]:
     """Update the starts that proposed candidates (``running``) from the values (U,),
     gradients (U, 2) and data (U, kd) at the evaluated points (see ``descent``'s
     module docstring for the rules). Returns R, the number of starts still running
-    (``running[:R]`` on return). A start that tried its cone's minimiser stops
-    there when f has the value the cone predicts (to ``shape_tol``)."""
+    (``running[:R]`` on return), and ``bound`` of them for the next round. A start
+    that stops at a stationary point is dropped here rather than next round; one
+    that tried its triangle model's minimiser stops there when f has the value the
+    model predicts (to ``shape_tol``)."""
     table = np.empty(N_COLUMNS)                         # value per column (inf: none)
     slope = np.empty(N_COLUMNS)
     where = np.empty(N_COLUMNS, dtype=np.int64)         # column -> candidate row
     seen = np.empty((N_COLUMNS + 2, 5))                 # planes: point, value, gradient
     samples = np.empty((2, N_RUNGS + 1, 3))             # per ladder: s, value, slope
     rungs = np.empty(2, dtype=np.int64)
-    kept = 0
+    steep = np.empty(8)
+    kept = total = 0
     for i in running:
         count, offset = flags[i, COUNT], flags[i, OFFSET]
         t = owner[i] if kind == TRIANGLE else 0
@@ -659,8 +684,11 @@ def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
                 size = 1.0 + abs(cand[offset, 1]) + abs(cand[offset, 2]) + abs(value_m)
                 if abs(value_m - shape[t, 3]) <= shape_tol * size:
                     continue                                 # the cone's minimum: done
-            running[kept] = i
-            kept += 1
+            _steep_path(kind, state, data, i, steep)
+            if _moving(kind, tri, t, steep, state[i, SIGMA])[0]:
+                running[kept] = i
+                kept += 1
+                total += _most_candidates(kind, owner, shape, state, flags, i)
             continue
         table[:] = np.inf
         slope[:] = 0.0
@@ -818,9 +846,12 @@ def accept(kind: int, owner: np.ndarray, corner: np.ndarray, state: np.ndarray,
         flags[i, FAILS] = 0 if improved else flags[i, FAILS] + 1
         flags[i, HAS_PREVIOUS] = improved
         if flags[i, FAILS] < 2 and not (improved and moved < tol):
-            running[kept] = i
-            kept += 1
-    return kept
+            _steep_path(kind, state, data, i, steep)
+            if _moving(kind, tri, t, steep, state[i, SIGMA])[0]:
+                running[kept] = i
+                kept += 1
+                total += _most_candidates(kind, owner, shape, state, flags, i)
+    return kept, total
 
 
 # --------------------------------------------------------------------------------------
@@ -1031,13 +1062,26 @@ def triangle_known(tri: np.ndarray, at_vertex: np.ndarray, points: np.ndarray,
 def initialize(points: np.ndarray, phi: np.ndarray, grad: np.ndarray, sigma: np.ndarray,
                state: np.ndarray, flags: np.ndarray) -> None:
     """Fill ``state`` and ``flags`` (all rows) for starts at points (P, 2) with
-    values (P,), gradients (P, 2) and initial step scales (P,): running, no second
-    plane (b's own), no line search."""
+    values (P,), gradients (P, 2) and initial step scales (P,): no second plane
+    (b's own), no line search. Columns left unset (the line search's path and
+    bracket, the per-round ones) are written before they are read."""
     for i in range(len(state)):
-        state[i, :] = 0.0
-        flags[i, :] = 0
+        for c in range(N_FLAGS):
+            flags[i, c] = 0
         state[i, BEST], state[i, BEST + 1], state[i, PHI] = points[i, 0], points[i, 1], phi[i]
         state[i, GRAD], state[i, GRAD + 1] = grad[i, 0], grad[i, 1]
         state[i, ALT:ALT + 5] = state[i, BEST:BEST + 5]
         state[i, SIGMA] = sigma[i]
         state[i, PREVIOUS], state[i, PREVIOUS + 1] = points[i, 0], points[i, 1]
+        state[i, PREVIOUS + 2] = state[i, PREVIOUS + 3] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def results(state: np.ndarray, flags: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Best points (P, 2), their objective (P,) and the rounds run (P,), as new arrays."""
+    n = len(state)
+    best, phi, rounds = np.empty((n, 2)), np.empty(n), np.empty(n, dtype=np.int64)
+    for i in range(n):
+        best[i, 0], best[i, 1], phi[i] = state[i, BEST], state[i, BEST + 1], state[i, PHI]
+        rounds[i] = flags[i, ROUNDS]
+    return best, phi, rounds

@@ -342,9 +342,8 @@ def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, itera
     running = _WORK.rows("running", n_points, 1, np.int64)[:, 0]
     running[:] = np.arange(n_points)
     n_running = n_points
+    size = kernels.bound(problem.kind, problem.owner, shape, state, flags, running)
     for _ in range(iterations):
-        size = kernels.bound(problem.kind, problem.owner, shape, state, flags,
-                             running[:n_running])
         if size == 0:
             break
         cand = _WORK.rows("cand", size, 5)
@@ -357,11 +356,11 @@ def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, itera
             break
         value, gradient, cand_data = (np.ascontiguousarray(a, dtype=np.float64)
                                       for a in problem.evaluate(candidates[:n_eval]))
-        n_running = kernels.accept(problem.kind, problem.owner, corner, state, flags, data, cand,
-                                   cand_i, value, gradient, cand_data, tol, running[:n_running],
-                                   shape, _SHAPE_TOL)
-    return (state[:, kernels.BEST:kernels.BEST + 2].copy(), state[:, kernels.PHI].copy(), data,
-            flags[:, kernels.ROUNDS].copy())
+        n_running, size = kernels.accept(problem.kind, problem.triangles, problem.owner, corner,
+                                         state, flags, data, cand, cand_i, value, gradient,
+                                         cand_data, tol, running[:n_running], shape, _SHAPE_TOL)
+    best, phi, rounds = kernels.results(state, flags)
+    return best, phi, data, rounds
 
 
 # --------------------------------------------------------------------------------------
