@@ -65,6 +65,9 @@ def _parser() -> argparse.ArgumentParser:
                        "(default: " + ", ".join(f"{k} {v:g}" for k, v in TOLERANCES.items())
                        + ")")
 
+    sub.add_parser("bench", help="the speed/accuracy study: CSV, markdown table and plot "
+                   "(options: -o DIR, --quick)", add_help=False)
+
     compare = sub.add_parser("compare", help="the same scene in pymunk: contact and "
                              "trajectory differences (exit 2 if pymunk cannot model it)")
     compare.add_argument("scene")
@@ -86,6 +89,11 @@ def _scene_options(parser: argparse.ArgumentParser, seconds: bool = True) -> Non
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["bench"]:
+        from .bench import bench_main
+
+        return bench_main(argv[1:])
     args = _parser().parse_args(argv)
     try:
         commands = {"run": _run, "play": _play, "record": _record, "check": _check,

@@ -22,7 +22,7 @@ import json
 import math
 import tomllib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -215,32 +215,10 @@ def _parse_sim(sim: dict) -> tuple[str, Settings, float]:
         base = preset(quality)
     except KeyError as err:
         raise SpecError("sim.quality", str(err.args[0])) from None
-    values = {}
-    types = {f.name: f.type for f in fields(Settings)}
-    for key, value in sim.items():
-        if key in SIM_EXTRA_KEYS:
-            continue
-        values[key] = _check_knob(key, types[key], value, f"sim.{key}")
+    values = {key: Settings.check(key, value, f"sim.{key}")
+              for key, value in sim.items() if key not in SIM_EXTRA_KEYS}
     duration = check_number(sim.get("duration", 5.0), "sim.duration", low=0.0, low_open=True)
     return quality, base.with_values(**values), duration
-
-
-def _check_knob(name: str, kind: Any, value: Any, path: str) -> Any:
-    """A Settings value of the declared type; numbers finite and >= 0, dt/substeps > 0."""
-    kind = kind if isinstance(kind, str) else kind.__name__
-    if kind == "bool":
-        if not isinstance(value, bool):
-            raise SpecError(path, f"must be true or false, got {value!r}")
-        return value
-    if kind == "int":
-        return check_int(value, path, low=1 if name == "substeps" else 0)
-    if kind == "float":
-        return check_number(value, path, low=0.0, low_open=name == "dt")
-    if kind == "str":
-        if not isinstance(value, str):
-            raise SpecError(path, f"must be a string, got {value!r}")
-        return value
-    raise SpecError(path, f"cannot be set from a scene (type {kind})")
 
 
 def _parse_render(render: dict) -> RenderSpec:

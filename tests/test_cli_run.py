@@ -97,3 +97,14 @@ def test_compare_reports_and_refuses_what_pymunk_cannot_model():
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "pymunk cannot model" in lines[0] and "csg0" in lines[0]
+
+
+def test_bench_quick_writes_its_outputs(tmp_path):
+    result = run_cli("bench", "--quick", "-o", tmp_path / "bench")
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "bench" / "bench.csv").is_file()
+    assert (tmp_path / "bench" / "bench.md").is_file()
+
+
+def test_bench_bad_usage_is_exit_2():
+    assert run_cli("bench", "--quik").returncode == 2
