@@ -383,11 +383,24 @@ def _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
         angular_velocity[i] = angular_velocity[i] / (1.0 + h * angular_damping[i])
 
 
+#: Largest rotation of a body in one substep, rad (Box2D v3's B2_MAX_ROTATION).
+MAX_ROTATION = 0.25 * math.pi
+
+
 @njit(cache=True)
 def _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h):
-    """x <- x + h v, angle <- angle + h w (semi-implicit Euler); |v| clamped to max_speed."""
+    """x <- x + h v, angle <- angle + h w (semi-implicit Euler); |v| clamped to max_speed,
+    |w| h clamped to MAX_ROTATION (Box2D v3's cap: a contact's anchors are turned by each
+    substep's rotation, which stops meaning anything when a body spins by a large
+    fraction of a turn in one substep; a 2 cm circle spun up by friction at 300 m/s
+    reached 27 rad per substep and slipped through a thin wall)."""
     limit = max_speed * max_speed
+    max_w = MAX_ROTATION / h
     for i in range(angle.shape[0]):
+        if angular_velocity[i] > max_w:
+            angular_velocity[i] = max_w
+        elif angular_velocity[i] < -max_w:
+            angular_velocity[i] = -max_w
         vx = velocity[i, 0]
         vy = velocity[i, 1]
         speed2 = vx * vx + vy * vy

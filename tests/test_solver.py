@@ -417,3 +417,17 @@ def test_twenty_base_pyramid_stands_twenty_seconds_with_exact_contacts():
         cache = step(state, collide(state.com, state.angle), settings, friction=friction,
                      cache=cache)
     assert np.linalg.norm(state.com[-1] - com[-1]) < 0.05
+
+
+def test_rotation_per_substep_is_capped_at_a_quarter_turn():
+    """Box2D v3's cap: |w| h <= pi / 4 (a faster spin is clamped, slower ones untouched)."""
+    from sdfphys.solver import MAX_ROTATION, _integrate_positions
+
+    h = 1.0 / 240.0
+    com = np.zeros((3, 2))
+    angle = np.zeros(3)
+    velocity = np.zeros((3, 2))
+    w = np.array([10.0, 1e4, -1e4])
+    _integrate_positions(com, angle, velocity, w, 400.0, h)
+    np.testing.assert_array_equal(w, [10.0, MAX_ROTATION / h, -MAX_ROTATION / h])
+    np.testing.assert_allclose(angle, [10.0 * h, MAX_ROTATION, -MAX_ROTATION], rtol=1e-15)

@@ -9,22 +9,6 @@ import stability_speed as cases
 
 pytestmark = pytest.mark.slow
 
-SPIN_ANCHOR = (
-    "solver._update_anchors re-measures each separation with the anchors turned by the "
-    "bodies' rotation since the step start (SOLVER.md: s = base + n.(dp_b + R(dq_b) r_b - "
-    "...)); friction spins a small circle sliding along the wall up to rolling speed "
-    "(r 0.02 at 159 m/s: 6,500 rad/s, 27 rad per substep), the turned anchor swings round "
-    "the circle and the measured gap grows by up to 2 r while the circle still faces the "
-    "wall, so the speculative row (bias = s / h) lets the centre through the 2 cm wall: 98 % "
-    "of the r 0.02 circles at 45 deg, none without friction. Box2D v3 caps the rotation per "
-    "substep (B2_MAX_ROTATION = pi / 4); Settings caps only the linear speed")
-SPIN_PLANK = (
-    "0.5 % of spinning planks (0.2 x 0.02 m, 100 rad/s, 300 m/s) pass a thin wall: time "
-    "of impact traces translation only (toi.py: rotation is not traced), and the "
-    "anchors turned by the rotation within the step (see SPIN_ANCHOR) let a swinging end "
-    "through; an earlier narrowphase crash on this case (_first_per_key of zero rows) is "
-    "fixed")
-
 
 def test_the_issues_bullets_never_pass_a_thin_segment():
     """Circles r 0.1 at 200 m/s into a 1 cm segment, head on, 200 start phases (pymunk:
@@ -34,9 +18,8 @@ def test_the_issues_bullets_never_pass_a_thin_segment():
 
 @pytest.mark.parametrize("bullet", [
     "circle r 0.1",
-    pytest.param("circle r 0.02", marks=pytest.mark.xfail(strict=True, reason=SPIN_ANCHOR)),
-    pytest.param("plank 0.2 x 0.02",
-                 marks=pytest.mark.xfail(strict=True, reason=SPIN_PLANK)),
+    "circle r 0.02",
+    "plank 0.2 x 0.02",
 ])
 def test_bullets_at_300_m_s_never_pass_thin_walls(bullet):
     """Into a 2 cm box and a 1 cm segment, head on and at 45 deg, 100 phases each."""
