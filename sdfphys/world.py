@@ -67,6 +67,7 @@ _ARRAYS: dict[str, tuple[tuple[int, ...], Any]] = {
     "inv_inertia": ((), np.float64),
     "linear_damping": ((), np.float64),
     "angular_damping": ((), np.float64),
+    "round": ((), np.bool_),
     "mass": ((), np.float64),
     "inertia": ((), np.float64),
     "friction": ((), np.float64),
@@ -172,6 +173,7 @@ class World:
         d["inv_inertia"][i] = 1.0 / inertia if inertia > 0.0 else 0.0
         d["linear_damping"][i] = linear_damping
         d["angular_damping"][i] = angular_damping
+        d["round"][i] = shape.kind == "circle"
         d["friction"][i] = friction
         d["restitution"][i] = restitution
         d["origin"][i] = origin
@@ -274,7 +276,7 @@ class World:
         v = self._view
         return BodyState(v("com"), v("angle"), v("velocity"), v("angular_velocity"),
                          v("inv_mass"), v("inv_inertia"), v("linear_damping"),
-                         v("angular_damping"))
+                         v("angular_damping"), v("round"))
 
     def _collision_shapes(self) -> list[Shape]:
         """The distinct shapes as collisions see them under the field knobs."""

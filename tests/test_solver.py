@@ -27,7 +27,7 @@ G = np.array([0.0, -9.81])
 
 
 def bodies(com, velocity=None, inv_mass=None, inv_inertia=None, angle=None,
-           angular_velocity=None) -> BodyState:
+           angular_velocity=None, round_body=None) -> BodyState:
     com = np.array(com, dtype=np.float64).reshape(-1, 2)
     n = len(com)
     return BodyState(
@@ -38,7 +38,8 @@ def bodies(com, velocity=None, inv_mass=None, inv_inertia=None, angle=None,
                           else np.array(angular_velocity, np.float64)),
         inv_mass=np.ones(n) if inv_mass is None else np.array(inv_mass, np.float64),
         inv_inertia=np.ones(n) if inv_inertia is None else np.array(inv_inertia, np.float64),
-        linear_damping=np.zeros(n), angular_damping=np.zeros(n))
+        linear_damping=np.zeros(n), angular_damping=np.zeros(n),
+        round_body=np.zeros(n, bool) if round_body is None else np.array(round_body, bool))
 
 
 def contact(a, b, point, normal, depth, feature=0) -> Contacts:
