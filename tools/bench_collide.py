@@ -14,9 +14,10 @@ gives:
 - us/query: CPU time of this process per triangle, median of ``--runs`` runs (less
   sensitive than wall time to other load on the machine; the descent runs on one
   thread). Wall time is printed for the default configuration. A first call per
-  field, before timing, loads or compiles the numba kernels; its time is printed
-  ("cold") together with the field's own evaluation cost per point, which bounds
-  the query cost from below (evals/query x ns/point).
+  field, before timing, loads the numba kernels from their cache; its time is
+  printed ("cold") together with the field's own evaluation cost per point, which
+  bounds the query cost from below (evals/query x ns/point). The compilation
+  itself (an empty cache, in a fresh process) is timed once at the end.
 - evals/query: points passed to ``field.evaluate`` per triangle.
 - depth error: the largest amount by which the deepest point over the starts is
   shallower than an independent reference, and how many triangles exceed 1e-6 m.
@@ -32,6 +33,10 @@ Usage: python tools/bench_collide.py [--runs 5] [--grid 48] [--batches 1000 1000
 from __future__ import annotations
 
 import argparse
+import os
+import subprocess
+import sys
+import tempfile
 import time
 from functools import partial
 
@@ -127,6 +132,26 @@ class _Counting:
         return self.f.evaluate(points)
 
 
+_FIRST_CALL = """
+import time, numpy as np
+from sdfphys.collide import descent
+from sdfphys.sdf import field
+f = field({"type": "box", "size": [2.0, 1.0]})
+start = time.perf_counter()
+descent.triangle_deepest(f, np.array([[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]]))
+print(time.perf_counter() - start)
+"""
+
+
+def compile_seconds() -> float:
+    """Wall time of the first query in a fresh process with an empty numba cache."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        out = subprocess.run([sys.executable, "-c", _FIRST_CALL], env=env, check=True,
+                             capture_output=True, text=True)
+    return float(out.stdout.split()[-1])
+
+
 def _median_time(run, runs: int, clock) -> float:
     times = []
     for _ in range(runs):
@@ -190,6 +215,8 @@ def main() -> None:
     print()
     for note in notes:
         print(f"- {note}")
+    print(f"- first query in a fresh process, numba cache empty (compilation): "
+          f"{compile_seconds():.1f} s")
 
 
 if __name__ == "__main__":

@@ -506,135 +506,160 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
     (``points[:U]``) and of starts that proposed some (``running[:R]`` on return).
 
     tri (T, 3, 2), owner (P,): the starts' triangles (TRIANGLE); corner (T, 3, 3):
-    value and gradient of f at each vertex, NaN where unknown; shape (T, 3): what
+    value and gradient of f at each vertex, NaN where unknown; shape (T, 4): what
     f is over the triangle (``triangle_known``): on a plane the steepest path runs
-    straight to its end and only the end is evaluated; on a cone the start tries
-    the cone's minimiser first. Stops the starts whose projected gradient
+    straight to its end and only the end is evaluated; on a cone or cuts the start
+    tries the model's minimiser first. Stops the starts whose projected gradient
     vanishes; writes the per-round columns of ``state`` and ``flags`` and the
     candidates (rows 0..C-1 of ``cand``, ``cand_i``).
     """
-    steep, bundle, line = np.empty(8), np.empty(8), np.empty(8)
+    # Paths of a round (rows: steepest, bundle, the line search's) and the plan of
+    # a start's candidates: path (-1: the model's minimiser), step, column,
+    # candidate it may repeat (-1: none), and whether it is the steepest path's end.
+    paths = np.empty((3, 8))
+    plan_path = np.empty(N_COLUMNS, dtype=np.int64)
+    plan_s = np.empty(N_COLUMNS)
+    plan_twin = np.empty(N_COLUMNS, dtype=np.int64)
+    plan_end = np.empty(N_COLUMNS, dtype=np.bool_)
     n = u = kept = 0
-    shared_t = shared_source = -1                     # the last cone minimiser evaluated
+    shared_t = shared_source = -1                     # the last model minimiser evaluated
     for i in running:
         t = owner[i] if kind == TRIANGLE else 0
         code = _code(kind, shape, t, state, i)
         sigma = state[i, SIGMA]
         # The steepest path from b and its slope at the start; a zero projected
         # gradient is a stationary point (the start stops).
-        _steep_path(kind, state, data, i, steep)
-        moving, dqx, dqy = _moving(kind, tri, t, steep, sigma)
+        _steep_path(kind, state, data, i, paths[0])
+        moving, dqx, dqy = _moving(kind, tri, t, paths[0], sigma)
         if not moving:
             continue
         running[kept] = i
         kept += 1
         flags[i, ROUNDS] += 1
+        state[i, D0] = state[i, GRAD] * dqx + state[i, GRAD + 1] * dqy
+        count = 0
+        end, end_dx, end_dy = np.inf, 0.0, 0.0
         if code >= CONE and flags[i, MODEL] == 0:
             # The model's minimiser, shared by the starts of the triangle.
             flags[i, MODEL] = 1
-            x, y = shape[t, 1], shape[t, 2]
-            if shared_t == t and shared_source != AT_BEST:
+            plan_path[0], plan_s[0], plan_twin[0], plan_end[0] = -1, 0.0, -1, False
+            count = 1
+        else:
+            has_alt = code != PLANE and (state[i, ALT] != state[i, BEST]
+                                         or state[i, ALT + 1] != state[i, BEST + 1])
+            if has_alt:
+                _bundle_path(state, i, paths[1])
+                if kind == TRIANGLE:
+                    has_alt = _bundle_free(tri, t, paths[1], PROBE * sigma)
+
+            # The ladder's scale: sigma, or the Barzilai-Borwein step s.s / s.y from
+            # the last accepted step s = b - b_prev and the change y of the path's
+            # direction at scale sigma (exact for a locally quadratic model: it
+            # places the ladder around the step that lands on the minimum), kept
+            # within a factor BB_RANGE of sigma (next to a kink y jumps and s.s / s.y
+            # is meaningless).
+            scale = sigma
+            if barzilai_borwein:
+                _, _, vx, vy = _path(kind, tri, t, paths[0], sigma)
+                sx = state[i, BEST] - state[i, PREVIOUS]
+                sy = state[i, BEST + 1] - state[i, PREVIOUS + 1]
+                curvature = sx * (state[i, PREVIOUS + 2] - vx) + sy * (state[i, PREVIOUS + 3] - vy)
+                if flags[i, HAS_PREVIOUS] and curvature > 0.0:
+                    bb = (sx * sx + sy * sy) / curvature
+                    if not np.isfinite(bb):
+                        bb = sigma
+                    scale = min(max(bb, sigma / BB_RANGE), sigma * BB_RANGE)
+                state[i, PREVIOUS], state[i, PREVIOUS + 1] = state[i, BEST], state[i, BEST + 1]
+                state[i, PREVIOUS + 2], state[i, PREVIOUS + 3] = vx, vy
+            state[i, SCALE] = scale
+
+            # A line search on one straight piece of its path (the same dq/ds at both
+            # ends of its bracket: a slide along an edge, or a straight gradient
+            # line), with b at an end of its bracket and the steepest path from b
+            # along the same line, needs no new ladder: the bracket still holds the
+            # first valley ahead, the model points find it.
+            ladders = True
+            if flags[i, BRACKETED]:
+                for c in range(8):
+                    paths[2, c] = state[i, PATH + c]
+                if kind == TRIANGLE and not flags[i, FAILS] and not flags[i, SLOW]:
+                    at_end, one_piece = False, True
+                    ux = uy = 0.0
+                    for side in range(2):
+                        x, y, dx, dy = _path(kind, tri, t, paths[2],
+                                             state[i, LEFT if side == 0 else RIGHT])
+                        at_end = at_end or (x == state[i, BEST] and y == state[i, BEST + 1])
+                        if side == 0:
+                            ux, uy = dx, dy
+                        else:
+                            one_piece = (abs(ux - dx) + abs(uy - dy)
+                                         <= PARALLEL * (abs(ux) + abs(uy) + abs(dx) + abs(dy)))
+                    ux, uy = _unit(ux, uy)
+                    wx, wy = _unit(dqx, dqy)
+                    ladders = not (at_end and one_piece
+                                   and abs(ux * wx + uy * wy) > 1.0 - PARALLEL)
+
+            # Candidates: a ladder on each path, ended on a triangle's steepest path
+            # by the path's end (the vertex or edge point where the projected ray
+            # stops; with dq/ds just before it, so that a slide that still descends
+            # there reads as descending), and two model points in the bracket.
+            if kind == TRIANGLE:
+                end, end_dx, end_dy = _ray_end(tri, t, state[i, BEST], state[i, BEST + 1],
+                                               -state[i, GRAD], -state[i, GRAD + 1])
+                if end > END_REACH * scale and code != PLANE:
+                    end = np.inf
+            for k in range(N_RUNGS if ladders else 0):
+                s = min(scale * LADDER[k] if k < N_RUNGS - 1 and code != PLANE else end, end)
+                if not np.isfinite(s):
+                    break
+                plan_path[count], plan_s[count], plan_twin[count] = 0, s, -1
+                plan_end[count] = s == end
+                count += 1
+                if s == end:
+                    break
+            steep_rungs = count
+            flags[i, ENDED] = steep_rungs > 0 and plan_end[steep_rungs - 1]
+            for k in range(N_RUNGS - 1 if has_alt and ladders else 0):
+                s = scale * LADDER[k]
+                plan_path[count], plan_s[count], plan_end[count] = 1, s, False
+                plan_twin[count] = k if k < steep_rungs and plan_s[k] == s else -1
+                count += 1
+            if flags[i, BRACKETED]:
+                s_first, s_second = _model_steps(state, i)
+                plan_path[count], plan_s[count], plan_twin[count] = 2, s_first, -1
+                plan_path[count + 1], plan_s[count + 1], plan_twin[count + 1] = 2, s_second, count
+                plan_end[count] = plan_end[count + 1] = False
+                count += 2
+
+        # The plan's candidates; columns: steepest rungs from 0, bundle rungs from
+        # COLUMN_BUNDLE, model points from COLUMN_MODEL (the model's minimiser: 0).
+        start = n
+        rung = bundle_rung = model = 0
+        for j in range(count):
+            which = plan_path[j]
+            if which < 0:
+                x, y, dx, dy = shape[t, 1], shape[t, 2], 0.0, 0.0
+                col = 0
+            else:
+                x, y, dx, dy = _path(kind, tri, t, paths[which], plan_s[j])
+                if plan_end[j]:
+                    dx, dy = end_dx, end_dy
+                if which == 0:
+                    col, rung = rung, rung + 1
+                elif which == 1:
+                    col, bundle_rung = COLUMN_BUNDLE + bundle_rung, bundle_rung + 1
+                else:
+                    col, model = COLUMN_MODEL + model, model + 1
+            if which < 0 and shared_t == t and shared_source != AT_BEST:
                 cand[n, 0], cand[n, 1], cand[n, 2], cand[n, 3], cand[n, 4] = 0.0, x, y, 0.0, 0.0
                 cand_i[n, 0], cand_i[n, 1] = 0, shared_source
             else:
-                u = _candidate(kind, tri, t, corner, state, i, x, y, 0.0, 0.0, 0.0, 0, -1, n, u,
-                               cand, cand_i, points)
-                shared_t, shared_source = t, cand_i[n, 1]
-            flags[i, COUNT], flags[i, OFFSET] = 1, n
+                twin = start + plan_twin[j] if plan_twin[j] >= 0 else -1
+                u = _candidate(kind, tri, t, corner, state, i, x, y, dx, dy, plan_s[j], col,
+                               twin, n, u, cand, cand_i, points)
+                if which < 0:
+                    shared_t, shared_source = t, cand_i[n, 1]
             n += 1
-            continue
-        state[i, D0] = state[i, GRAD] * dqx + state[i, GRAD + 1] * dqy
-        has_alt = code != PLANE and (state[i, ALT] != state[i, BEST]
-                                     or state[i, ALT + 1] != state[i, BEST + 1])
-        if has_alt:
-            _bundle_path(state, i, bundle)
-            if kind == TRIANGLE:
-                has_alt = _bundle_free(tri, t, bundle, PROBE * sigma)
-
-        # The ladder's scale: sigma, or the Barzilai-Borwein step s.s / s.y from the
-        # last accepted step s = b - b_prev and the change y of the path's direction
-        # at scale sigma (exact for a locally quadratic model: it places the ladder
-        # around the step that lands on the minimum), kept within a factor BB_RANGE
-        # of sigma (next to a kink y jumps and s.s / s.y is meaningless).
-        scale = sigma
-        if barzilai_borwein:
-            _, _, vx, vy = _path(kind, tri, t, steep, sigma)
-            sx = state[i, BEST] - state[i, PREVIOUS]
-            sy = state[i, BEST + 1] - state[i, PREVIOUS + 1]
-            curvature = sx * (state[i, PREVIOUS + 2] - vx) + sy * (state[i, PREVIOUS + 3] - vy)
-            if flags[i, HAS_PREVIOUS] and curvature > 0.0:
-                bb = (sx * sx + sy * sy) / curvature
-                if not np.isfinite(bb):
-                    bb = sigma
-                scale = min(max(bb, sigma / BB_RANGE), sigma * BB_RANGE)
-            state[i, PREVIOUS], state[i, PREVIOUS + 1] = state[i, BEST], state[i, BEST + 1]
-            state[i, PREVIOUS + 2], state[i, PREVIOUS + 3] = vx, vy
-        state[i, SCALE] = scale
-
-        # A line search on one straight piece of its path (the same dq/ds at both
-        # ends of its bracket: a slide along an edge, or a straight gradient line),
-        # with b at an end of its bracket and the steepest path from b along the
-        # same line, needs no new ladder: the bracket still holds the first valley
-        # ahead, the model points find it.
-        if flags[i, BRACKETED]:
-            for c in range(8):
-                line[c] = state[i, PATH + c]
-        ladders = True
-        if kind == TRIANGLE and flags[i, BRACKETED] and not flags[i, FAILS] \
-                and not flags[i, SLOW]:
-            lx, ly, ldx, ldy = _path(kind, tri, t, line, state[i, LEFT])
-            rx, ry, rdx, rdy = _path(kind, tri, t, line, state[i, RIGHT])
-            at_end = ((lx == state[i, BEST] and ly == state[i, BEST + 1])
-                      or (rx == state[i, BEST] and ry == state[i, BEST + 1]))
-            ux, uy = _unit(ldx, ldy)
-            wx, wy = _unit(dqx, dqy)
-            one_piece = (abs(ldx - rdx) + abs(ldy - rdy)
-                         <= PARALLEL * (abs(ldx) + abs(ldy) + abs(rdx) + abs(rdy)))
-            ladders = not (at_end and one_piece and abs(ux * wx + uy * wy) > 1.0 - PARALLEL)
-
-        # Candidates: a ladder on each path, ended on a triangle's steepest path by
-        # the path's end (the vertex or edge point where the projected ray stops;
-        # with dq/ds just before it, so that a slide that still descends there
-        # reads as descending), and two model points in the bracket.
-        start = n
-        end, end_dx, end_dy = np.inf, 0.0, 0.0
-        if kind == TRIANGLE:
-            end, end_dx, end_dy = _ray_end(tri, t, state[i, BEST], state[i, BEST + 1],
-                                           -state[i, GRAD], -state[i, GRAD + 1])
-            if end > END_REACH * scale and code != PLANE:
-                end = np.inf
-        for k in range(N_RUNGS if ladders else 0):
-            s = scale * LADDER[k] if k < N_RUNGS - 1 and code != PLANE else end
-            s = min(s, end)
-            if not np.isfinite(s):
-                break
-            x, y, dx, dy = _path(kind, tri, t, steep, s)
-            if s == end:
-                dx, dy = end_dx, end_dy
-            u = _candidate(kind, tri, t, corner, state, i, x, y, dx, dy, s, k, -1, n, u,
-                           cand, cand_i, points)
-            n += 1
-            if s == end:
-                break
-        steep_rungs = n - start
-        flags[i, ENDED] = steep_rungs > 0 and cand[n - 1, 0] == end
-        if has_alt and ladders:
-            for k in range(N_RUNGS - 1):
-                s = scale * LADDER[k]
-                x, y, dx, dy = _path(kind, tri, t, bundle, s)
-                twin = start + k if k < steep_rungs and cand[start + k, 0] == s else -1
-                u = _candidate(kind, tri, t, corner, state, i, x, y, dx, dy, s,
-                               COLUMN_BUNDLE + k, twin, n, u, cand, cand_i, points)
-                n += 1
-        if flags[i, BRACKETED]:
-            s_first, s_second = _model_steps(state, i)
-            for k in range(2):
-                s = s_first if k == 0 else s_second
-                x, y, dx, dy = _path(kind, tri, t, line, s)
-                u = _candidate(kind, tri, t, corner, state, i, x, y, dx, dy, s,
-                               COLUMN_MODEL + k, n - 1 if k == 1 else -1, n, u, cand, cand_i,
-                               points)
-                n += 1
         flags[i, COUNT], flags[i, OFFSET] = n - start, start
     return n, u, kept
 
@@ -665,187 +690,185 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
         t = owner[i] if kind == TRIANGLE else 0
         d0, scale, phi_old = state[i, D0], state[i, SCALE], state[i, PHI]
         if flags[i, MODEL] == 1:
-            # The cone's minimiser: taken when lower (the start is then done, as
-            # when it is there already); else the descent goes on.
+            # The model's minimiser: taken when lower; the start is done there when
+            # f has the value the model predicts (or when it is there already),
+            # else the descent goes on.
             flags[i, MODEL] = 2
             src = cand_i[offset, 1]
-            if src == AT_BEST:
-                continue
+            keep = src != AT_BEST
+            value_m = gx = gy = 0.0
             if src <= AT_CORNER:
                 v = AT_CORNER - src
                 value_m, gx, gy = corner[t, v, 0], corner[t, v, 1], corner[t, v, 2]
-            else:
+            elif src >= 0:
                 value_m, gx, gy = value[src], gradient[src, 0], gradient[src, 1]
-            if value_m < phi_old - 4.0 * EPS * max(1.0, abs(phi_old)):
+            if keep and value_m < phi_old - 4.0 * EPS * max(1.0, abs(phi_old)):
                 state[i, BEST], state[i, BEST + 1] = cand[offset, 1], cand[offset, 2]
                 state[i, PHI], state[i, GRAD], state[i, GRAD + 1] = value_m, gx, gy
                 state[i, ALT:ALT + 5] = state[i, BEST:BEST + 5]
                 data[i, 0], data[i, 1] = gx, gy
                 size = 1.0 + abs(cand[offset, 1]) + abs(cand[offset, 2]) + abs(value_m)
-                if abs(value_m - shape[t, 3]) <= shape_tol * size:
-                    continue                                 # the cone's minimum: done
-            _steep_path(kind, state, data, i, steep)
-            if _moving(kind, tri, t, steep, state[i, SIGMA])[0]:
-                running[kept] = i
-                kept += 1
-                total += _most_candidates(kind, owner, shape, state, flags, i)
-            continue
-        table[:] = np.inf
-        slope[:] = 0.0
-        where[:] = -1
-        rungs[:] = 0
-        for j in range(offset, offset + count):
-            c, src = cand_i[j, 0], cand_i[j, 1]
-            where[c] = j
-            if src == AT_BEST:
-                table[c], gx, gy = phi_old, state[i, GRAD], state[i, GRAD + 1]
-            elif src <= AT_CORNER:
-                v = AT_CORNER - src
-                table[c], gx, gy = corner[t, v, 0], corner[t, v, 1], corner[t, v, 2]
-            else:
-                table[c], gx, gy = value[src], gradient[src, 0], gradient[src, 1]
-            slope[c] = gx * cand[j, 3] + gy * cand[j, 4]
-            seen[c, 0], seen[c, 1], seen[c, 2] = cand[j, 1], cand[j, 2], table[c]
-            seen[c, 3], seen[c, 4] = gx, gy
-            if c < COLUMN_MODEL:
-                rungs[c // N_RUNGS] += 1
+                keep = abs(value_m - shape[t, 3]) > shape_tol * size
+        else:
+            table[:] = np.inf
+            slope[:] = 0.0
+            where[:] = -1
+            rungs[:] = 0
+            for j in range(offset, offset + count):
+                c, src = cand_i[j, 0], cand_i[j, 1]
+                where[c] = j
+                if src == AT_BEST:
+                    table[c], gx, gy = phi_old, state[i, GRAD], state[i, GRAD + 1]
+                elif src <= AT_CORNER:
+                    v = AT_CORNER - src
+                    table[c], gx, gy = corner[t, v, 0], corner[t, v, 1], corner[t, v, 2]
+                else:
+                    table[c], gx, gy = value[src], gradient[src, 0], gradient[src, 1]
+                slope[c] = gx * cand[j, 3] + gy * cand[j, 4]
+                seen[c, 0], seen[c, 1], seen[c, 2] = cand[j, 1], cand[j, 2], table[c]
+                seen[c, 3], seen[c, 4] = gx, gy
+                if c < COLUMN_MODEL:
+                    rungs[c // N_RUNGS] += 1
 
-        # On each path only the first valley counts (samples up to the first one
-        # where phi rises or its slope turns >= 0): the descent stays local, each
-        # start finds the minimum of its own basin.
-        for ladder in range(2):
-            samples[ladder, 0, 0], samples[ladder, 0, 1], samples[ladder, 0, 2] = 0.0, phi_old, d0
-            rise = rungs[ladder]
-            for k in range(1, rungs[ladder] + 1):
-                c = ladder * N_RUNGS + k - 1
-                samples[ladder, k, 0] = cand[where[c], 0]
-                samples[ladder, k, 1] = table[c]
-                samples[ladder, k, 2] = slope[c]
-                if rise == rungs[ladder] and (slope[c] >= 0.0
-                                              or table[c] > samples[ladder, k - 1, 1]):
-                    rise = k
-                if k > rise or (k == rise and ladder == 0 and k == rungs[0]
-                                and flags[i, ENDED] and slope[c] >= 0.0):
-                    table[c] = np.inf
+            # On each path only the first valley counts (samples up to the first one
+            # where phi rises or its slope turns >= 0): the descent stays local, each
+            # start finds the minimum of its own basin.
+            for ladder in range(2):
+                samples[ladder, 0, 0] = 0.0
+                samples[ladder, 0, 1], samples[ladder, 0, 2] = phi_old, d0
+                rise = rungs[ladder]
+                for k in range(1, rungs[ladder] + 1):
+                    c = ladder * N_RUNGS + k - 1
+                    samples[ladder, k, 0] = cand[where[c], 0]
+                    samples[ladder, k, 1] = table[c]
+                    samples[ladder, k, 2] = slope[c]
+                    if rise == rungs[ladder] and (slope[c] >= 0.0
+                                                  or table[c] > samples[ladder, k - 1, 1]):
+                        rise = k
+                    if k > rise or (k == rise and ladder == 0 and k == rungs[0]
+                                    and flags[i, ENDED] and slope[c] >= 0.0):
+                        table[c] = np.inf
 
-        win = np.argmin(table)
-        phi_win = table[win]
-        rounding = 4.0 * EPS * max(1.0, abs(phi_old))
-        improved = phi_win < phi_old - rounding
-        if not improved and kind != TRIANGLE:
-            # Near a smooth minimum phi stops changing in double precision long
-            # before the point stops moving; there a candidate whose value ties with
-            # b's (to rounding) is taken when it halves the stationarity measure.
-            tie, tie_win = np.inf, -1
-            for c in range(N_COLUMNS):
-                if table[c] <= phi_old + rounding and cand_i[where[c], 1] >= 0:
-                    measure = _stationarity(kind, cand_data, cand_i[where[c], 1])
-                    if measure < tie:
-                        tie, tie_win = measure, c
-            if tie_win >= 0 and tie < 0.5 * _stationarity(kind, data, i):
-                win, phi_win, improved = tie_win, table[tie_win], True
-        w = where[win]
-        moved = _norm(cand[w, 1] - state[i, BEST], cand[w, 2] - state[i, BEST + 1])
-        new_sigma = scale
+            win = np.argmin(table)
+            phi_win = table[win]
+            rounding = 4.0 * EPS * max(1.0, abs(phi_old))
+            improved = phi_win < phi_old - rounding
+            if not improved and kind != TRIANGLE:
+                # Near a smooth minimum phi stops changing in double precision long
+                # before the point stops moving; there a candidate whose value ties with
+                # b's (to rounding) is taken when it halves the stationarity measure.
+                tie, tie_win = np.inf, -1
+                for c in range(N_COLUMNS):
+                    if table[c] <= phi_old + rounding and cand_i[where[c], 1] >= 0:
+                        measure = _stationarity(kind, cand_data, cand_i[where[c], 1])
+                        if measure < tie:
+                            tie, tie_win = measure, c
+                if tie_win >= 0 and tie < 0.5 * _stationarity(kind, data, i):
+                    win, phi_win, improved = tie_win, table[tie_win], True
+            w = where[win]
+            moved = _norm(cand[w, 1] - state[i, BEST], cand[w, 2] - state[i, BEST + 1])
+            new_sigma = scale
 
-        # (a) The model samples shrink their bracket: one with phi' < 0 and phi <=
-        #     phi(s_l) becomes the left end, otherwise the right end (the second only
-        #     if it still lies inside).
-        has = flags[i, BRACKETED] != 0
-        width = state[i, RIGHT] - state[i, LEFT]
-        if has:
-            for c in range(COLUMN_MODEL, N_COLUMNS):
-                s = cand[where[c], 0]
-                if state[i, LEFT] < s < state[i, RIGHT]:
-                    end = LEFT if slope[c] < 0.0 and table[c] <= state[i, LEFT + 1] else RIGHT
-                    state[i, end], state[i, end + 1], state[i, end + 2] = s, table[c], slope[c]
-            if improved and win >= COLUMN_MODEL:
-                new_sigma = max(moved, 0.25 * scale)
-        # A continued line search whose models failed to halve the bracket gets
-        # ladders again next round (the bracket holds more than one kink or bend).
-        flags[i, SLOW] = rungs[0] == 0 and state[i, RIGHT] - state[i, LEFT] > 0.5 * width
+            # (a) The model samples shrink their bracket: one with phi' < 0 and phi <=
+            #     phi(s_l) becomes the left end, otherwise the right end (the second only
+            #     if it still lies inside).
+            has = flags[i, BRACKETED] != 0
+            width = state[i, RIGHT] - state[i, LEFT]
+            if has:
+                for c in range(COLUMN_MODEL, N_COLUMNS):
+                    s = cand[where[c], 0]
+                    if state[i, LEFT] < s < state[i, RIGHT]:
+                        end = LEFT if slope[c] < 0.0 and table[c] <= state[i, LEFT + 1] else RIGHT
+                        state[i, end], state[i, end + 1], state[i, end + 2] = s, table[c], slope[c]
+                if improved and win >= COLUMN_MODEL:
+                    new_sigma = max(moved, 0.25 * scale)
+            # A continued line search whose models failed to halve the bracket gets
+            # ladders again next round (the bracket holds more than one kink or bend).
+            flags[i, SLOW] = rungs[0] == 0 and state[i, RIGHT] - state[i, LEFT] > 0.5 * width
 
-        if improved and win < COLUMN_MODEL:
-            # (b) A ladder winner at rung k starts a new line search on its path,
-            #     bracketed by its neighbours (k - 1, k) if phi' >= 0 there, else
-            #     (k, k + 1); open (no bracket) past the last rung, where the scale
-            #     then grows (a long slide along an edge or a ridge).
-            ladder = win // N_RUNGS
-            k = win - ladder * N_RUNGS + 1
-            down = samples[ladder, k, 2] < 0.0
-            lk = k if down else k - 1
-            rk = min(k + 1 if down else k, rungs[ladder])
-            if ladder == 0:
+            if improved and win < COLUMN_MODEL:
+                # (b) A ladder winner at rung k starts a new line search on its path,
+                #     bracketed by its neighbours (k - 1, k) if phi' >= 0 there, else
+                #     (k, k + 1); open (no bracket) past the last rung, where the scale
+                #     then grows (a long slide along an edge or a ridge).
+                ladder = win // N_RUNGS
+                k = win - ladder * N_RUNGS + 1
+                down = samples[ladder, k, 2] < 0.0
+                lk = k if down else k - 1
+                rk = min(k + 1 if down else k, rungs[ladder])
+                if ladder == 0:
+                    _steep_path(kind, state, data, i, state[i, PATH:PATH + 8])
+                else:
+                    _bundle_path(state, i, state[i, PATH:PATH + 8])
+                state[i, LEFT:LEFT + 3] = samples[ladder, lk]
+                state[i, RIGHT:RIGHT + 3] = samples[ladder, rk]
+                open_end = down and k == rungs[ladder]
+                has = not open_end
+                new_sigma = samples[ladder, k, 0] * (LADDER[-1] if open_end else 1.0)
+            elif not improved and rungs[0] == 0:
+                # (c) No decrease in a continued line search: its bracket, shrunk by the
+                #     model samples, stands; the next round brings ladders back.
+                new_sigma = scale / SHRINK
+            elif not improved:
+                # (d) No decrease: search finely around b on the steepest path next round.
                 _steep_path(kind, state, data, i, state[i, PATH:PATH + 8])
+                state[i, LEFT:LEFT + 3] = samples[0, 0]
+                state[i, RIGHT:RIGHT + 3] = samples[0, 1]
+                has = d0 < 0.0
+                new_sigma = scale / SHRINK
+
+            # The next second plane: among the planes seen near the new best (this
+            # round's samples, the old best and the old second plane, within the step
+            # scale) whose gradient differs from the new best's, the one most active
+            # there, i.e. with the smallest linearisation error |f(b) - l_i(b)| (the
+            # bundle methods' rule). A different gradient close by reveals a kink (a
+            # ridge of the medial axis, or a minimum just passed); the bundle path then
+            # follows the ridge l_1 = l_2 instead of zigzagging across it. Without a
+            # decrease b's own plane is carried to the best candidate's point.
+            new_x, new_y = cand[w, 1], cand[w, 2]
+            if improved:
+                new_phi, new_gx, new_gy = phi_win, seen[win, 3], seen[win, 4]
             else:
-                _bundle_path(state, i, state[i, PATH:PATH + 8])
-            state[i, LEFT:LEFT + 3] = samples[ladder, lk]
-            state[i, RIGHT:RIGHT + 3] = samples[ladder, rk]
-            open_end = down and k == rungs[ladder]
-            has = not open_end
-            new_sigma = samples[ladder, k, 0] * (LADDER[-1] if open_end else 1.0)
-        elif not improved and rungs[0] == 0:
-            # (c) No decrease in a continued line search: its bracket, shrunk by the
-            #     model samples, stands; the next round brings ladders back.
-            new_sigma = scale / SHRINK
-        elif not improved:
-            # (d) No decrease: search finely around b on the steepest path next round.
-            _steep_path(kind, state, data, i, state[i, PATH:PATH + 8])
-            state[i, LEFT:LEFT + 3] = samples[0, 0]
-            state[i, RIGHT:RIGHT + 3] = samples[0, 1]
-            has = d0 < 0.0
-            new_sigma = scale / SHRINK
+                new_phi, new_gx, new_gy = phi_old, state[i, GRAD], state[i, GRAD + 1]
+            seen[N_COLUMNS, :] = state[i, BEST:BEST + 5]
+            seen[N_COLUMNS + 1, :] = state[i, ALT:ALT + 5]
+            ux, uy = _unit(new_gx, new_gy)
+            reach2 = max(scale, new_sigma) ** 2
+            pick, error = -1, np.inf
+            for c in range(N_COLUMNS + 2):
+                if c < N_COLUMNS and not np.isfinite(table[c]):
+                    continue
+                gx, gy = seen[c, 3], seen[c, 4]
+                along = gx * ux + gy * uy               # cosine >= 1 - KINK: the same plane
+                if along > 0.0 and along * along >= (1.0 - KINK) ** 2 * (gx * gx + gy * gy):
+                    continue
+                if (seen[c, 0] - new_x) ** 2 + (seen[c, 1] - new_y) ** 2 > reach2:
+                    continue
+                e = abs(new_phi - seen[c, 2] - gx * (new_x - seen[c, 0])
+                        - gy * (new_y - seen[c, 1]))
+                if e < error:
+                    pick, error = c, e
+            if pick >= 0:
+                state[i, ALT:ALT + 5] = seen[pick]
+            else:
+                state[i, ALT], state[i, ALT + 1], state[i, ALT + 2] = new_x, new_y, new_phi
+                state[i, ALT + 3], state[i, ALT + 4] = new_gx, new_gy
 
-        # The next second plane: among the planes seen near the new best (this
-        # round's samples, the old best and the old second plane, within the step
-        # scale) whose gradient differs from the new best's, the one most active
-        # there, i.e. with the smallest linearisation error |f(b) - l_i(b)| (the
-        # bundle methods' rule). A different gradient close by reveals a kink (a
-        # ridge of the medial axis, or a minimum just passed); the bundle path then
-        # follows the ridge l_1 = l_2 instead of zigzagging across it. Without a
-        # decrease b's own plane is carried to the best candidate's point.
-        new_x, new_y = cand[w, 1], cand[w, 2]
-        if improved:
-            new_phi, new_gx, new_gy = phi_win, seen[win, 3], seen[win, 4]
-        else:
-            new_phi, new_gx, new_gy = phi_old, state[i, GRAD], state[i, GRAD + 1]
-        seen[N_COLUMNS, :] = state[i, BEST:BEST + 5]
-        seen[N_COLUMNS + 1, :] = state[i, ALT:ALT + 5]
-        ux, uy = _unit(new_gx, new_gy)
-        reach2 = max(scale, new_sigma) ** 2
-        pick, error = -1, np.inf
-        for c in range(N_COLUMNS + 2):
-            if c < N_COLUMNS and not np.isfinite(table[c]):
-                continue
-            gx, gy = seen[c, 3], seen[c, 4]
-            along = gx * ux + gy * uy               # cosine >= 1 - KINK: the same plane
-            if along > 0.0 and along * along >= (1.0 - KINK) ** 2 * (gx * gx + gy * gy):
-                continue
-            if (seen[c, 0] - new_x) ** 2 + (seen[c, 1] - new_y) ** 2 > reach2:
-                continue
-            e = abs(new_phi - seen[c, 2] - gx * (new_x - seen[c, 0]) - gy * (new_y - seen[c, 1]))
-            if e < error:
-                pick, error = c, e
-        if pick >= 0:
-            state[i, ALT:ALT + 5] = seen[pick]
-        else:
-            state[i, ALT], state[i, ALT + 1], state[i, ALT + 2] = new_x, new_y, new_phi
-            state[i, ALT + 3], state[i, ALT + 4] = new_gx, new_gy
-
-        # Commit.
-        if improved:
-            state[i, BEST], state[i, BEST + 1], state[i, PHI] = new_x, new_y, phi_win
-            state[i, GRAD], state[i, GRAD + 1] = new_gx, new_gy
-            src = cand_i[w, 1]
-            if src >= 0:
-                data[i, :] = cand_data[src]
-            elif src <= AT_CORNER:
-                data[i, 0], data[i, 1] = new_gx, new_gy
-        flags[i, BRACKETED] = has and state[i, RIGHT] > state[i, LEFT]
-        state[i, SIGMA] = max(new_sigma, TINY)
-        flags[i, FAILS] = 0 if improved else flags[i, FAILS] + 1
-        flags[i, HAS_PREVIOUS] = improved
-        if flags[i, FAILS] < 2 and not (improved and moved < tol):
+            # Commit.
+            if improved:
+                state[i, BEST], state[i, BEST + 1], state[i, PHI] = new_x, new_y, phi_win
+                state[i, GRAD], state[i, GRAD + 1] = new_gx, new_gy
+                src = cand_i[w, 1]
+                if src >= 0:
+                    data[i, :] = cand_data[src]
+                elif src <= AT_CORNER:
+                    data[i, 0], data[i, 1] = new_gx, new_gy
+            flags[i, BRACKETED] = has and state[i, RIGHT] > state[i, LEFT]
+            state[i, SIGMA] = max(new_sigma, TINY)
+            flags[i, FAILS] = 0 if improved else flags[i, FAILS] + 1
+            flags[i, HAS_PREVIOUS] = improved
+            keep = flags[i, FAILS] < 2 and not (improved and moved < tol)
+        if keep:
             _steep_path(kind, state, data, i, steep)
             if _moving(kind, tri, t, steep, state[i, SIGMA])[0]:
                 running[kept] = i
