@@ -273,8 +273,8 @@ def region_of(fa, fb, pose, grow: float = 0.0) -> np.ndarray:
 
 def contacts(fa, fb, pose, margin: float = 0.0):
     pose = np.asarray(pose, dtype=np.float64)
-    return descent.field_field_contacts(fa, fb, pose, region_of(fa, fb, pose, margin),
-                                        margin=margin)
+    return descent.field_field_contacts_single(fa, fb, pose, region_of(fa, fb, pose, margin),
+                                               margin=margin)
 
 
 def test_two_circles_exact():
@@ -385,6 +385,35 @@ def test_separated_fields_give_no_contact_unless_within_the_margin():
     np.testing.assert_allclose(depth, -0.005, atol=1e-9)
 
 
+def test_field_field_batch_equals_single_calls():
+    """P random placements in one call give, pair by pair, the contacts of P single
+    calls (same bits): the batch changes who is evaluated together, not the result."""
+    rng = np.random.default_rng(33)
+    base, top = field({"type": "box", "size": [4.0, 1.0]}), field({"type": "box", "size": [2.0, 1.0]})
+    for fa, fb, low, high in ((field(FIELDS["polygon"]), field(FIELDS["smooth_union"]),
+                               [-1.5, -1.5, -3.0], [1.5, 1.5, 3.0]),
+                              (base, top, [-2.0, 0.9, -0.05], [2.0, 1.05, 0.05])):
+        n = 40
+        poses = rng.uniform(low, high, (n, 3))
+        poses[::4, 2] = 0.0                                   # some exactly flat contacts
+        margin = 0.05
+        regions = np.array([region_of(fa, fb, pose, margin) for pose in poses])
+        regions[3] = [1.0, 1.0, 0.0, 0.0]                     # empty: no contact
+        pair, point, depth, normal, start = descent.field_field_contacts(
+            fa, fb, poses, regions, margin=margin)
+        assert np.all(np.diff(pair) >= 0) and 3 not in pair
+        assert len(np.unique(pair)) > n // 2
+        for k in range(n):
+            expected = descent.field_field_contacts_single(fa, fb, poses[k], regions[k],
+                                                           margin=margin)
+            mine = pair == k
+            for got, want in zip((point[mine], depth[mine], normal[mine], start[mine]),
+                                 expected, strict=True):
+                np.testing.assert_array_equal(got, want)
+    with pytest.raises(ValueError):
+        descent.field_field_contacts(base, top, np.zeros((2, 3)), np.zeros((3, 4)))
+
+
 def test_field_field_is_deterministic_and_rejects_infinite_regions():
     fa = field(FIELDS["polygon"])
     fb = field(FIELDS["smooth_union"])
@@ -395,6 +424,6 @@ def test_field_field_is_deterministic_and_rejects_infinite_regions():
     for x, y in zip(first, second):
         np.testing.assert_array_equal(x, y)
     with pytest.raises(ValueError):
-        descent.field_field_contacts(fa, fb, pose, [-np.inf, 0.0, 1.0, 1.0])
-    empty = descent.field_field_contacts(fa, fb, pose, [1.0, 1.0, 0.0, 0.0])
+        descent.field_field_contacts_single(fa, fb, pose, [-np.inf, 0.0, 1.0, 1.0])
+    empty = descent.field_field_contacts_single(fa, fb, pose, [1.0, 1.0, 0.0, 0.0])
     assert all(len(x) == 0 for x in empty)

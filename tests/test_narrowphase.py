@@ -428,6 +428,29 @@ def test_sdf_box_resting_flat_on_an_sdf_box():
     np.testing.assert_allclose(depth, [0.01, 0.01], atol=1e-6)
 
 
+def test_sdf_pair_group_field_calls_do_not_grow_with_pairs(rng):
+    """50 sdf boxes on one sdf ground (one group): each field is evaluated a bounded
+    number of times, the same bound as for 5 pairs (all pairs of a descent round in
+    one call): the starts, one call per descent iteration, and the patch search (its
+    two bracket ends, one call per iteration)."""
+    counting_ground = Counting(field({"type": "box", "size": [400.0, 1.0]}))
+    counting_box = Counting(field(TOP))
+    ground, box = SdfShape(counting_ground), SdfShape(counting_box)
+    _ = ground.field, ground.radius, box.field, box.radius
+    settings = Settings()
+    bound = 2 * settings.field_descent_iterations + 3
+    for n in (5, 50):
+        x = np.arange(n) * 2.0 - 50.0
+        position = np.concatenate([[[0.0, 0.0]], np.stack([x, np.full(n, 0.74)], axis=1)])
+        angle = np.r_[0.0, rng.uniform(-0.01, 0.01, n)]
+        counting_ground.calls = counting_box.calls = 0
+        c = find_contacts([ground, box], np.r_[0, np.ones(n, int)], position, angle,
+                          np.r_[False, np.ones(n, bool)], settings)
+        assert set(c.body_b) == set(range(1, n + 1))
+        assert 0 < counting_ground.calls <= bound
+        assert 0 < counting_box.calls <= bound
+
+
 def test_mesh_box_resting_on_an_sdf_ground():
     """Mesh-sdf: the mesh's corners against the sdf's face, either kind order."""
     ground = {"type": "sdf", "field": GROUND}

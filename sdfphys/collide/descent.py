@@ -7,9 +7,10 @@ field's own frame; sign convention of ``sdfphys.sdf``: f < 0 inside):
   triangle, one per start (3 vertices, 3 edge midpoints, centroid);
   ``merge_minima`` keeps one start per distinct minimum.
 - ``triangle_cull``: which triangles may reach f < margin (enclosing-circle test).
-- ``field_field_contacts``: contact points between two fields placed relative to
-  each other, found by descent on max(f_a, f_b) from starts spread over the
-  overlap of their bounds.
+- ``field_field_contacts``: contact points between two fields, for a batch of
+  placements of one relative to the other, found by descent on max(f_a, f_b)
+  from starts spread over the overlap of their bounds
+  (``field_field_contacts_single``: one placement).
 
 The fields are Python objects, so every descent round gathers the candidate
 points of ALL running starts into ONE ``field.evaluate`` call, between two
@@ -130,6 +131,7 @@ from . import _descent_kernels as kernels
 __all__ = [
     "START_BARYCENTRIC",
     "field_field_contacts",
+    "field_field_contacts_single",
     "merge_minima",
     "triangle_cull",
     "triangle_deepest",
@@ -261,6 +263,7 @@ class _TriangleProblem:
 
     kind = kernels.TRIANGLE
     barzilai_borwein = False
+    per_start = False
 
     def __init__(self, field: Field, triangles: np.ndarray, owner: np.ndarray,
                  at_vertex: np.ndarray, n_start: int, spanning: bool):
@@ -272,7 +275,9 @@ class _TriangleProblem:
         self.n_start = n_start
         self.spanning = spanning
 
-    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def evaluate(self, points: np.ndarray, start: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """f, grad f, grad f at points (N, 2); start (N,): not needed (one field for all)."""
         d, g = self.field.evaluate(points)
         return d, g, g
 
@@ -317,23 +322,44 @@ class _Workspace(threading.local):
 _WORK = _Workspace()
 
 
+def _point_starts(cand_i: np.ndarray, flags: np.ndarray, proposing: np.ndarray, n: int,
+                  n_eval: int) -> np.ndarray:
+    """(U,) the start each evaluated point of a round belongs to.
+
+    ``propose`` writes the candidates of the starts ``proposing`` (R,) one start
+    after the other (``flags[i, COUNT]`` each); cand_i (C, 2): a candidate whose
+    source is >= 0 added that row of the n_eval points.
+    """
+    owner = np.repeat(proposing, flags[proposing, kernels.COUNT])
+    source = cand_i[:n, 1]
+    added = source >= 0
+    start = np.empty(n_eval, dtype=np.int64)
+    start[source[added]] = owner[added]
+    return start
+
+
 def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, iterations: int,
-             sigma: np.ndarray, tol: float
+             sigma: np.ndarray, tol: float | np.ndarray
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Minimise the problem's objective from each start (P, 2) (see the module docstring).
 
-    sigma: (P,) initial step scale (path units); tol: a start stops when its
-    accepted step is shorter (m). At most ``iterations`` rounds, each ONE
-    ``problem.evaluate`` call over the candidates of all running starts between
-    two compiled kernels (``_descent_kernels.propose`` and ``accept``). Returns
-    the best point (P, 2), its objective (P,), its data (P, kd) and the number of
-    rounds each start ran (P,).
+    sigma: (P,) initial step scale (path units); tol: scalar or (P,), a start
+    stops when its accepted step is shorter (m). At most ``iterations`` rounds,
+    each ONE ``problem.evaluate`` call over the candidates of all running starts
+    between two compiled kernels (``_descent_kernels.propose`` and ``accept``).
+    ``accept`` takes one tol: given the smallest, the starts whose own tol is
+    larger and whose accepted step is shorter than it are then stopped here.
+    Returns the best point (P, 2), its objective (P,), its data (P, kd) and the
+    number of rounds each start ran (P,).
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
-    phi, grad, data = problem.evaluate(points)
+    n_points = len(points)
+    tol = np.broadcast_to(np.asarray(tol, dtype=np.float64), (n_points,))
+    least = float(tol.min()) if n_points else 0.0
+    uneven = n_points > 0 and bool(tol.max() > least)
+    phi, grad, data = problem.evaluate(points, np.arange(n_points))
     phi, grad = np.ascontiguousarray(phi, np.float64), np.ascontiguousarray(grad, np.float64)
     data = np.array(data, dtype=np.float64, order="C")              # updated in place
-    n_points = len(points)
     state = _WORK.rows("state", n_points, kernels.N_STATE)
     flags = _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64)
     kernels.initialize(points, phi, grad, np.ascontiguousarray(sigma, dtype=np.float64),
@@ -354,11 +380,25 @@ def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, itera
             problem.barzilai_borwein, running[:n_running], cand, cand_i, candidates)
         if n == 0:
             break
+        start = (_point_starts(cand_i, flags, running[:n_running], n, n_eval)
+                 if problem.per_start else None)
         value, gradient, cand_data = (np.ascontiguousarray(a, dtype=np.float64)
-                                      for a in problem.evaluate(candidates[:n_eval]))
+                                      for a in problem.evaluate(candidates[:n_eval], start))
+        before = state[:, kernels.BEST:kernels.BEST + 2].copy() if uneven else None
         n_running, size = kernels.accept(problem.kind, problem.triangles, problem.owner, corner,
                                          state, flags, data, cand, cand_i, value, gradient,
-                                         cand_data, tol, running[:n_running], shape, _SHAPE_TOL)
+                                         cand_data, least, running[:n_running], shape, _SHAPE_TOL)
+        if uneven:
+            kept = running[:n_running]
+            step = state[kept, kernels.BEST:kernels.BEST + 2] - before[kept]
+            moved = np.sqrt(step[:, 0] * step[:, 0] + step[:, 1] * step[:, 1])
+            stop = (flags[kept, kernels.HAS_PREVIOUS] != 0) & (moved < tol[kept])
+            if stop.any():
+                kept = kept[~stop]
+                n_running = len(kept)
+                running[:n_running] = kept
+                size = kernels.bound(problem.kind, problem.owner, shape, state, flags,
+                                     running[:n_running])
     best, phi, rounds = kernels.results(state, flags)
     return best, phi, data, rounds
 
@@ -429,15 +469,28 @@ def merge_minima(point: np.ndarray, radius: float) -> np.ndarray:
 # Contacts between two fields
 # --------------------------------------------------------------------------------------
 
-def _rotation(angle: float) -> np.ndarray:
+def _rotations(angle: np.ndarray) -> np.ndarray:
+    """(P, 2, 2) counter-clockwise rotation matrices by angle (P,) rad."""
     c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s], [s, c]])
+    return np.stack([np.stack([c, -s], axis=1), np.stack([s, c], axis=1)], axis=1)
+
+
+def _times(v: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """(N, 2) rows v (N, 2) times matrices m (N, 2, 2): v[n] @ m[n].
+
+    With m C-contiguous, the same bits as ``v @ M`` for one matrix M (N > 1).
+    """
+    return np.matmul(v[:, None, :], m)[:, 0]
 
 
 class _PairProblem:
-    """phi = max(f_a, f_b) over the plane, b placed in a's frame by (rotation, offset).
+    """phi = max(f_a, f_b) over the plane, for P placements of b in a's frame.
 
-    Point data: f_a, f_b, grad f_a, grad f_b (6 columns, a's frame). Path
+    Pair k places b by (rotation[k] (2, 2), offset[k] (2,)): p_a = R p_b + offset
+    (``inverse``: the transposes, contiguous);
+    start i belongs to pair ``pair_of[i]`` (S,). Both fields are the same objects
+    for every pair, so one round evaluates each field once on the points of all
+    pairs. Point data: f_a, f_b, grad f_a, grad f_b (6 columns, a's frame). Path
     parameters: origin and its data; the path is the proximal min-max path of
     the two fields' linearisations (``_descent_kernels._proximal_step``): steepest descent of the
     larger field until the linear models balance, then along the line where they
@@ -447,11 +500,14 @@ class _PairProblem:
 
     kind = kernels.PAIR
     barzilai_borwein = True
+    per_start = True
 
     def __init__(self, field_a: Field, field_b: Field, rotation: np.ndarray,
-                 offset: np.ndarray):
+                 offset: np.ndarray, pair_of: np.ndarray):
         self.field_a, self.field_b = field_a, field_b
         self.rotation, self.offset = rotation, offset
+        self.inverse = np.ascontiguousarray(rotation.transpose(0, 2, 1))
+        self.pair_of = pair_of
         self.triangles = np.zeros((1, 3, 2))           # no triangle: paths are not projected
         self.owner = np.zeros(0, dtype=np.int64)
 
@@ -460,14 +516,16 @@ class _PairProblem:
         """No triangle: no vertex values (1, 3, 3) NaN, no known shape (1, 4)."""
         return np.full((1, 3, 3), np.nan), np.zeros((1, 4))
 
-    def values(self, points: np.ndarray) -> np.ndarray:
-        """(N, 6): f_a, f_b, grad f_a, grad f_b at points (N, 2) of a's frame."""
+    def values(self, points: np.ndarray, pair: np.ndarray) -> np.ndarray:
+        """(N, 6): f_a, f_b, grad f_a, grad f_b at points (N, 2) of a's frame, of pairs (N,)."""
         fa, ga = self.field_a.evaluate(points)
-        fb, gb = self.field_b.evaluate((points - self.offset) @ self.rotation)
-        return np.column_stack([fa, fb, ga, gb @ self.rotation.T])
+        fb, gb = self.field_b.evaluate(_times(points - self.offset[pair], self.rotation[pair]))
+        return np.column_stack([fa, fb, ga, _times(gb, self.inverse[pair])])
 
-    def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        data = self.values(points)
+    def evaluate(self, points: np.ndarray, start: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """phi (N,), grad phi (N, 2), data (N, 6) at points (N, 2) of starts (N,)."""
+        data = self.values(points, self.pair_of[start])
         fa, fb, ga, gb = data[:, 0], data[:, 1], data[:, 2:4], data[:, 4:6]
         sign = np.where(fa >= fb, 1.0, -1.0)
         phi = 0.5 * (fa + fb) + kernels.IMBALANCE * np.abs(fa - fb)
@@ -491,43 +549,63 @@ def _halton(index: np.ndarray, base: int) -> np.ndarray:
     return result
 
 
-def _clusters(point: np.ndarray, key: np.ndarray, score: np.ndarray, tiebreak: np.ndarray,
-              radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """Merge points closer than radius: (head (C,), best (C,)) indices into the K points.
+def _clusters(group: np.ndarray, point: np.ndarray, key: np.ndarray, score: np.ndarray,
+              tiebreak: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Merge points of one group closer than radius: (head (C,), best (C,)) indices into K.
 
-    Each point joins the lowest-key point within radius of it (itself if none is
-    lower); per cluster, ``head`` is that lowest-key point (its key names the
-    cluster) and ``best`` the member to report: lowest score, and among scores
-    equal to rounding, lowest tiebreak.
+    group (K,): the points' groups (pairs), each group's points contiguous;
+    point (K, 2); key (K,) int; score, tiebreak, radius (K,) (radius: the
+    group's, m). Within its group, each point joins the lowest-key point within
+    radius of it (itself if none is lower); per cluster, ``head`` is that
+    lowest-key point (its key names the cluster) and ``best`` the member to
+    report: lowest score, and among scores equal to rounding, lowest tiebreak.
+    Clusters come group by group, in the order of their heads. The groups are
+    padded to the largest, (G, W, W) pairwise tests in all.
     """
-    gap = point[:, None, :] - point[None, :, :]
-    near = np.einsum("kjd,kjd->kj", gap, gap) < radius * radius
-    leader = np.argmin(np.where(near, key[None, :], np.iinfo(np.int64).max), axis=1)
-    head = np.flatnonzero(leader == np.arange(len(point)))
-    member = leader[None, :] == head[:, None]                          # (C, K)
-    lowest = np.min(np.where(member, score[None, :], np.inf), axis=1, keepdims=True)
+    n = len(point)
+    first = np.flatnonzero(np.r_[True, group[1:] != group[:-1]])      # (G,) run starts
+    count = np.diff(np.r_[first, n])
+    run = np.repeat(np.arange(len(first)), count)
+    width = int(count.max())
+    index = np.full((len(first), width), -1, dtype=np.int64)           # (G, W) -> point
+    index[run, np.arange(n) - first[run]] = np.arange(n)
+    valid = index >= 0
+    at = np.maximum(index, 0)
+    p = point[at]
+    gap = p[:, :, None, :] - p[:, None, :, :]                          # (G, W, W, 2)
+    r = radius[first]
+    near = np.einsum("gkjd,gkjd->gkj", gap, gap) < (r * r)[:, None, None]
+    near &= valid[:, None, :]
+    leader = np.argmin(np.where(near, key[at][:, None, :], np.iinfo(np.int64).max), axis=2)
+    slot = np.arange(width)
+    is_head = valid & (leader == slot)
+    member = (leader[:, None, :] == slot[None, :, None]) & valid[:, None, :]   # (G, W, W)
+    lowest = np.min(np.where(member, score[at][:, None, :], np.inf), axis=2, keepdims=True)
     rounding = 4.0 * kernels.EPS * np.maximum(1.0, np.abs(lowest))
-    member &= score[None, :] <= lowest + rounding
-    best = np.argmin(np.where(member, tiebreak[None, :], np.inf), axis=1)
-    return head, best
+    member &= score[at][:, None, :] <= lowest + rounding
+    best = np.argmin(np.where(member, tiebreak[at][:, None, :], np.inf), axis=2)
+    g, h = np.nonzero(is_head)
+    return index[g, h], index[g, best[g, h]]
 
 
-def _patch_ends(problem: _PairProblem, centre: np.ndarray, normal: np.ndarray,
-                depth: np.ndarray, sliver: float, reach: float, iterations: int,
-                tol: float) -> tuple[np.ndarray, np.ndarray]:
+def _patch_ends(problem: _PairProblem, pair: np.ndarray, centre: np.ndarray,
+                normal: np.ndarray, depth: np.ndarray, sliver: np.ndarray, reach: np.ndarray,
+                iterations: int, tol: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Extent of each contact's patch along its tangent: (s (K, 2), found (K, 2)).
 
-    centre: (K, 2) midway points, normal (K, 2), depth (K,). Shifting b by
-    (depth - sliver) along the normal leaves an overlap only where the two
-    surfaces are within ``sliver`` of the full depth of each other: a sliver of
-    thickness ``sliver`` just inside a's surface, over the flat part of the
-    contact patch (two parallel faces), a point-like lens where a surface is
-    curved. Its ends along t = perp(n) are the roots of
+    pair (K,): each contact's pair of the problem; centre: (K, 2) midway points,
+    normal (K, 2), depth (K,); sliver, reach, tol (K,): m, per contact (its
+    pair's scale). Shifting b by (depth - sliver) along the normal leaves an
+    overlap only where the two surfaces are within ``sliver`` of the full depth
+    of each other: a sliver of thickness ``sliver`` just inside a's surface,
+    over the flat part of the contact patch (two parallel faces), a point-like
+    lens where a surface is curved. Its ends along t = perp(n) are the roots of
     h(s) = max(f_a(x(s)), f_b(x(s) - shift)), x(s) = m + s t, m in the middle of
     the sliver, found by a safeguarded Newton / regula falsi / bisection search
-    on [0, reach] (h(0) < 0 < h(reach)) in both directions at once. Column 0 is
-    the -t end, column 1 the +t end (s >= 0 along its direction); ``found`` is
-    False where the sliver is empty at m (depth overestimated).
+    on [0, reach] (h(0) < 0 < h(reach)) in both directions of every contact at
+    once (each iteration one evaluation of each field). Column 0 is the -t end,
+    column 1 the +t end (s >= 0 along its direction); ``found`` is False where
+    the sliver is empty at m (depth overestimated).
     """
     n_contacts = len(depth)
     tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
@@ -535,23 +613,28 @@ def _patch_ends(problem: _PairProblem, centre: np.ndarray, normal: np.ndarray,
     middle = centre + (0.5 * depth - 0.5 * sliver)[:, None] * normal
     origin = np.concatenate([middle, middle])
     shift = np.concatenate([(depth - sliver)[:, None] * normal] * 2)
+    of = np.concatenate([pair, pair])
 
     def h(s: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         x = origin[rows] + s[:, None] * direction[rows]
+        pair_rows = of[rows]
         fa, ga = problem.field_a.evaluate(x)
-        fb, gb = problem.field_b.evaluate((x - shift[rows] - problem.offset) @ problem.rotation)
+        fb, gb = problem.field_b.evaluate(
+            _times(x - shift[rows] - problem.offset[pair_rows], problem.rotation[pair_rows]))
         slope = np.where(fa >= fb, np.einsum("nd,nd->n", ga, direction[rows]),
-                         np.einsum("nd,nd->n", gb @ problem.rotation.T, direction[rows]))
+                         np.einsum("nd,nd->n", _times(gb, problem.inverse[pair_rows]),
+                                   direction[rows]))
         return np.maximum(fa, fb), slope
 
     everything = np.arange(2 * n_contacts)
     h_lo = h(np.zeros(2 * n_contacts), everything)[0]
     lo = np.zeros(2 * n_contacts)
-    hi = np.full(2 * n_contacts, reach)
+    hi = np.concatenate([reach, reach])
+    tol = np.concatenate([tol, tol])
     h_hi, d_hi = h(hi, everything)
     found = h_lo < 0.0
     active = found & (h_hi > 0.0)
-    lo[found & ~active] = reach
+    lo[found & ~active] = hi[found & ~active]
     for _ in range(iterations):
         rows = np.flatnonzero(active & (hi - lo > tol))
         if len(rows) == 0:
@@ -582,19 +665,28 @@ def _patch_ends(problem: _PairProblem, centre: np.ndarray, normal: np.ndarray,
     return lo.reshape(2, n_contacts).T, found.reshape(2, n_contacts).T
 
 
-def field_field_contacts(field_a: Field, field_b: Field, pose_b_in_a: Sequence[float],
-                         region: Sequence[float], n_starts: int = 16, iterations: int = 24,
+def field_field_contacts(field_a: Field, field_b: Field, poses_b_in_a: np.ndarray,
+                         regions: np.ndarray, n_starts: int = 16, iterations: int = 24,
                          margin: float = 0.0
-                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Contacts between two fields: (point (K, 2), depth (K,), normal (K, 2), start_id (K,)).
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Contacts between two fields, for P placements of b in a's frame at once.
 
-    pose_b_in_a: (x, y, angle) placing b's frame in a's (p_a = R(angle) p_b + (x, y),
-    m, rad). region: (4,) finite box (xmin, ymin, xmax, ymax) in a's frame where
-    the bodies may overlap (the overlap of their bounds; grown by the margin for
-    speculative contacts). n_starts: starts over the region, the Halton (2, 3)
-    points 1..n_starts (a fixed pattern: start id k is always the same relative
-    place). iterations: descent iterations (each one evaluation of each field).
-    margin: m, contacts with depth > -margin are reported.
+    Returns (pair (K,), point (K, 2), depth (K,), normal (K, 2), start_id (K,)):
+    contact k belongs to row pair[k] of the inputs, in a's frame; the contacts
+    come pair by pair, in ascending pair order. Each pair's contacts are exactly
+    those of a batch of that pair alone (``field_field_contacts_single``).
+
+    poses_b_in_a: (P, 3) rows (x, y, angle) placing b's frame in a's
+    (p_a = R(angle) p_b + (x, y), m, rad). regions: (P, 4) finite boxes
+    (xmin, ymin, xmax, ymax) in a's frame where the bodies may overlap (the
+    overlap of their bounds; grown by the margin for speculative contacts); an
+    empty box (xmax < xmin or ymax < ymin) gives no contact. n_starts: starts
+    over each region, the Halton (2, 3) points 1..n_starts (a fixed pattern:
+    start id k is always the same relative place). iterations: descent
+    iterations. margin: m, contacts with depth > -margin are reported. Cost: the
+    fields are the same objects for every pair, so each descent iteration (and
+    each iteration of the patch search) is ONE ``evaluate`` call of each field
+    over the points of all pairs, whatever P.
 
     Method (Liu et al. 2024, MuJoCo's SDF-SDF collision): every start descends
     phi = max(f_a, f_b) (see ``_PairProblem``), whose minima are the points
@@ -614,64 +706,91 @@ def field_field_contacts(field_a: Field, field_b: Field, pose_b_in_a: Sequence[f
     - point: p moved to midway between the two surfaces along the normal,
       p + (f_b - f_a) / 2 n (a's surface at p - f_a n, b's at p + f_b n).
 
-    Contacts of different starts within 1e-3 of the region's diagonal are one
-    (the lowest start id is kept). Then each contact's patch is measured along
-    its tangent (``_patch_ends``): where the two surfaces stay parallel at the
-    full depth (a box resting on a box) the contact is replaced by the two ends
-    of that flat patch, with the same depth and normal, ids n_starts + 2k (the -t
-    end, t = perp(n)) and n_starts + 2k + 1 (the +t end) for start k; merged
-    again by distance. Ids are < n_starts * 3.
+    Contacts of different starts of a pair within 1e-3 of its region's diagonal
+    are one (the lowest start id is kept). Then each contact's patch is measured
+    along its tangent (``_patch_ends``): where the two surfaces stay parallel at
+    the full depth (a box resting on a box) the contact is replaced by the two
+    ends of that flat patch, with the same depth and normal, ids n_starts + 2k
+    (the -t end, t = perp(n)) and n_starts + 2k + 1 (the +t end) for start k;
+    merged again by distance. Ids are < n_starts * 3.
 
     Limits: a start may stop at a local minimum of max(f_a, f_b) that is not a
     contact (it is then dropped); two contacts closer than the merge distance are
     one; a slightly tilted flat contact reports its deepest end only.
     """
-    region = np.asarray(region, dtype=np.float64).reshape(4)
-    empty = (np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)), np.zeros(0, dtype=np.int64))
-    if not np.all(np.isfinite(region)):
-        raise ValueError(f"region must be finite, got {region}")
-    lo, hi = region[:2], region[2:]
-    if np.any(hi < lo) or n_starts < 1:
+    poses = np.asarray(poses_b_in_a, dtype=np.float64).reshape(-1, 3)
+    regions = np.asarray(regions, dtype=np.float64).reshape(-1, 4)
+    if len(poses) != len(regions):
+        raise ValueError(f"{len(poses)} poses but {len(regions)} regions")
+    if not np.all(np.isfinite(regions)):
+        raise ValueError(f"regions must be finite, got {regions}")
+    empty = (np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)),
+             np.zeros(0, dtype=np.int64))
+    live = np.flatnonzero(np.all(regions[:, 2:] >= regions[:, :2], axis=1))
+    if len(live) == 0 or n_starts < 1:
         return empty
-    x, y, angle = (float(v) for v in pose_b_in_a)
-    problem = _PairProblem(field_a, field_b, _rotation(angle), np.array([x, y]))
-    diagonal = float(np.hypot(*(hi - lo)))
-    scale = max(diagonal, _TINY)
+    lo, hi = regions[live, :2], regions[live, 2:]
+    pair_of = np.repeat(np.arange(len(live)), n_starts)                 # (S,) start -> pair
+    problem = _PairProblem(field_a, field_b, _rotations(poses[live, 2]), poses[live, :2],
+                           pair_of)
+    extent = hi - lo
+    scale = np.maximum(np.hypot(extent[:, 0], extent[:, 1]), _TINY)    # (L,) diagonals
 
     # Starts and descent.
     index = np.arange(1, n_starts + 1)
-    starts = lo + (hi - lo) * np.column_stack([_halton(index, 2), _halton(index, 3)])
-    best, phi, data, _ = _descend(problem, starts, iterations, np.full(n_starts, 0.25 * scale),
-                                  1e-12 * scale)
+    unit = np.column_stack([_halton(index, 2), _halton(index, 3)])
+    starts = (lo[:, None, :] + extent[:, None, :] * unit[None, :, :]).reshape(-1, 2)
+    scale_of = scale[pair_of]
+    best, phi, data, _ = _descend(problem, starts, iterations, 0.25 * scale_of,
+                                  1e-12 * scale_of)
     fa, fb, ga, gb = data[:, 0], data[:, 1], data[:, 2:4], data[:, 4:6]
     hit = phi < 0.5 * margin
-    balanced = np.abs(fa - fb) <= 1e-9 * scale
+    balanced = np.abs(fa - fb) <= 1e-9 * scale_of
     normal = np.where(balanced[:, None], ga - gb, np.where((fa > fb)[:, None], -gb, ga))
     normal = safe_normalize(normal)
     depth = -(fa + fb)
     point = best + (0.5 * (fb - fa))[:, None] * normal
-    start_id = np.arange(n_starts)
+    start_id = np.tile(np.arange(n_starts), len(live))
     hits = np.flatnonzero(hit)
     if len(hits) == 0:
         return empty
-    head, chosen = _clusters(best[hits], start_id[hits], phi[hits],
-                             problem.stationarity(data[hits]), _MERGE * scale)
+    head, chosen = _clusters(pair_of[hits], best[hits], start_id[hits], phi[hits],
+                             problem.stationarity(data[hits]), _MERGE * scale_of[hits])
     take = hits[chosen]
+    pair = pair_of[take]
     point, depth, normal, start_id = point[take], depth[take], normal[take], start_id[hits[head]]
 
     # Flat patches: replace a contact by the two ends of its patch when either is far.
-    radius = _MERGE * scale
-    sliver = _SLIVER * scale
-    ends, found = _patch_ends(problem, point, normal, depth, sliver, 2.0 * scale,
-                              iterations, 1e-12 * scale)
-    flat = np.any(found & (ends > radius), axis=1)
+    radius = _MERGE * scale[pair]
+    ends, found = _patch_ends(problem, pair, point, normal, depth, _SLIVER * scale[pair],
+                              2.0 * scale[pair], iterations, 1e-12 * scale[pair])
+    flat = np.any(found & (ends > radius[:, None]), axis=1)
     tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
     end_point = np.concatenate([point - ends[:, :1] * tangent, point + ends[:, 1:] * tangent])
     end_id = np.concatenate([n_starts + 2 * start_id, n_starts + 2 * start_id + 1])
     two = np.concatenate([flat, flat])
-    point = np.concatenate([point[~flat], end_point[two]])
-    depth = np.concatenate([depth[~flat], np.concatenate([depth, depth])[two]])
-    normal = np.concatenate([normal[~flat], np.concatenate([normal, normal])[two]])
-    start_id = np.concatenate([start_id[~flat], end_id[two]])
-    head, chosen = _clusters(point, start_id, -depth, start_id.astype(np.float64), radius)
-    return point[chosen], depth[chosen], normal[chosen], start_id[head]
+    # Per pair: its contacts kept as they are, then the -t ends, then the +t ends.
+    pair = np.concatenate([pair[~flat], np.concatenate([pair, pair])[two]])
+    order = np.argsort(pair, kind="stable")
+    pair = pair[order]
+    point = np.concatenate([point[~flat], end_point[two]])[order]
+    depth = np.concatenate([depth[~flat], np.concatenate([depth, depth])[two]])[order]
+    normal = np.concatenate([normal[~flat], np.concatenate([normal, normal])[two]])[order]
+    start_id = np.concatenate([start_id[~flat], end_id[two]])[order]
+    head, chosen = _clusters(pair, point, start_id, -depth, start_id.astype(np.float64),
+                             _MERGE * scale[pair])
+    return live[pair[chosen]], point[chosen], depth[chosen], normal[chosen], start_id[head]
+
+
+def field_field_contacts_single(field_a: Field, field_b: Field, pose_b_in_a: Sequence[float],
+                                region: Sequence[float], n_starts: int = 16,
+                                iterations: int = 24, margin: float = 0.0
+                                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``field_field_contacts`` for one pose (3,) and region (4,).
+
+    Returns (point (K, 2), depth (K,), normal (K, 2), start_id (K,)).
+    """
+    _, point, depth, normal, start_id = field_field_contacts(
+        field_a, field_b, np.reshape(pose_b_in_a, (1, 3)), np.reshape(region, (1, 4)),
+        n_starts=n_starts, iterations=iterations, margin=margin)
+    return point, depth, normal, start_id

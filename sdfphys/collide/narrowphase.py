@@ -159,8 +159,8 @@ def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b
 
     Decision: the mesh's triangles, vertices and edge midpoints are queried in the
     sdf's field, batched over the group. The other view (the sdf's deepest points
-    inside the mesh's polygon field) needs a field-field query, per pair today (see
-    ``collide_sdfs``), so it is not run: where a sharp feature of the sdf pokes
+    inside the mesh's polygon field) would need a field-field descent as in
+    ``collide_sdfs``; it is not run: where a sharp feature of the sdf pokes
     into a face of the mesh, the depth is underestimated and the normal follows
     the feature's side (the approximation stated in the module docstring). A mesh
     vertex or edge pressing on the sdf, and faces resting on faces, are exact.
@@ -202,28 +202,23 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     Points, normals (a toward b) and depths come back in a's frame and are rotated
     to the world; keys are (source 3, start id).
 
-    Cost: ``field_field_contacts`` takes one pose, so this loops over the group's
-    pairs in Python, two field evaluations per descent iteration per pair. It is
-    the one pair function whose Python cost grows with the number of pairs, until
-    the descent offers a batched field-field query.
+    Cost: one ``field_field_contacts`` call for the whole group (the pairs share
+    the two fields; only b's pose in a's frame and the region differ), so each
+    descent iteration is one evaluation of each field over the points of all
+    pairs.
     """
     from .descent import field_field_contacts
 
     angle = pose_b[:, 2] - pose_a[:, 2]
     offset = _to_local(pose_b[:, :2], pose_a)
     region = _overlap_region(sdf_a.bounds(), sdf_b.bounds(), angle, offset, margin)
-    parts = []
-    for k in range(len(angle)):
-        point, depth, normal, start = field_field_contacts(
-            sdf_a.field, sdf_b.field, (offset[k, 0], offset[k, 1], angle[k]), region[k],
-            n_starts=settings.field_descent_starts,
-            iterations=settings.field_descent_iterations,
-            margin=margin)
-        rot = np.full(len(depth), pose_a[k, 2])
-        parts.append(Contacts(np.full(len(depth), body_a[k]), np.full(len(depth), body_b[k]),
-                              _rotate(point, rot) + pose_a[k, :2], _rotate(normal, rot),
-                              depth, feature_key(SOURCE_FIELDS, 0, start)))
-    return Contacts.concatenate(parts)
+    pair, point, depth, normal, start = field_field_contacts(
+        sdf_a.field, sdf_b.field, np.column_stack([offset, angle]), region,
+        n_starts=settings.field_descent_starts, iterations=settings.field_descent_iterations,
+        margin=margin)
+    rot = pose_a[pair, 2]
+    return Contacts(body_a[pair], body_b[pair], _rotate(point, rot) + pose_a[pair, :2],
+                    _rotate(normal, rot), depth, feature_key(SOURCE_FIELDS, 0, start))
 
 
 #: (kind_a, kind_b) -> pair function, kind_a <= kind_b in KIND_ORDER.
