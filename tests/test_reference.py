@@ -118,8 +118,8 @@ KINDS_SCENE = {
          "position": [3.2, 2.8]},
         {"name": "on_rail", "shape": {"type": "circle", "radius": 0.2},
          "position": [5.0, 1.6]},
-        {"name": "on_bumper", "shape": {"type": "circle", "radius": 0.3},
-         "position": [-0.9, 1.6]},
+        {"name": "on_bumper", "shape": {"type": "circle", "radius": 0.3},   # comes to
+         "position": [-1.0, 1.6]},                                          # rest on top
     ],
 }
 
