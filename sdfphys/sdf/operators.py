@@ -100,8 +100,18 @@ def _check_operands(of: list[Field]) -> list[Field]:
 # multiply every distance by the same factor).
 # --------------------------------------------------------------------------------------
 
+class _Leveled(Field):
+    """An operator that knows ``level_bounds(t)``; its ``bounds()`` is the level 0 box."""
+
+    def level_bounds(self, level: float) -> np.ndarray:
+        raise NotImplementedError
+
+    def bounds(self):
+        return self.level_bounds(0.0)
+
+
 @operator("transform", Param("of", "field", REQUIRED, "the field to place"))
-class Transform(Field):
+class Transform(_Leveled):
     """``of`` rotated by ``angle`` (radians, counter-clockwise) then moved by ``offset`` (m).
 
     f(p) = g(R^T (p - t)); gradient R grad g. Exact when ``of`` is. In a spec,
@@ -138,9 +148,6 @@ class Transform(Field):
         """R v for vectors (N, 2)."""
         (c, ms), (s, _) = self.rotation
         return np.stack([c * v[:, 0] + ms * v[:, 1], s * v[:, 0] + c * v[:, 1]], axis=1)
-
-    def bounds(self):
-        return self.level_bounds(0.0)
 
     def level_bounds(self, level: float) -> np.ndarray:
         """The box of the rotated and moved operand box at ``level``."""
@@ -180,7 +187,7 @@ class Rotate(Transform):
 
 @operator("scale", Param("of", "field", REQUIRED, "the field to scale"),
           Param("factor", "positive", REQUIRED, "uniform scale factor s > 0"))
-class Scale(Field):
+class Scale(_Leveled):
     """``of`` scaled by ``factor`` s > 0 about the origin: f(p) = s g(p / s).
 
     Gradient: grad f(p) = s (1/s) grad g(p / s) = grad g(p / s). Uniform scaling
@@ -199,9 +206,6 @@ class Scale(Field):
     def distance(self, points):
         return self.factor * self.of.distance(as_points(points) / self.factor)
 
-    def bounds(self):
-        return self.level_bounds(0.0)
-
     def level_bounds(self, level: float) -> np.ndarray:
         """f <= t  <=>  g(p / s) <= t / s."""
         return self.factor * level_bounds(self.of, level / self.factor)
@@ -211,7 +215,7 @@ class Scale(Field):
 # Boolean combinations (n-ary; the first operand wins ties).
 # --------------------------------------------------------------------------------------
 
-class _Select(Field):
+class _Select(_Leveled):
     """Common part of union / intersection / difference: pick one operand per point.
 
     Subclasses set ``_pick`` (argmin or argmax; numpy returns the first index of a
@@ -251,9 +255,6 @@ class Union(_Select):
 
     _pick = staticmethod(np.argmin)
 
-    def bounds(self):
-        return self.level_bounds(0.0)
-
     def level_bounds(self, level: float) -> np.ndarray:
         """min_i f_i <= t when some f_i <= t."""
         return _hull([level_bounds(f, level) for f in self.of])
@@ -269,9 +270,6 @@ class Intersection(_Select):
     """
 
     _pick = staticmethod(np.argmax)
-
-    def bounds(self):
-        return self.level_bounds(0.0)
 
     def level_bounds(self, level: float) -> np.ndarray:
         """max_i f_i <= t when every f_i <= t."""
@@ -293,16 +291,13 @@ class Difference(_Select):
         super().__init__(of)
         self._signs[1:] = -1.0
 
-    def bounds(self):
-        return self.level_bounds(0.0)
-
     def level_bounds(self, level: float) -> np.ndarray:
         """max(a, ...) <= t implies a <= t."""
         return level_bounds(self.of[0], level)
 
 
 @operator("xor", Param("of", "fields", REQUIRED, "two or more FIELDs"))
-class Xor(Field):
+class Xor(_Leveled):
     """Points inside an odd number of the fields: xor(a, b) = max(min(a, b), -max(a, b)).
 
     More than two operands fold from the left: xor(xor(a, b), c). Gradient by
@@ -336,9 +331,6 @@ class Xor(Field):
             b = f.distance(p)
             d = np.maximum(np.minimum(d, b), -np.maximum(d, b))
         return d
-
-    def bounds(self):
-        return self.level_bounds(0.0)
 
     def level_bounds(self, level: float) -> np.ndarray:
         """xor <= t implies min(a, b) <= t."""
@@ -427,7 +419,7 @@ _SMOOTH_PARAMS = (
 )
 
 
-class _Smooth(Field):
+class _Smooth(_Leveled):
     """Common part of the smooth blends: operands, width ``k`` and kernel ``blend``."""
 
     exact = False
@@ -439,9 +431,6 @@ class _Smooth(Field):
             raise SpecError("blend", f"must be one of {', '.join(BLENDS)}; got {blend!r}")
         self.blend = blend
         self.dip = BLENDS[blend][1] * self.k
-
-    def bounds(self):
-        return self.level_bounds(0.0)
 
 
 @operator("smooth_union", Param("of", "fields", REQUIRED, "two or more FIELDs"),
@@ -551,7 +540,7 @@ class SmoothDifference(_Smooth):
 
 @operator("round", Param("of", "field", REQUIRED, "the field to round"),
           Param("r", "nonneg", REQUIRED, "rounding radius, m"))
-class Round(Field):
+class Round(_Leveled):
     """``of`` grown by ``r`` (m): f = g - r, gradient grad g (corners become arcs of radius r).
 
     For an exact ``of`` the result is exact where g >= r (outside: walking from p
@@ -576,9 +565,6 @@ class Round(Field):
     def distance(self, points):
         return self.of.distance(as_points(points)) - self.r
 
-    def bounds(self):
-        return self.level_bounds(0.0)
-
     def level_bounds(self, level: float) -> np.ndarray:
         """g - r <= t  <=>  g <= t + r."""
         return level_bounds(self.of, level + self.r)
@@ -586,7 +572,7 @@ class Round(Field):
 
 @operator("onion", Param("of", "field", REQUIRED, "the field to hollow"),
           Param("thickness", "positive", REQUIRED, "half-thickness t of the shell, m"))
-class Onion(Field):
+class Onion(_Leveled):
     """A shell of half-thickness t around the boundary of ``of``: f = |g| - t.
 
     Gradient sign(g) grad g, with sign(0) = +1. For an exact ``of`` the result is
@@ -611,9 +597,6 @@ class Onion(Field):
 
     def distance(self, points):
         return np.abs(self.of.distance(as_points(points))) - self.thickness
-
-    def bounds(self):
-        return self.level_bounds(0.0)
 
     def level_bounds(self, level: float) -> np.ndarray:
         """|g| - t <= s implies g <= s + t."""
