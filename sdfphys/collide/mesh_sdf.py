@@ -1,0 +1,218 @@
+"""The sdf body's points inside a mesh: the reverse direction of mesh-sdf pairs, n pairs at once.
+
+``mesh_contacts.mesh_in_field`` finds the mesh's points inside the sdf body: exact
+for a mesh vertex or edge pressing on the sdf, but where a corner (any sharp
+feature) of the sdf body presses into a flat face of the mesh it only sees the
+face's points inside the corner's wedge, whose depth -f_sdf underestimates the
+corner's depth (by 1 - cos 45 deg = 29 % for a square corner pressed straight in)
+and whose normal follows the corner's side. ``sdf_in_mesh`` finds the sdf body's
+points deepest in the mesh instead, for all n pairs of a group:
+
+1. ``descent.field_field_contacts`` on the sdf's field and the mesh's exact polygon
+   field (``mesh.field``), solved in the sdf's frame (so an unbounded sdf, a
+   half-plane ground, works: the overlap region is bounded by the mesh), over the
+   overlap of the two bounds grown by the margin, as ``narrowphase.collide_sdfs``.
+   Its points are where the two bodies overlap (flat patches: the patch's two ends);
+   its normal, where f_mesh = f_sdf, averages the two gradients, which is wrong for
+   a corner pressing into a face, so only its points are kept.
+2. ``_deepest_on_sdf``: from each point, a descent of f_mesh over the sdf body's
+   boundary (a support search along the mesh face's inward normal): the point is
+   projected onto the sdf's surface (z = w - f_sdf(w) grad f_sdf(w), exact in one
+   step for an exact field, whose gradient at w is the surface normal at z), then
+   moved along the surface's tangent toward -n, n = grad f_mesh(z) the normal of the
+   mesh face z is under, and projected back. Past a convex corner of the sdf the
+   projection snaps to the corner, so a corner is reached exactly. Depth -f_mesh
+   and normal grad f_mesh are those of the final sdf point z: exact for an sdf
+   corner or face pressing on a mesh face.
+
+Results: normal n = grad f_mesh(z), unit, outward of the mesh, i.e. from the mesh
+toward the sdf body; depth = -f_mesh(z) (> 0 overlapping; a separated pair within
+the margin gives -gap); point = z + depth / 2 n, midway between the sdf's point z
+and the mesh face above it (z - f_mesh(z) n); the mesh outline edge nearest that
+face point, for the feature key (``narrowphase``: source 4).
+
+Where a vertex of the mesh presses into the sdf's face instead, the descent ends
+on the mesh's medial axis (the sdf face's point deepest in the mesh's corner
+wedge): depth underestimated, normal a mesh side's. The forward direction reports
+that vertex exactly and deeper within less than its depth, which shadows this
+point in the reduction (``reduce``), as it shadows the forward direction's wedge
+points when an sdf corner presses into a mesh face.
+
+Cost: one ``field_field_contacts`` call (each of its rounds one evaluation of each
+field for all pairs), then ``1 + REFINE_ROUNDS`` evaluations of each field for all
+contacts of all pairs; nothing is per pair or per contact in Python.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..sdf import Field, safe_normalize
+from ..settings import Settings
+from ..shapes import Shape
+from .descent import field_field_contacts
+
+__all__ = ["REFINE_ROUNDS", "sdf_in_mesh"]
+
+#: Rounds of the support search (``_deepest_on_sdf``), one evaluation of each field
+#: per round for all contacts: 4 rungs x 4 growth per round span 4^8 in step size.
+REFINE_ROUNDS = 8
+#: Steps tried per round, times the contact's step scale (one evaluation batch).
+_LADDER = np.array([1.0 / 16.0, 0.25, 1.0, 4.0])
+#: A round without decrease divides the step scale by this (below the lowest rung).
+_SHRINK = 64.0
+#: |tangential part of -n| (sin of the angle between the sdf normal and -n) under
+#: which the sdf surface is parallel to the mesh face: every point of it is as deep,
+#: the search stops (a face resting on a face keeps the patch ends it started from).
+_PARALLEL = 1e-9
+#: Steps shorter than this fraction of the pair's overlap diagonal end the search.
+_MIN_STEP = 1e-12
+
+
+def _rotate(v: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
+    """Rows of v (N, 2) rotated counter-clockwise by the angles of cos, sin (N,)."""
+    return np.stack([cos * v[:, 0] - sin * v[:, 1], sin * v[:, 0] + cos * v[:, 1]], axis=1)
+
+
+class _MeshInSdfFrame:
+    """The mesh's field seen from the sdf's frame, for P placements (one call per batch).
+
+    Pair k places the mesh by angle[k] and offset[k] (2,): p_sdf = R p_mesh + offset.
+    """
+
+    def __init__(self, field: Field, angle: np.ndarray, offset: np.ndarray):
+        self.field = field
+        self.cos, self.sin, self.offset = np.cos(angle), np.sin(angle), offset
+
+    def to_mesh(self, points: np.ndarray, pair: np.ndarray) -> np.ndarray:
+        """Points (N, 2) of the sdf's frame into the mesh's frame of pairs (N,)."""
+        return _rotate(points - self.offset[pair], self.cos[pair], -self.sin[pair])
+
+    def evaluate(self, points: np.ndarray, pair: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """f_mesh (N,) and its unit gradient (N, 2) (sdf frame) at points (N, 2), pairs (N,)."""
+        f, g = self.field.evaluate(self.to_mesh(points, pair))
+        return f, _rotate(safe_normalize(g), self.cos[pair], self.sin[pair])
+
+
+def _project(sdf: Field, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points w (N, 2) onto the sdf's surface: z = w - f(w) g(w), and the unit normal g.
+
+    Exact for an exact field (its gradient at w is the normal at w's closest surface
+    point); for a bound, one Newton step toward the surface.
+    """
+    f, g = sdf.evaluate(w)
+    g = safe_normalize(g)
+    return w - f[:, None] * g, g
+
+
+def _deepest_on_sdf(sdf: Field, mesh: _MeshInSdfFrame, pair: np.ndarray, start: np.ndarray,
+                    step: np.ndarray, min_step: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Local minimum of f_mesh over the sdf's surface from K starts (sdf frame).
+
+    pair: (K,) pair of each start; start: (K, 2) points near the sdf's surface;
+    step: (K,) initial step scale (m); min_step: (K,) m, the search of a contact
+    ends when its step scale falls below it. Returns (z (K, 2) on the sdf's
+    surface, f_mesh(z) (K,), n = unit grad f_mesh(z) (K, 2)).
+
+    Each round, for every running contact at z (sdf normal g): the direction
+    t = -n + (n.g) g (the tangent of the sdf's surface along which the mesh's
+    linearisation decreases; |t| <= ``_PARALLEL``: the surface is parallel to the
+    face, done), the ladder z + step * ``_LADDER`` t projected onto the surface
+    (one sdf evaluation), f_mesh there (one mesh evaluation). Only the first valley
+    of the ladder counts (rungs while f_mesh keeps falling), so a start stays in
+    its own basin; its deepest rung is accepted and the scale becomes that rung's
+    step (times 4 when it is the last rung); a round without decrease divides the
+    scale by ``_SHRINK``. f_mesh never increases.
+    """
+    z, g = _project(sdf, start)
+    phi, n = mesh.evaluate(z, pair)
+    step = step.copy()
+    active = np.ones(len(z), bool)
+    rungs = len(_LADDER)
+    for _ in range(REFINE_ROUNDS):
+        rows = np.flatnonzero(active)
+        t = -n[rows] + np.einsum("kd,kd->k", n[rows], g[rows])[:, None] * g[rows]
+        length = np.hypot(t[:, 0], t[:, 1])
+        moving = length > _PARALLEL
+        active[rows[~moving]] = False
+        rows, t = rows[moving], t[moving] / length[moving, None]
+        if len(rows) == 0:
+            break
+        w = z[rows, None, :] + (step[rows, None] * _LADDER)[:, :, None] * t[:, None, :]
+        zc, gc = _project(sdf, w.reshape(-1, 2))
+        fc, nc = mesh.evaluate(zc, np.repeat(pair[rows], rungs))
+        fc = fc.reshape(-1, rungs)
+        before = np.column_stack([phi[rows], fc[:, :-1]])
+        tol = 4.0 * np.finfo(float).eps * np.maximum(1.0, np.abs(before))
+        falling = np.cumprod(fc < before - tol, axis=1).astype(bool)
+        count = falling.sum(axis=1)
+        better = count > 0
+        best = np.maximum(count - 1, 0)
+        flat = np.arange(len(rows)) * rungs + best
+        won = rows[better]
+        z[won], g[won] = zc[flat[better]], gc[flat[better]]
+        phi[won], n[won] = fc[better, best[better]], nc[flat[better]]
+        grow = np.where(best == rungs - 1, 4.0, 1.0)
+        step[won] = (step[rows] * _LADDER[best] * grow)[better]
+        lost = rows[~better]
+        step[lost] /= _SHRINK
+        active[lost] = step[lost] >= min_step[lost]
+    return z, phi, n
+
+
+def _nearest_edges(vertices: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Index (K,) of the outline edge (i: vertex i to i + 1 mod M) nearest each point.
+
+    vertices: (M, 2) the mesh's outline; points: (K, 2) in the mesh's frame. Ties
+    (a point equally near two edges, at their shared vertex) go to the lower index.
+    """
+    a = vertices[None, :, :]
+    e = np.roll(vertices, -1, axis=0)[None, :, :] - a                    # (1, M, 2)
+    rel = points[:, None, :] - a                                          # (K, M, 2)
+    t = np.clip(np.sum(rel * e, axis=2) / np.sum(e * e, axis=2), 0.0, 1.0)
+    gap = rel - t[:, :, None] * e
+    return np.argmin(np.sum(gap * gap, axis=2), axis=1)
+
+
+def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.ndarray,
+                region: np.ndarray, margin: float, settings: Settings
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                           np.ndarray]:
+    """Contacts of the sdf body's points inside ``mesh`` for n pairs (see the module doc).
+
+    pose_mesh, pose_sdf: (n, 3) centre-of-mass poses (x, y, angle), world (m, rad).
+    region: (n, 4) boxes (xmin, ymin, xmax, ymax) in the SDF's body frame where the
+    two may overlap, grown by the margin (``narrowphase._overlap_region``).
+    margin: m, contacts with depth > -margin are returned. Field-field starts and
+    iterations: ``settings.field_descent_starts`` / ``field_descent_iterations``.
+    Returns pair index (C,), midway point (C, 2) world, normal (C, 2) world (unit,
+    outward of the mesh: from the mesh toward the sdf body), depth (C,) m, the mesh
+    outline edge pressed on (C,) and the field-field start id (C,) (< 3
+    ``field_descent_starts``).
+    """
+    angle = pose_mesh[:, 2] - pose_sdf[:, 2]
+    co, so = np.cos(pose_sdf[:, 2]), np.sin(pose_sdf[:, 2])
+    offset = _rotate(pose_mesh[:, :2] - pose_sdf[:, :2], co, -so)      # mesh in sdf frame
+    pair, point, depth, _, start = field_field_contacts(
+        sdf.field, mesh.field, np.column_stack([offset, angle]), region,
+        n_starts=settings.field_descent_starts, iterations=settings.field_descent_iterations,
+        margin=margin)
+    empty = (pair, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), pair.copy(), pair.copy())
+    if len(pair) == 0:
+        return empty
+
+    in_sdf = _MeshInSdfFrame(mesh.field, angle, offset)
+    extent = region[pair, 2:] - region[pair, :2]
+    diagonal = np.hypot(extent[:, 0], extent[:, 1])
+    z, phi, n = _deepest_on_sdf(sdf.field, in_sdf, pair, point,
+                                np.abs(depth) + 1e-3 * diagonal, _MIN_STEP * diagonal)
+    depth = -phi
+    keep = depth > -margin
+    pair, z, depth, n, start = pair[keep], z[keep], depth[keep], n[keep], start[keep]
+    face = in_sdf.to_mesh(z + depth[:, None] * n, pair)                  # mesh surface point
+    edge = _nearest_edges(mesh.vertices, face)
+    mid = z + (0.5 * depth)[:, None] * n
+    co, so = co[pair], so[pair]
+    world_mid = _rotate(mid, co, so) + pose_sdf[pair, :2]
+    return pair, world_mid, _rotate(n, co, so), depth, edge, start

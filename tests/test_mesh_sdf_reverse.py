@@ -1,0 +1,197 @@
+"""Mesh-sdf pairs from the sdf's side: the sdf body's corners and faces pressing into mesh faces.
+
+Exact answers (geometry of boxes and discs, tolerance 1e-6 m / 1e-6 on unit normals:
+the field-field descent that seeds the search converges to ~1e-12 of the region).
+A mesh plank ``{"type": "box"}`` is body a or b; an sdf box or disc presses into
+its top face y = 0.1. Normal from a toward b, depth > 0 overlapping, point midway.
+"""
+
+import importlib
+import math
+
+import numpy as np
+import pytest
+
+from sdfphys.collide import collide
+from sdfphys.collide.narrowphase import SOURCE_SDF_IN_MESH
+from sdfphys.settings import Settings
+
+mesh_sdf = importlib.import_module("sdfphys.collide.mesh_sdf")
+
+PLANK = {"type": "box", "size": [4.0, 0.2]}                   # top face at y = 0.1
+SDF_BOX = {"type": "sdf", "field": {"type": "box", "size": [1.0, 0.5]}}
+SDF_SQUARE = {"type": "sdf", "field": {"type": "box", "size": [0.5, 0.5]}}
+HALF = np.array([0.5, 0.25])
+TOL = 1e-6
+
+
+def rotation(theta):
+    return np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
+
+
+def moved(pose, theta, shift):
+    """A user pose (x, y, a) after the rigid motion: rotate by theta about 0, then shift."""
+    return (*(rotation(theta) @ np.asarray(pose[:2]) + shift), pose[2] + theta)
+
+
+def both_orders(plank_pose, sdf_shape, sdf_pose, margin=0.0):
+    """[(contacts, sign)]: plank as a (normal sign +1) and as b (sign -1)."""
+    return [(collide(PLANK, plank_pose, sdf_shape, sdf_pose, margin=margin), 1.0),
+            (collide(sdf_shape, sdf_pose, PLANK, plank_pose, margin=margin), -1.0)]
+
+
+def lowest_corner(half, angle):
+    corners = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * half @ rotation(angle).T
+    return corners[np.argmin(corners[:, 1])]
+
+
+@pytest.mark.parametrize("gap", [-0.01, 0.005])
+def test_sdf_box_flat_on_a_mesh_plank_gets_its_two_corners(rng, gap):
+    """Overlap 0.01 (or a 5 mm gap within a 2 cm margin): contacts at the box's bottom
+    corners x = -0.2 and 0.8, depth -gap, normal the plank's face normal (a toward b),
+    in both argument orders and after rigid motions of the whole scene."""
+    box = (0.3, 0.1 + 0.25 + gap, 0.0)
+    corners = np.array([[-0.2, 0.1 + 0.5 * gap], [0.8, 0.1 + 0.5 * gap]])
+    for theta, shift in [(0.0, np.zeros(2))] + [(rng.uniform(-4, 4), rng.uniform(-5, 5, 2))
+                                                  for _ in range(4)]:
+        plank, sdf = moved((0.0, 0.0, 0.0), theta, shift), moved(box, theta, shift)
+        up = rotation(theta)[:, 1]
+        for c, sign in both_orders(plank, SDF_BOX, sdf, margin=0.02):
+            assert len(c) >= 2
+            np.testing.assert_allclose(c.depth, -gap, atol=TOL)
+            np.testing.assert_allclose(c.normal, np.tile(sign * up, (len(c), 1)), atol=TOL)
+            local = (c.point - shift) @ rotation(theta)          # back to the unmoved scene
+            for corner in corners:
+                assert np.min(np.linalg.norm(local - corner, axis=1)) <= TOL
+            # every contact lies on the face between the two corners
+            np.testing.assert_allclose(local[:, 1], 0.1 + 0.5 * gap, atol=TOL)
+            assert np.all((local[:, 0] >= -0.2 - TOL) & (local[:, 0] <= 0.8 + TOL))
+
+
+@pytest.mark.parametrize("gap", [-0.01, 0.004])
+def test_sdf_square_corner_at_45_degrees_into_a_mesh_face(gap):
+    """The corner presses 0.01 into the top face (or hovers 4 mm above it, margin 2 cm):
+    one contact, depth -gap (not 0.01 cos 45 deg), normal (0, +-1), point the corner
+    moved half the depth toward the face."""
+    corner_y = 0.1 + gap
+    r = 0.25 * math.sqrt(2.0)
+    sdf = (0.2, corner_y + r, math.pi / 4)
+    for c, sign in both_orders((0.0, 0.0, 0.0), SDF_SQUARE, sdf, margin=0.02):
+        assert len(c) == 1
+        np.testing.assert_allclose(c.depth, [-gap], atol=TOL)
+        np.testing.assert_allclose(c.normal, [[0.0, sign]], atol=TOL)
+        np.testing.assert_allclose(c.point, [[0.2, corner_y - 0.5 * gap]], atol=TOL)
+        if gap < 0.0:        # separated, the forward direction is exact too (and wins the tie)
+            assert c.feature[0] >> 56 == SOURCE_SDF_IN_MESH
+
+
+def test_tilted_sdf_box_corner_into_a_mesh_face(rng):
+    """Any tilt: the box's lowest corner, depth d, normal (0, 1), point corner + d/2."""
+    for _ in range(20):
+        angle = rng.uniform(0.1, math.pi / 2 - 0.1)
+        d = rng.uniform(0.002, 0.05)
+        low = lowest_corner(HALF, angle)
+        x = rng.uniform(-1.0, 1.0)
+        c = collide(PLANK, (0.0, 0.0, 0.0), SDF_BOX, (x, 0.1 - d - low[1], angle))
+        deepest = np.argmax(c.depth)
+        np.testing.assert_allclose(c.depth[deepest], d, atol=TOL)
+        np.testing.assert_allclose(c.normal[deepest], [0.0, 1.0], atol=TOL)
+        np.testing.assert_allclose(c.point[deepest], [x + low[0], 0.1 - d / 2], atol=TOL)
+        # nothing else deeper or with another normal survives the reduction
+        np.testing.assert_array_less(c.depth, d + TOL)
+
+
+def test_sdf_disc_on_a_mesh_face():
+    """A disc (curved: no corner) pressing 0.01: depth r - distance, normal (0, 1)."""
+    disc = {"type": "sdf", "field": {"type": "circle", "radius": 0.3}}
+    for c, sign in both_orders((0.0, 0.0, 0.0), disc, (0.5, 0.39, 0.7)):
+        deepest = np.argmax(c.depth)
+        np.testing.assert_allclose(c.depth[deepest], 0.01, atol=TOL)
+        np.testing.assert_allclose(c.normal[deepest], [0.0, sign], atol=TOL)
+        np.testing.assert_allclose(c.point[deepest], [0.5, 0.095], atol=1e-4)
+
+
+def test_mesh_corner_into_an_sdf_face_is_unchanged():
+    """The forward direction's case: a mesh box's corner 0.01 into an sdf ground, 45 deg.
+    The reverse direction's view of it (the ground's face point on the box's medial
+    axis, shallower, with a side's normal) is shadowed: one contact, exact."""
+    ground = {"type": "sdf", "field": {"type": "box", "size": [4.0, 0.2]}}
+    mesh = {"type": "box", "size": [0.5, 0.5]}
+    pose = (0.2, 0.1 - 0.01 + 0.25 * math.sqrt(2.0), math.pi / 4)
+    for c, sign in [(collide(mesh, pose, ground, (0.0, 0.0, 0.0)), -1.0),
+                    (collide(ground, (0.0, 0.0, 0.0), mesh, pose), 1.0)]:
+        assert len(c) == 1
+        np.testing.assert_allclose(c.depth, [0.01], atol=1e-9)
+        np.testing.assert_allclose(c.normal, [[0.0, sign]], atol=1e-9)
+        np.testing.assert_allclose(c.point, [[0.2, 0.095]], atol=1e-9)
+
+
+def test_mesh_box_on_an_unbounded_sdf_half_plane():
+    """The reverse direction is solved in the sdf's frame: a half-plane ground works."""
+    ground = {"type": "sdf", "field": {"type": "half_plane", "normal": [0.0, 1.0]}}
+    mesh = {"type": "box", "size": [1.0, 0.5]}
+    c = collide(ground, (0.0, 0.0, 0.0), mesh, (0.3, 0.24, 0.0))
+    order = np.argsort(c.point[:, 0])
+    np.testing.assert_allclose(c.point[order], [[-0.2, -0.005], [0.8, -0.005]], atol=TOL)
+    np.testing.assert_allclose(c.depth, 0.01, atol=TOL)
+    np.testing.assert_allclose(c.normal, [[0.0, 1.0], [0.0, 1.0]], atol=TOL)
+
+
+@pytest.mark.parametrize("sdf_shape", [
+    {"type": "sdf", "field": {"type": "box", "size": [0.3, 0.2]}},
+    {"type": "sdf", "field": {"type": "circle", "radius": 0.15}},
+    {"type": "sdf", "field": {"type": "box", "size": [3.0, 0.1]}}])
+def test_sdf_centre_inside_the_mesh_gives_finite_contacts(rng, sdf_shape):
+    """Deep overlaps (the sdf body's centre inside the plank, or the body wholly inside
+    it): finite points, unit normals, positive depths."""
+    for _ in range(10):
+        pose = (rng.uniform(-1.5, 1.5), rng.uniform(-0.08, 0.08), rng.uniform(-3, 3))
+        for c, _ in both_orders((0.0, 0.0, 0.0), sdf_shape, pose, margin=0.02):
+            assert len(c) > 0
+            assert np.all(np.isfinite(c.point)) and np.all(np.isfinite(c.depth))
+            np.testing.assert_allclose(np.linalg.norm(c.normal, axis=1), 1.0, atol=1e-12)
+            assert np.max(c.depth) > 0.0
+
+
+def test_reverse_keys_are_stable_and_unique(rng):
+    """Source-4 keys (mesh edge, start id) survive a small motion of the sdf body."""
+    r = 0.25 * math.sqrt(2.0)
+    cases = [(SDF_BOX, (0.3, 0.34, 0.0)), (SDF_SQUARE, (0.2, 0.09 + r, math.pi / 4)),
+             (SDF_BOX, (-0.4, 0.1 - 0.02 - lowest_corner(HALF, 0.6)[1], 0.6))]
+    for shape, pose in cases:
+        before = collide(PLANK, (0.0, 0.0, 0.0), shape, pose)
+        assert np.any(before.feature >> 56 == SOURCE_SDF_IN_MESH)
+        assert len(np.unique(before.feature)) == len(before)
+        for shift in [(1e-4, 0.0), (0.0, 1e-4), (-1e-4, 1e-4)]:
+            after = collide(PLANK, (0.0, 0.0, 0.0), shape, np.add(pose, (*shift, 0.0)))
+            np.testing.assert_array_equal(after.feature, before.feature)
+
+
+def test_sdf_in_mesh_batched_over_pairs_equals_one_by_one(rng):
+    """One call for n pairs gives each pair what a call for that pair alone gives."""
+    from sdfphys.collide.narrowphase import _overlap_region, _to_local
+    from sdfphys.shapes import shape_from_spec
+
+    mesh, sdf = shape_from_spec(PLANK), shape_from_spec(SDF_BOX)
+    settings = Settings()
+    n = 12
+    pose_mesh = np.column_stack([rng.uniform(-5, 5, (n, 2)), rng.uniform(-3, 3, n)])
+    local = np.column_stack([rng.uniform(-1.5, 1.5, n), rng.uniform(0.2, 0.4, n)])
+    angle = rng.uniform(-3, 3, n)
+    world = np.array([rotation(a) @ p for a, p in zip(pose_mesh[:, 2], local)])
+    pose_sdf = np.column_stack([pose_mesh[:, :2] + world, pose_mesh[:, 2] + angle])
+
+    def run(index):
+        region = _overlap_region(sdf.bounds(), mesh.bounds(),
+                                 pose_mesh[index, 2] - pose_sdf[index, 2],
+                                 _to_local(pose_mesh[index, :2], pose_sdf[index]), 0.02)
+        return mesh_sdf.sdf_in_mesh(mesh, sdf, pose_mesh[index], pose_sdf[index], region,
+                                    0.02, settings)
+
+    batch = run(np.arange(n))
+    assert len(np.unique(batch[0])) > n // 2
+    for k in range(n):
+        alone = run(np.array([k]))
+        rows = batch[0] == k
+        for got, expected in zip(batch[1:], alone[1:]):
+            np.testing.assert_allclose(got[rows], expected, atol=1e-12)
