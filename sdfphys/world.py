@@ -302,7 +302,8 @@ class World:
         """Stage 2: anchors, masses, base separations, warm-start impulses."""
         constraints = prepare_contacts(contacts, bodies, self._view("friction"),
                                        self._view("restitution"), self._impulses,
-                                       self.settings.warm_starting, self.gravity)
+                                       self.settings.warm_starting, self.gravity,
+                                       self.settings.linear_slop)
         if len(constraints):
             self.stage_counts["prepare"] += 1
         return constraints
