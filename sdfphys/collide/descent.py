@@ -126,7 +126,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..sdf import Field, safe_normalize
+from ..sdf.compiled import Program, compile_field
 from . import _descent_kernels as kernels
+from ._compiled_descent import descend_triangles
 
 __all__ = [
     "START_BARYCENTRIC",
@@ -155,6 +157,10 @@ _TINY = 1e-300
 #: Tolerance of the plane and cone fits of ``_descent_kernels.triangle_known``
 #: (unit gradients; values relative to the coordinates' and values' size).
 _SHAPE_TOL = 1e-12
+#: Run ``triangle_deepest`` with the field compiled into the descent
+#: (``_compiled_descent``) when it compiles (``sdf.compiled``). False forces the
+#: Python-driven loop (the tests compare the two).
+USE_COMPILED = True
 
 # --------------------------------------------------------------------------------------
 # Triangle geometry
@@ -268,7 +274,7 @@ class _TriangleProblem:
     def __init__(self, field: Field, triangles: np.ndarray, owner: np.ndarray,
                  at_vertex: np.ndarray, n_start: int, spanning: bool):
         self.field = field
-        self.convex = _convex(getattr(field, "spec", None))
+        self.convex = _field_convex(field)
         self.triangles = triangles
         self.owner = owner
         self.at_vertex = at_vertex
@@ -317,6 +323,15 @@ class _Workspace(threading.local):
             size = max(n, 2 * len(array) if array is not None else n, 64)
             array = self._arrays[name] = np.empty((size, width), dtype=dtype)
         return array[:n]
+
+    def whole(self, name: str, width: int, dtype: type = np.float64) -> np.ndarray:
+        """All rows (at least 64) of the array ``name``, contents undefined."""
+        self.rows(name, 64, width, dtype)
+        return self._arrays[name]
+
+    def keep(self, name: str, array: np.ndarray) -> None:
+        """Make ``array`` (grown by a compiled caller) the array ``name``."""
+        self._arrays[name] = array
 
 
 _WORK = _Workspace()
@@ -417,13 +432,54 @@ def _triangle_minima(field: Field, triangles: np.ndarray, iterations: int,
     n_tri, n_start = len(tri), len(weights)
     if n_tri == 0:
         return np.zeros((0, n_start, 2)), np.zeros((0, n_start)), np.zeros((0, n_start), int)
-    points, owner, sigma, at_vertex = kernels.triangle_starts(np.ascontiguousarray(tri),
-                                                              np.ascontiguousarray(weights))
-    problem = _TriangleProblem(field, tri, owner, at_vertex, n_start,
-                               bool(np.linalg.matrix_rank(weights) == 3))
-    best, value, _, rounds = _descend(problem, points, iterations, sigma, tol)
+    tri = np.ascontiguousarray(tri)
+    points, owner, sigma, at_vertex = kernels.triangle_starts(tri, np.ascontiguousarray(weights))
+    spanning = _spanning(weights)
+    program = compile_field(field) if USE_COMPILED else None
+    if program is not None and np.ndim(tol) == 0:
+        best, value, rounds = _descend_compiled(program, tri, owner, at_vertex, n_start,
+                                                spanning, _field_convex(field), points, sigma,
+                                                iterations, float(tol))
+    else:
+        problem = _TriangleProblem(field, tri, owner, at_vertex, n_start, spanning)
+        best, value, _, rounds = _descend(problem, points, iterations, sigma, tol)
     return (best.reshape(n_tri, n_start, 2), value.reshape(n_tri, n_start),
             rounds.reshape(n_tri, n_start))
+
+
+_SPANNING: dict[bytes, bool] = {}
+
+
+def _spanning(weights: np.ndarray) -> bool:
+    """The start weights (K, 3) have rank 3 (cached: a few sets are used over and over)."""
+    key = weights.tobytes()
+    if key not in _SPANNING:
+        _SPANNING[key] = bool(np.linalg.matrix_rank(weights) == 3)
+    return _SPANNING[key]
+
+
+def _descend_compiled(program: Program, tri: np.ndarray, owner: np.ndarray,
+                      at_vertex: np.ndarray, n_start: int, spanning: bool, convex: bool,
+                      points: np.ndarray, sigma: np.ndarray, iterations: int, tol: float
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``_descend`` of the triangle problem in one compiled call (``_compiled_descent``).
+
+    Same arguments as ``_TriangleProblem`` and ``_descend`` (one scalar tol, m);
+    returns best (P, 2), value (P,), rounds (P,).
+    """
+    n_points = len(points)
+    state = _WORK.rows("state", n_points, kernels.N_STATE)
+    flags = _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64)
+    running = _WORK.rows("running", n_points, 1, np.int64)[:, 0]
+    best, value, _, rounds, _, cand, cand_i, candidates = descend_triangles(
+        kernels.TRIANGLE, False, program.code, program.consts, program.depth, program.nesting, tri, owner, at_vertex,
+        n_start, spanning, convex, points, np.ascontiguousarray(sigma, dtype=np.float64),
+        iterations, tol, _SHAPE_TOL, state, flags, running, _WORK.whole("cand", 5),
+        _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2))
+    _WORK.keep("cand", cand)
+    _WORK.keep("cand_i", cand_i)
+    _WORK.keep("points", candidates)
+    return best, value, rounds
 
 
 def triangle_deepest(field: Field, triangles: np.ndarray, iterations: int = 16,
@@ -463,6 +519,18 @@ def merge_minima(point: np.ndarray, radius: float) -> np.ndarray:
     near = np.einsum("tkjd,tkjd->tkj", gap, gap) < radius * radius
     earlier = np.tril(np.ones(near.shape[1:], dtype=bool), k=-1)  # j < k
     return ~np.any(near & earlier, axis=2)
+
+
+def _field_convex(field: Field) -> bool:
+    """``_convex`` of the field's spec, cached on the field object."""
+    cached = getattr(field, "_descent_convex", None)
+    if cached is None:
+        cached = _convex(getattr(field, "spec", None))
+        try:
+            field._descent_convex = cached
+        except AttributeError:
+            pass
+    return cached
 
 
 # --------------------------------------------------------------------------------------

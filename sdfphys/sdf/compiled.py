@@ -199,7 +199,7 @@ def compile_field(f: Field) -> Program | None:
 # operation (see the references in the comments), so that both paths round alike.
 # --------------------------------------------------------------------------------------
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _box(x: float, y: float, hx: float, hy: float) -> tuple[float, float, float]:
     """polygonal._box at one point: value and gradient of the box of half-extents h."""
     wx, wy = abs(x) - hx, abs(y) - hy
@@ -258,7 +258,7 @@ def _polygon(consts: np.ndarray, o: int, m: int, px: float, py: float
     return s * math.sqrt(best), nx, ny
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _segment(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
     """curved._segment_distance at one point, minus the capsule radius."""
     ax, ay, bax, bay, length2 = consts[o], consts[o + 1], consts[o + 2], consts[o + 3], \
@@ -280,7 +280,7 @@ def _segment(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, f
     return dist - consts[o + 7], lx, ly
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _blend(gap: float, k: float, blend: int) -> tuple[float, float]:
     """operators.BLENDS kernels: (dip below min, weight of the larger operand)."""
     if blend == 0:
@@ -298,7 +298,7 @@ def _blend(gap: float, k: float, blend: int) -> tuple[float, float]:
     return s * math.log1p(e), e / (1.0 + e)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _smooth_min(a: float, b: float, k: float, blend: int) -> tuple[float, float]:
     """operators.smooth_min: (value, weight of b)."""
     dip, larger = _blend(abs(a - b), k, blend)

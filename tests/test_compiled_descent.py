@@ -1,0 +1,67 @@
+"""Tests of the compiled triangle descent (sdfphys.collide._compiled_descent): for
+fields that compile, ``triangle_deepest`` run in one compiled call gives the same
+minima, values and rounds as the Python-driven loop, on the cases of
+tests/test_descent.py; fields that do not compile take the Python loop."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_descent import CIRCLE, FIELDS, UNION, random_triangles
+
+from sdfphys.collide import descent
+from sdfphys.sdf import compiled, field
+
+CASES = dict(FIELDS, plain_circle=CIRCLE, union_again=UNION,
+             rounded={"op": "round", "r": 0.1, "of": {"type": "box", "size": [1.0, 0.5]}},
+             onion={"op": "onion", "thickness": 0.1, "of": {"type": "circle", "radius": 0.7}},
+             difference={"op": "difference", "of": [
+                 {"type": "box", "size": [2.0, 2.0]}, {"type": "circle", "radius": 0.6}]})
+STARTS = {"default": None, "centroid": descent.START_BARYCENTRIC[[6]],
+          "vertices": descent.START_BARYCENTRIC[[0, 1, 2]],
+          "mesh_order": descent.START_BARYCENTRIC[[6, 3, 4, 5, 0, 1, 2]]}
+
+
+def both_paths(f, tri, iterations, starts, monkeypatch):
+    monkeypatch.setattr(descent, "USE_COMPILED", True)
+    fast = descent._triangle_minima(f, tri, iterations, starts, 1e-12)
+    monkeypatch.setattr(descent, "USE_COMPILED", False)
+    slow = descent._triangle_minima(f, tri, iterations, starts, 1e-12)
+    return fast, slow
+
+
+@pytest.mark.parametrize("starts", sorted(STARTS))
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_compiled_descent_equals_the_python_loop(name, starts, monkeypatch):
+    f = field(CASES[name])
+    assert compiled.compile_field(f) is not None
+    tri = random_triangles(f, 300, np.random.default_rng(sorted(CASES).index(name)))
+    tri[:5, 2] = 0.5 * (tri[:5, 0] + tri[:5, 1])                    # degenerate
+    for iterations in (1, 4, 16, 32):
+        (p1, v1, r1), (p2, v2, r2) = both_paths(f, tri, iterations, STARTS[starts], monkeypatch)
+        np.testing.assert_allclose(p1, p2, rtol=0.0, atol=1e-12)
+        np.testing.assert_allclose(v1, v2, rtol=0.0, atol=1e-12)
+        np.testing.assert_array_equal(r1, r2)
+        keep1, keep2 = descent.merge_minima(p1, 1e-6), descent.merge_minima(p2, 1e-6)
+        np.testing.assert_array_equal(keep1, keep2)
+
+
+def test_compiled_descent_handles_batches_of_every_size(monkeypatch):
+    f = field(FIELDS["smooth_union"])
+    rng = np.random.default_rng(5)
+    for count in (0, 1, 2, 50, 3000, 7):                            # buffers grow, then shrink
+        tri = random_triangles(f, count, rng)
+        (p1, v1, r1), (p2, v2, r2) = both_paths(f, tri, 16, None, monkeypatch)
+        assert p1.shape == (count, 7, 2)
+        np.testing.assert_allclose(p1, p2, atol=1e-12)
+        np.testing.assert_allclose(v1, v2, atol=1e-12)
+        np.testing.assert_array_equal(r1, r2)
+
+
+def test_fields_that_do_not_compile_take_the_python_loop():
+    f = field({"type": "ellipse", "size": [2.0, 1.0]})
+    assert compiled.compile_field(f) is None
+    tri = random_triangles(f, 20, np.random.default_rng(0))
+    point, value = descent.triangle_deepest(f, tri)
+    np.testing.assert_allclose(value, f.distance(point.reshape(-1, 2)).reshape(value.shape),
+                               atol=1e-12)
