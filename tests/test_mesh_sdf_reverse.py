@@ -195,3 +195,33 @@ def test_sdf_in_mesh_batched_over_pairs_equals_one_by_one(rng):
         rows = batch[0] == k
         for got, expected in zip(batch[1:], alone[1:]):
             np.testing.assert_allclose(got[rows], expected, atol=1e-12)
+
+
+@pytest.mark.parametrize("theta", [1e-5, 0.004, -0.01])
+def test_slightly_tilted_sdf_box_keeps_both_bottom_corners(theta):
+    """The shallower corner is no minimum of f_mesh (nor of the field-field descent),
+    yet it is a contact: the far end of the incident face, measured against the plank's
+    face (depth exact, speculative when above it), key start + FAR_END."""
+    corners = np.array([[-1.0, -1.0], [1.0, -1.0]]) * HALF @ rotation(theta).T
+    y = 0.1 - 0.005 - corners[:, 1].min()
+    bottom = corners + [0.3, y]
+    expected_depth = 0.1 - bottom[:, 1]
+    for c, sign in both_orders((0.0, 0.0, 0.0), SDF_BOX, (0.3, y, theta), margin=0.02):
+        order = np.argsort(c.point[:, 0])
+        np.testing.assert_allclose(c.depth[order], expected_depth, atol=TOL)
+        np.testing.assert_allclose(c.point[order],
+                                   bottom + np.c_[np.zeros(2), expected_depth / 2], atol=TOL)
+        np.testing.assert_allclose(c.normal, [[0.0, sign]] * 2, atol=TOL)
+        far = (c.feature & ((1 << 13) - 1)) >= mesh_sdf.FAR_END
+        assert np.sum(far) == 1 and c.depth[far][0] == np.min(c.depth)
+
+
+def test_sdf_box_overhanging_the_mesh_plank_end():
+    """The box spans x in [1.5, 2.5], the plank ends at x = 2: the far end past the
+    plank is not on its face (dropped); contacts at the box's corner x = 1.5 and the
+    plank's corner x = 2 (forward direction), depth 0.01, normal (0, 1)."""
+    c = collide(PLANK, (0.0, 0.0, 0.0), SDF_BOX, (2.0, 0.34, 0.0))
+    order = np.argsort(c.point[:, 0])
+    np.testing.assert_allclose(c.point[order], [[1.5, 0.095], [2.0, 0.095]], atol=TOL)
+    np.testing.assert_allclose(c.depth, 0.01, atol=TOL)
+    np.testing.assert_allclose(c.normal, [[0.0, 1.0]] * 2, atol=TOL)

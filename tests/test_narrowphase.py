@@ -368,10 +368,10 @@ def test_mesh_instancing_field_calls_do_not_grow_with_bodies(rng):
     at the minima. The sdf in the mesh (``mesh_sdf``, raised on purpose for it): one
     ``field_field_contacts`` (the starts, one call per descent iteration, the patch
     search's two bracket ends and one call per iteration: 2 field_descent_iterations
-    + 3, as for sdf-sdf groups), then the support search's projection and one call
-    per round (REFINE_ROUNDS + 1). All independent of the number of bodies.
+    + 3, as for sdf-sdf groups), then the support search's projection, one call per
+    round and two for the far ends (SDF_CALLS). All independent of the number of bodies.
     """
-    from sdfphys.collide.mesh_sdf import REFINE_ROUNDS
+    from sdfphys.collide.mesh_sdf import SDF_CALLS
 
     counting = Counting(field({"type": "box", "size": [400.0, 1.0]}))
     ground = SdfShape(counting)
@@ -389,7 +389,7 @@ def test_mesh_instancing_field_calls_do_not_grow_with_bodies(rng):
         calls.append(counting.calls)
         assert set(c.body_b) == set(range(1, n + 1))
     assert max(calls) <= (settings.descent_iterations + 3
-                          + 2 * settings.field_descent_iterations + 3 + REFINE_ROUNDS + 1)
+                          + 2 * settings.field_descent_iterations + 3 + SDF_CALLS)
 
 
 @pytest.mark.parametrize("quality", ["fast", "accurate"])

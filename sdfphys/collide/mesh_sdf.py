@@ -24,12 +24,18 @@ points deepest in the mesh instead, for all n pairs of a group:
    projection snaps to the corner, so a corner is reached exactly. Depth -f_mesh
    and normal grad f_mesh are those of the final sdf point z: exact for an sdf
    corner or face pressing on a mesh face.
+3. ``_far_ends``: the other end of the sdf face leaving z toward the mesh face (the
+   incident face, as Box2D's manifolds): a box resting slightly tilted has its
+   deeper corner as the only minimum, yet its other bottom corner is a contact too.
+   It is measured against the plane of z's mesh face (depth exact), and kept when
+   its foot lies on the same mesh outline edge and it is within the margin.
 
 Results: normal n = grad f_mesh(z), unit, outward of the mesh, i.e. from the mesh
 toward the sdf body; depth = -f_mesh(z) (> 0 overlapping; a separated pair within
 the margin gives -gap); point = z + depth / 2 n, midway between the sdf's point z
 and the mesh face above it (z - f_mesh(z) n); the mesh outline edge nearest that
-face point, for the feature key (``narrowphase``: source 4).
+face point and the start id (+ ``FAR_END`` for a far end), for the feature key
+(``narrowphase``: source 4).
 
 Where a vertex of the mesh presses into the sdf's face instead, the descent ends
 on the mesh's medial axis (the sdf face's point deepest in the mesh's corner
@@ -39,8 +45,9 @@ point in the reduction (``reduce``), as it shadows the forward direction's wedge
 points when an sdf corner presses into a mesh face.
 
 Cost: one ``field_field_contacts`` call (each of its rounds one evaluation of each
-field for all pairs), then ``1 + REFINE_ROUNDS`` evaluations of each field for all
-contacts of all pairs; nothing is per pair or per contact in Python.
+field for all pairs), then ``1 + REFINE_ROUNDS`` evaluations of the mesh field and
+``SDF_CALLS`` of the sdf field for all contacts of all pairs; nothing is per pair or
+per contact in Python.
 """
 
 from __future__ import annotations
@@ -52,7 +59,7 @@ from ..settings import Settings
 from ..shapes import Shape
 from .descent import field_field_contacts
 
-__all__ = ["REFINE_ROUNDS", "sdf_in_mesh"]
+__all__ = ["FAR_END", "REFINE_ROUNDS", "SDF_CALLS", "sdf_in_mesh"]
 
 #: Rounds of the support search (``_deepest_on_sdf``), one evaluation of each field
 #: per round for all contacts: 4 rungs x 4 growth per round span 4^8 in step size.
@@ -67,6 +74,23 @@ _SHRINK = 64.0
 _PARALLEL = 1e-9
 #: Steps shorter than this fraction of the pair's overlap diagonal end the search.
 _MIN_STEP = 1e-12
+#: Far ends (``_far_ends``): probe distance either side of the deepest point and the
+#: ladder's rungs along the incident face, as fractions of the overlap diagonal
+#: (rung k at 2^(k - _RUNGS + 1): from 1.2e-7 to 1 diagonal), and the distance under
+#: which a point is on the face's line (projection did not move it).
+_PROBE = 1e-6
+_RUNGS = 24
+_ON_LINE = 1e-9
+#: The incident face must face the mesh face: (-n).g at least this (60 degrees).
+_FACING = 0.5
+#: A normal n is an outline edge's when |n . edge direction| <= this (1 urad).
+_FACE_NORMAL = 1e-6
+#: Start ids of far-end contacts: the deepest point's start id plus this (the
+#: field-field ids are < 3 x 1024, so it needs one more bit, see ``narrowphase``).
+FAR_END = 4096
+#: Evaluations of the sdf field after the field-field descent: the projection of
+#: the starts, one per support-search round, the far ends' probes and ladder.
+SDF_CALLS = REFINE_ROUNDS + 3
 
 
 def _rotate(v: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
@@ -161,6 +185,54 @@ def _deepest_on_sdf(sdf: Field, mesh: _MeshInSdfFrame, pair: np.ndarray, start: 
     return z, phi, n
 
 
+def _far_ends(sdf: Field, z: np.ndarray, n: np.ndarray, diagonal: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """The other end of the sdf's face through each deepest point (Box2D's incident face).
+
+    z: (K, 2) the sdf's deepest points (sdf frame), n: (K, 2) the mesh face normals
+    there, diagonal: (K,) m, the pair's overlap diagonal. A box resting slightly
+    tilted on a face has its deeper corner as the only local minimum of f_mesh (and
+    of the field-field descent: it reports the deepest end of a tilted patch); its
+    other bottom corner is a contact too (Box2D keeps both ends of the incident face
+    and measures them against the reference face).
+
+    Two probes z +- h t (t = perp(n), h = ``_PROBE`` diagonal) projected onto the
+    sdf's surface give the normals g of the faces leaving z either way; the incident
+    face is the one whose g is most anti-parallel to n, used when (-n).g >=
+    ``_FACING``. Along its direction u (perp(g), away from z), the ladder z + L_k u
+    (``_RUNGS`` rungs up to the diagonal) is projected onto the surface in one
+    evaluation: rungs on the face stay where they are; the first rung past the
+    face's end projects, for an exact field and a convex corner, exactly onto that
+    corner, which is accepted when it lies on the face's line beyond the last rung
+    still on the face. Returns (found (K,) bool, end (K, 2) sdf frame). A curved
+    surface (no corner) gives no end. Two evaluations of the sdf field for all K.
+    """
+    k = len(z)
+    tangent = np.column_stack([-n[:, 1], n[:, 0]])
+    h = (_PROBE * diagonal)[:, None]
+    _, g = _project(sdf, np.concatenate([z + h * tangent, z - h * tangent]))
+    facing = -np.einsum("kd,kd->k", g, np.concatenate([n, n])).reshape(2, k)
+    side = np.argmax(facing, axis=0)                                     # 0: +t, 1: -t
+    rows = np.arange(k)
+    g = g.reshape(2, k, 2)[side, rows]
+    sign = np.where(side == 0, 1.0, -1.0)
+    u = np.column_stack([-g[:, 1], g[:, 0]])
+    u *= np.where(np.einsum("kd,kd->k", u, tangent) * sign >= 0.0, 1.0, -1.0)[:, None]
+    length = diagonal[:, None] * 2.0 ** (np.arange(_RUNGS) - _RUNGS + 1)   # (K, R)
+    rung = z[:, None, :] + length[:, :, None] * u[:, None, :]
+    projected = _project(sdf, rung.reshape(-1, 2))[0].reshape(k, _RUNGS, 2)
+    tol = (_ON_LINE * diagonal)[:, None]
+    on_face = np.linalg.norm(projected - rung, axis=2) <= tol
+    first_off = np.argmin(np.cumprod(on_face, axis=1), axis=1)         # first rung off it
+    reached = np.where(first_off > 0, length[rows, np.maximum(first_off - 1, 0)], 0.0)
+    end = projected[rows, first_off]
+    along = np.einsum("kd,kd->k", end - z, u)
+    off_line = np.abs(np.einsum("kd,kd->k", end - z, g))
+    found = ((facing[side, rows] >= _FACING) & ~on_face[rows, first_off]
+             & (off_line <= tol[:, 0]) & (along > reached) & (along <= length[rows, first_off]))
+    return found, end
+
+
 def _nearest_edges(vertices: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Index (K,) of the outline edge (i: vertex i to i + 1 mod M) nearest each point.
 
@@ -189,7 +261,8 @@ def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.nda
     Returns pair index (C,), midway point (C, 2) world, normal (C, 2) world (unit,
     outward of the mesh: from the mesh toward the sdf body), depth (C,) m, the mesh
     outline edge pressed on (C,) and the field-field start id (C,) (< 3
-    ``field_descent_starts``).
+    ``field_descent_starts``; + ``FAR_END`` for the far end of its incident face),
+    pair by pair.
     """
     angle = pose_mesh[:, 2] - pose_sdf[:, 2]
     co, so = np.cos(pose_sdf[:, 2]), np.sin(pose_sdf[:, 2])
@@ -212,6 +285,33 @@ def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.nda
     pair, z, depth, n, start = pair[keep], z[keep], depth[keep], n[keep], start[keep]
     face = in_sdf.to_mesh(z + depth[:, None] * n, pair)                  # mesh surface point
     edge = _nearest_edges(mesh.vertices, face)
+
+    # The incident face's far end, measured against the same mesh face (its plane
+    # through the deepest point's face point, normal n), kept when n is that outline
+    # edge's normal (not a vertex's: a point outside the mesh near its corner), the
+    # far end's foot lies on the edge, it is within the margin and no deeper than the
+    # deepest point (deeper: the descent stopped on the mesh's medial axis, the sdf
+    # body pierces the mesh and the face runs on through it).
+    found, end = _far_ends(sdf.field, z, n, diagonal[keep])
+    end_depth = depth + np.einsum("kd,kd->k", z - end, n)
+    foot = in_sdf.to_mesh(end + end_depth[:, None] * n, pair)
+    v0 = mesh.vertices[edge]
+    e = mesh.vertices[(edge + 1) % len(mesh.vertices)] - v0
+    e_length2 = np.einsum("kd,kd->k", e, e)
+    t = np.einsum("kd,kd->k", foot - v0, e) / e_length2
+    n_mesh = in_sdf.to_mesh(n + in_sdf.offset[pair], pair)               # rotation only
+    face_normal = np.abs(np.einsum("kd,kd->k", n_mesh, e)) <= _FACE_NORMAL * np.sqrt(e_length2)
+    far = (found & face_normal & (t >= -_ON_LINE) & (t <= 1.0 + _ON_LINE)
+           & (end_depth > -margin) & (end_depth <= depth + _ON_LINE * diagonal[keep]))
+    pair = np.concatenate([pair, pair[far]])
+    z = np.concatenate([z, end[far]])
+    depth = np.concatenate([depth, end_depth[far]])
+    n = np.concatenate([n, n[far]])
+    edge = np.concatenate([edge, edge[far]])
+    start = np.concatenate([start, start[far] + FAR_END])
+    order = np.argsort(pair, kind="stable")
+    pair, z, depth, n, edge, start = (pair[order], z[order], depth[order], n[order],
+                                      edge[order], start[order])
     mid = z + (0.5 * depth)[:, None] * n
     co, so = co[pair], so[pair]
     world_mid = _rotate(mid, co, so) + pose_sdf[pair, :2]

@@ -22,10 +22,11 @@ Feature key layout (int64): ``source << 56 | element << 8 | start``
              2  b's mesh inside a's field
              3  field-field descent (sdf pairs), start = start id
              4  (``SOURCE_SDF_IN_MESH``) the sdf body's point inside mesh a
-                (mesh-sdf pairs, ``mesh_sdf``): element = e << 12 with e the mesh
-                outline edge pressed on, start = field-field start id (< 3 x 1024,
-                so it may use the 12 bits above the start byte: the key is
-                ``4 << 56 | e << 20 | start``)
+                (mesh-sdf pairs, ``mesh_sdf``): element = e << 13 with e the mesh
+                outline edge pressed on, start = field-field start id k (< 3 x 1024)
+                of the deepest point, k + 4096 (``mesh_sdf.FAR_END``) for the far
+                end of its incident face; start uses 13 bits, so the key is
+                ``4 << 56 | e << 21 | start``
     start    0-6: a descent minimum of triangle ``element`` from start id 0-2
              (vertices), 3-5 (edge midpoints), 6 (centroid);
              255 (``VERTEX_START``): mesh vertex ``element``, whichever triangle or
@@ -82,8 +83,9 @@ SOURCE_ANALYTIC, SOURCE_A_IN_B, SOURCE_B_IN_A, SOURCE_FIELDS = 0, 1, 2, 3
 #: Source of mesh-sdf contacts found from the sdf's side (``mesh_sdf.sdf_in_mesh``).
 SOURCE_SDF_IN_MESH = 4
 #: Source 4 keys hold the mesh edge this many bits above the start field, whose
-#: field-field start ids (< 3 * 1024, ``field_descent_starts`` <= 1024) need 12 bits.
-_EDGE_SHIFT = 12
+#: field-field start ids (< 3 * 1024, ``field_descent_starts`` <= 1024) plus the far
+#: end flag (4096) need 13 bits.
+_EDGE_SHIFT = 13
 
 
 def feature_key(source: int, element: np.ndarray | int, start: np.ndarray | int) -> np.ndarray:
@@ -181,15 +183,18 @@ def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b
        (``descent.field_field_contacts`` on the sdf's field and the mesh's exact
        polygon field, over the overlap of the bounds in the sdf's frame), each point
        then moved to the sdf body's deepest point along the mesh face's inward
-       normal (source 4). Exact for a corner or face of the sdf pressing on a face
-       of the mesh, where the first direction underestimates the depth (a square
-       corner pressed straight in: by 29 %) and takes the corner's side as normal.
+       normal (source 4), plus the far end of the sdf face leaving it toward the
+       mesh face (Box2D's incident face: the other bottom corner of a box resting
+       slightly tilted), measured against the same mesh face. Exact for a corner or
+       face of the sdf pressing on a face of the mesh, where the first direction
+       underestimates the depth (a square corner pressed straight in: by 29 %) and
+       takes the corner's side as normal.
 
     Each direction's wrong view of the other's case (shallower, within its depth of
     the right one) is shadowed in the reduction (``reduce``). Cost per group: the
     first direction's ``descent_iterations + 3`` evaluations of the sdf field, one
-    ``field_field_contacts`` (about ``2 field_descent_iterations + 3``) and
-    ``mesh_sdf.REFINE_ROUNDS + 1``, each over all pairs at once.
+    ``field_field_contacts`` (at most ``2 field_descent_iterations + 3``) and
+    ``mesh_sdf.SDF_CALLS``, each over all pairs at once.
     """
     from .mesh_sdf import sdf_in_mesh
 
