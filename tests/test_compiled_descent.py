@@ -65,3 +65,44 @@ def test_fields_that_do_not_compile_take_the_python_loop():
     point, value = descent.triangle_deepest(f, tri)
     np.testing.assert_allclose(value, f.distance(point.reshape(-1, 2)).reshape(value.shape),
                                atol=1e-12)
+
+
+PAIRS = {
+    "smooth_union_box": (FIELDS["smooth_union"], {"type": "box", "size": [1.0, 0.4]}),
+    "box_polygon": ({"type": "box", "size": [1.0, 0.4]}, FIELDS["polygon"]),
+    "circle_onion": (CIRCLE, {"op": "onion", "thickness": 0.1,
+                              "of": {"type": "circle", "radius": 0.5}}),
+    "half_plane_union": ({"type": "half_plane", "normal": [0.0, 1.0]}, UNION),
+}
+
+
+@pytest.mark.parametrize("name", sorted(PAIRS))
+def test_compiled_field_field_descent_equals_the_python_loop(name, monkeypatch):
+    a, b = (field(spec) for spec in PAIRS[name])
+    rng = np.random.default_rng(sorted(PAIRS).index(name))
+    count = 60
+    poses = np.column_stack([rng.uniform(-1.5, 1.5, (count, 2)), rng.uniform(0.0, 6.0, count)])
+    # Regions of different sizes: per-start tolerances (the uneven stopping rule).
+    regions = np.column_stack([poses[:, :2] - rng.uniform(0.3, 1.0, (count, 2)),
+                               poses[:, :2] + rng.uniform(0.3, 1.0, (count, 2))])
+    regions[::7, 2] = regions[::7, 0] - 1.0                          # empty
+    pair_of = np.repeat(np.arange(count), 5)
+    problem = descent._PairProblem(a, b, descent._rotations(poses[:, 2]), poses[:, :2], pair_of)
+    starts = np.repeat(poses[:, :2], 5, axis=0) + rng.uniform(-0.8, 0.8, (5 * count, 2))
+    sigma = rng.uniform(0.1, 1.0, 5 * count)
+    tol = 1e-12 * np.repeat(rng.uniform(0.5, 3.0, count), 5)
+    for iterations in (0, 1, 3, 24):
+        monkeypatch.setattr(descent, "USE_COMPILED", True)
+        fast = descent._descend(problem, starts, iterations, sigma, tol)
+        monkeypatch.setattr(descent, "USE_COMPILED", False)
+        slow = descent._descend(problem, starts, iterations, sigma, tol)
+        for x, y in zip(fast, slow):
+            np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-12)
+    for margin in (0.0, 0.05):
+        monkeypatch.setattr(descent, "USE_COMPILED", True)
+        fast = descent.field_field_contacts(a, b, poses, regions, margin=margin)
+        monkeypatch.setattr(descent, "USE_COMPILED", False)
+        slow = descent.field_field_contacts(a, b, poses, regions, margin=margin)
+        for x, y in zip(fast, slow):
+            assert x.shape == y.shape
+            np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-12)

@@ -128,7 +128,7 @@ import numpy as np
 from ..sdf import Field, safe_normalize
 from ..sdf.compiled import Program, compile_field
 from . import _descent_kernels as kernels
-from ._compiled_descent import descend_triangles
+from ._compiled_descent import descend
 
 __all__ = [
     "START_BARYCENTRIC",
@@ -157,9 +157,9 @@ _TINY = 1e-300
 #: Tolerance of the plane and cone fits of ``_descent_kernels.triangle_known``
 #: (unit gradients; values relative to the coordinates' and values' size).
 _SHAPE_TOL = 1e-12
-#: Run ``triangle_deepest`` with the field compiled into the descent
-#: (``_compiled_descent``) when it compiles (``sdf.compiled``). False forces the
-#: Python-driven loop (the tests compare the two).
+#: Run the descent with the fields compiled in (``_compiled_descent``) when they
+#: compile (``sdf.compiled``). False forces the Python-driven loop (the tests
+#: compare the two).
 USE_COMPILED = True
 
 # --------------------------------------------------------------------------------------
@@ -281,6 +281,11 @@ class _TriangleProblem:
         self.n_start = n_start
         self.spanning = spanning
 
+    def programs(self) -> tuple[Program, Program] | None:
+        """The field's compiled program (twice: no second field), None if it does not compile."""
+        program = compile_field(self.field)
+        return None if program is None else (program, program)
+
     def evaluate(self, points: np.ndarray, start: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """f, grad f, grad f at points (N, 2); start (N,): not needed (one field for all)."""
@@ -370,6 +375,9 @@ def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, itera
     points = np.ascontiguousarray(points, dtype=np.float64)
     n_points = len(points)
     tol = np.broadcast_to(np.asarray(tol, dtype=np.float64), (n_points,))
+    programs = problem.programs() if USE_COMPILED else None
+    if programs is not None:
+        return _descend_compiled(problem, programs, points, iterations, sigma, tol)
     least = float(tol.min()) if n_points else 0.0
     uneven = n_points > 0 and bool(tol.max() > least)
     phi, grad, data = problem.evaluate(points, np.arange(n_points))
@@ -422,6 +430,40 @@ def _descend(problem: _TriangleProblem | _PairProblem, points: np.ndarray, itera
 # Deepest points of triangles
 # --------------------------------------------------------------------------------------
 
+def _descend_compiled(problem: _TriangleProblem | _PairProblem,
+                      programs: tuple[Program, Program], points: np.ndarray, iterations: int,
+                      sigma: np.ndarray, tol: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``_descend`` in one compiled call (``_compiled_descent.descend``): the same
+    arguments and results, the problem's fields given by their ``programs`` (a, b)."""
+    n_points = len(points)
+    a, b = programs
+    pair = problem.kind == kernels.PAIR
+    best, phi, data, rounds, _, cand, cand_i, candidates = descend(
+        problem.kind, problem.barzilai_borwein, 6 if pair else 2,
+        a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth, b.nesting,
+        np.ascontiguousarray(problem.rotation) if pair else _NO_ROTATION,
+        np.ascontiguousarray(problem.offset) if pair else _NO_OFFSET,
+        problem.pair_of if pair else problem.owner, problem.triangles, problem.owner,
+        problem.at_vertex if not pair else _NO_CORNERS, problem.n_start if not pair else 0,
+        not pair and problem.spanning, not pair and problem.convex, points,
+        np.ascontiguousarray(sigma, dtype=np.float64), iterations,
+        np.ascontiguousarray(tol), _SHAPE_TOL,
+        _WORK.rows("state", n_points, kernels.N_STATE),
+        _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64),
+        _WORK.rows("running", n_points, 1, np.int64)[:, 0],
+        _WORK.whole("cand", 5), _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2))
+    _WORK.keep("cand", cand)
+    _WORK.keep("cand_i", cand_i)
+    _WORK.keep("points", candidates)
+    return best, phi, data, rounds
+
+
+_NO_ROTATION = np.zeros((1, 2, 2))
+_NO_OFFSET = np.zeros((1, 2))
+_NO_CORNERS = np.zeros((1, 3), dtype=np.int64)
+
+
 def _triangle_minima(field: Field, triangles: np.ndarray, iterations: int,
                      starts: np.ndarray | None, tol: float
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -434,15 +476,8 @@ def _triangle_minima(field: Field, triangles: np.ndarray, iterations: int,
         return np.zeros((0, n_start, 2)), np.zeros((0, n_start)), np.zeros((0, n_start), int)
     tri = np.ascontiguousarray(tri)
     points, owner, sigma, at_vertex = kernels.triangle_starts(tri, np.ascontiguousarray(weights))
-    spanning = _spanning(weights)
-    program = compile_field(field) if USE_COMPILED else None
-    if program is not None and np.ndim(tol) == 0:
-        best, value, rounds = _descend_compiled(program, tri, owner, at_vertex, n_start,
-                                                spanning, _field_convex(field), points, sigma,
-                                                iterations, float(tol))
-    else:
-        problem = _TriangleProblem(field, tri, owner, at_vertex, n_start, spanning)
-        best, value, _, rounds = _descend(problem, points, iterations, sigma, tol)
+    problem = _TriangleProblem(field, tri, owner, at_vertex, n_start, _spanning(weights))
+    best, value, _, rounds = _descend(problem, points, iterations, sigma, tol)
     return (best.reshape(n_tri, n_start, 2), value.reshape(n_tri, n_start),
             rounds.reshape(n_tri, n_start))
 
@@ -456,30 +491,6 @@ def _spanning(weights: np.ndarray) -> bool:
     if key not in _SPANNING:
         _SPANNING[key] = bool(np.linalg.matrix_rank(weights) == 3)
     return _SPANNING[key]
-
-
-def _descend_compiled(program: Program, tri: np.ndarray, owner: np.ndarray,
-                      at_vertex: np.ndarray, n_start: int, spanning: bool, convex: bool,
-                      points: np.ndarray, sigma: np.ndarray, iterations: int, tol: float
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``_descend`` of the triangle problem in one compiled call (``_compiled_descent``).
-
-    Same arguments as ``_TriangleProblem`` and ``_descend`` (one scalar tol, m);
-    returns best (P, 2), value (P,), rounds (P,).
-    """
-    n_points = len(points)
-    state = _WORK.rows("state", n_points, kernels.N_STATE)
-    flags = _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64)
-    running = _WORK.rows("running", n_points, 1, np.int64)[:, 0]
-    best, value, _, rounds, _, cand, cand_i, candidates = descend_triangles(
-        kernels.TRIANGLE, False, program.code, program.consts, program.depth, program.nesting, tri, owner, at_vertex,
-        n_start, spanning, convex, points, np.ascontiguousarray(sigma, dtype=np.float64),
-        iterations, tol, _SHAPE_TOL, state, flags, running, _WORK.whole("cand", 5),
-        _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2))
-    _WORK.keep("cand", cand)
-    _WORK.keep("cand_i", cand_i)
-    _WORK.keep("points", candidates)
-    return best, value, rounds
 
 
 def triangle_deepest(field: Field, triangles: np.ndarray, iterations: int = 16,
@@ -546,9 +557,12 @@ def _rotations(angle: np.ndarray) -> np.ndarray:
 def _times(v: np.ndarray, m: np.ndarray) -> np.ndarray:
     """(N, 2) rows v (N, 2) times matrices m (N, 2, 2): v[n] @ m[n].
 
-    With m C-contiguous, the same bits as ``v @ M`` for one matrix M (N > 1).
+    Written out (v_x m_0j + v_y m_1j) rather than ``np.matmul``: BLAS may fuse the
+    multiply-adds, and the compiled descent (``_compiled_descent``) computes the
+    same expression, so that both paths give the same bits.
     """
-    return np.matmul(v[:, None, :], m)[:, 0]
+    return np.stack([v[:, 0] * m[:, 0, 0] + v[:, 1] * m[:, 1, 0],
+                     v[:, 0] * m[:, 0, 1] + v[:, 1] * m[:, 1, 1]], axis=1)
 
 
 class _PairProblem:
@@ -583,6 +597,11 @@ class _PairProblem:
               ) -> tuple[np.ndarray, np.ndarray]:
         """No triangle: no vertex values (1, 3, 3) NaN, no known shape (1, 4)."""
         return np.full((1, 3, 3), np.nan), np.zeros((1, 4))
+
+    def programs(self) -> tuple[Program, Program] | None:
+        """Both fields' compiled programs, None unless both compile."""
+        a, b = compile_field(self.field_a), compile_field(self.field_b)
+        return None if a is None or b is None else (a, b)
 
     def values(self, points: np.ndarray, pair: np.ndarray) -> np.ndarray:
         """(N, 6): f_a, f_b, grad f_a, grad f_b at points (N, 2) of a's frame, of pairs (N,)."""
