@@ -57,7 +57,7 @@ import numpy as np
 from ..sdf import Field, safe_normalize
 from ..settings import Settings
 from ..shapes import Shape
-from .descent import field_field_contacts
+from . import descent
 
 __all__ = ["FAR_END", "REFINE_ROUNDS", "SDF_CALLS", "sdf_in_mesh"]
 
@@ -267,7 +267,7 @@ def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.nda
     angle = pose_mesh[:, 2] - pose_sdf[:, 2]
     co, so = np.cos(pose_sdf[:, 2]), np.sin(pose_sdf[:, 2])
     offset = _rotate(pose_mesh[:, :2] - pose_sdf[:, :2], co, -so)      # mesh in sdf frame
-    pair, point, depth, _, start = field_field_contacts(
+    pair, point, depth, _, start = descent.field_field_contacts(
         sdf.field, mesh.field, np.column_stack([offset, angle]), region,
         n_starts=settings.field_descent_starts, iterations=settings.field_descent_iterations,
         margin=margin)
