@@ -17,6 +17,14 @@ One step of ``find_contacts`` (no Python loop over bodies, pairs or contacts):
 4. contacts with depth > -margin of their pair kept, reduced to at most
    ``contacts_per_pair`` per pair (``reduce``), sorted by (body_a, body_b, feature).
 
+Fast path for circles (``circle_kernels``, the default): steps 1-2 are one compiled
+pass over the bodies and the grid broadphase; the circle-circle candidate pairs go
+straight from the sorted pair list to their contacts (one compiled pass, same
+arithmetic, same order: a circle pair has one contact, so grouping and reduction
+change nothing for it), only the other pairs take steps 3-4, and the two sorted
+lists are merged. The result is identical to the general path
+(``find_contacts(..., fast_circles=False)``), bit for bit.
+
 Velocity-aware speculative margin. A contact found before the bodies touch costs
 nothing (the solver's speculative rows, s > 0, only forbid closing more than s), and
 one found late costs a step's travel of overlap. So the pair margin is
@@ -47,6 +55,7 @@ import numpy as np
 from ..settings import Settings
 from ..shapes import Shape, shape_from_spec
 from .broadphase import candidate_pairs, world_bounds
+from .circle_kernels import circle_circle_contacts, merge_by_pair, reach_and_boxes
 from .contacts import Contacts
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .reduce import reduce_contacts
@@ -138,7 +147,8 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                   angle: np.ndarray, movable: np.ndarray, settings: Settings,
                   velocity: np.ndarray | None = None,
                   angular_velocity: np.ndarray | None = None,
-                  ran: set[tuple[str, str]] | None = None) -> Contacts:
+                  ran: set[tuple[str, str]] | None = None,
+                  fast_circles: bool = True) -> Contacts:
     """All contacts of B bodies this step, sorted by (body_a, body_b, feature).
 
     shapes: Shape objects; shape_id: (B,) int index into ``shapes`` per body;
@@ -148,27 +158,53 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     (None: at rest), which widen each pair's margin by its bodies' reach (module doc).
     ran: if given, receives the (kind_a, kind_b) of every pair function called
     (``PAIR_FUNCTIONS`` keys): which narrowphase machinery this query needed.
+    fast_circles: compiled boxes and circle-circle contacts (module doc); False runs
+    every stage in numpy and every pair through ``_narrowphase`` (same result).
     Returns contacts with body_a < body_b, depth > -(settings.speculative_distance +
     reach_a + reach_b), at most settings.contacts_per_pair per pair.
     """
     distinct, canonical = _distinct(shapes)
     body_shape = canonical[np.asarray(shape_id, np.int64)]
-    local_bounds = np.array([s.bounds() for s in distinct]).reshape(-1, 4)
+    local_bounds = np.array([s.bounds() for s in distinct], np.float64).reshape(-1, 4)
     radius = np.array([s.radius for s in distinct], np.float64)
-    position = np.asarray(position, np.float64).reshape(-1, 2)
-    angle = np.asarray(angle, np.float64).reshape(-1)
+    position = np.ascontiguousarray(position, np.float64).reshape(-1, 2)
+    angle = np.ascontiguousarray(angle, np.float64).reshape(-1)
     n = len(angle)
-    velocity = np.zeros((n, 2)) if velocity is None else np.asarray(velocity, np.float64)
+    velocity = (np.zeros((n, 2)) if velocity is None
+                else np.ascontiguousarray(velocity, np.float64).reshape(-1, 2))
     angular_velocity = (np.zeros(n) if angular_velocity is None
-                        else np.asarray(angular_velocity, np.float64))
-    reach = speculative_reach(radius[body_shape], velocity.reshape(-1, 2),
-                              angular_velocity.reshape(-1), settings.dt)
+                        else np.ascontiguousarray(angular_velocity, np.float64).reshape(-1))
     margin = settings.speculative_distance
-    boxes = world_bounds(local_bounds[body_shape], radius[body_shape], position, angle,
-                         0.5 * margin + reach)
-    pairs = candidate_pairs(boxes, np.asarray(movable, bool))
+    movable = np.asarray(movable, bool)
+    if not fast_circles:
+        reach = speculative_reach(radius[body_shape], velocity, angular_velocity,
+                                  settings.dt)
+        boxes = world_bounds(local_bounds[body_shape], radius[body_shape], position, angle,
+                             0.5 * margin + reach)
+        pairs = candidate_pairs(boxes, movable)
+        pose = np.column_stack([position, angle])
+        return _narrowphase(distinct, body_shape, pairs, pose, margin, reach, settings, ran)
+
+    reach, boxes = np.empty(n), np.empty((n, 4))
+    reach_and_boxes(local_bounds, radius, body_shape, position, angle, velocity,
+                    angular_velocity, float(settings.dt), 0.5 * margin,
+                    UNBOUNDED_RADIUS, REACH_CAP_RADII, reach, boxes)
+    pairs = candidate_pairs(boxes, movable)
+    circle = np.array([s.kind == "circle" for s in distinct], np.bool_)
+    a, b, point, normal, depth, rest, n_circle = circle_circle_contacts(
+        pairs, body_shape, radius, circle, position, reach, float(margin))
+    if n_circle and ran is not None:
+        ran.add(("circle", "circle"))
+    if len(rest) == 0:
+        return Contacts(a, b, point, normal, depth, np.zeros(len(a), np.int64))
     pose = np.column_stack([position, angle])
-    return _narrowphase(distinct, body_shape, pairs, pose, margin, reach, settings, ran)
+    other = _narrowphase(distinct, body_shape, pairs[rest], pose, margin, reach, settings,
+                         ran)
+    return Contacts(*merge_by_pair(
+        np.int64(n), a, b, point, normal, depth, np.zeros(len(a), np.int64),
+        other.body_a, other.body_b, np.ascontiguousarray(other.point, np.float64),
+        np.ascontiguousarray(other.normal, np.float64),
+        np.ascontiguousarray(other.depth, np.float64), other.feature))
 
 
 def collide(shape_a: Any, pose_a: Sequence[float], shape_b: Any, pose_b: Sequence[float],

@@ -1,0 +1,238 @@
+"""Compiled fast paths of ``find_contacts``: body boxes, circle-circle contacts, merge.
+
+``find_contacts`` (module doc of ``sdfphys.collide``) is a pipeline of numpy stages
+whose Python cost is per stage. For scenes of many circles the per-pair numpy work
+(orienting and grouping the pairs by shape, the circle-circle narrowphase, the
+margin filter, the flip to body_a < body_b, the sort) dominated a step. Here:
+
+``reach_and_boxes``
+    one pass over the bodies: the speculative reach (``speculative_reach``) and the
+    world AABB grown by half the speculative distance plus the reach
+    (``broadphase.world_bounds``), with the same floating-point operations in the
+    same order.
+
+``circle_circle_contacts``
+    one pass over the sorted candidate pairs (``broadphase.candidate_pairs``,
+    sorted by (i, j)): pairs of two circles become contacts directly, the others
+    are handed back for the general narrowphase. A circle pair has at most one
+    contact, so the reduction is a no-op for it and the contacts come out already
+    sorted by (body_a, body_b). The arithmetic reproduces the general path
+    bit for bit:
+
+    - orientation: the body whose Shape comes first in the distinct-shape order is
+      ``first`` (ties: the lower body id), as ``_narrowphase`` orients a pair;
+    - with ``d = x_second - x_first``, ``|d| = hypot(d)``: depth = (r_first +
+      r_second) - |d|; normal = d / |d| (coincident centres, |d| <= 1e-300: (1, 0),
+      ``sdf.safe_normalize``), from first to second; point = x_first + (r_first -
+      depth / 2) normal;
+    - kept if depth > -(margin + max over the shape pair's group of (reach_first
+      + reach_second)) (the margin ``collide_circles`` is called with) and depth >
+      -((margin + reach_first) + reach_second) (the pair's own margin);
+    - if first > second the bodies are swapped and the normal negated (point and
+      depth unchanged).
+
+``merge_by_pair``
+    the circle contacts and the general path's contacts, both sorted by
+    (body_a, body_b[, feature]) and never sharing a body pair, merged into one
+    sorted list.
+
+All kernels are ``cache=True`` and run without a Python loop over bodies, pairs or
+contacts.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["circle_circle_contacts", "merge_by_pair", "reach_and_boxes"]
+
+#: Rotation coefficients below this count as 0 against infinite bounds
+#: (``broadphase._TINY_COEFFICIENT``).
+_TINY_COEFFICIENT = 1e-12
+#: Vectors not longer than this normalize to (1, 0) (``sdf.base._TINY``).
+_TINY_LENGTH = 1e-300
+
+
+@njit(cache=True)
+def _scaled(k: float, lo: float, hi: float) -> tuple[float, float]:
+    """Interval ``k * [lo, hi]``; ``k ~ 0`` gives [0, 0] for infinite ends."""
+    if k == 0.0 or (abs(k) < _TINY_COEFFICIENT
+                    and not (math.isfinite(lo) and math.isfinite(hi))):
+        return 0.0, 0.0
+    a = k * lo
+    b = k * hi
+    return min(a, b), max(a, b)
+
+
+@njit(cache=True)
+def reach_and_boxes(shape_bounds: np.ndarray, shape_radius: np.ndarray,
+                    body_shape: np.ndarray, position: np.ndarray, angle: np.ndarray,
+                    velocity: np.ndarray, angular_velocity: np.ndarray, dt: float,
+                    half_margin: float, unbounded_radius: float, reach_cap: float,
+                    reach: np.ndarray, boxes: np.ndarray) -> None:
+    """Fill ``reach`` (B,) m and ``boxes`` (B, 4) ``[xmin, ymin, xmax, ymax]`` m.
+
+    shape_bounds: (S, 4) body-frame AABBs of the distinct shapes (may be infinite);
+    shape_radius: (S,) bounding radii (inf if unbounded); body_shape: (B,) int64
+    index into them; position: (B, 2) centres of mass, m; angle: (B,) rad;
+    velocity: (B, 2) m/s; angular_velocity: (B,) rad/s; dt: s.
+    reach = min(dt (|v| + |w| r), reach_cap r), r = radius or ``unbounded_radius``
+    if infinite (``collide.speculative_reach``); box = world AABB grown by
+    half_margin + reach (``broadphase.world_bounds``).
+    """
+    for i in range(angle.shape[0]):
+        s = body_shape[i]
+        radius = shape_radius[s]
+        r = radius if math.isfinite(radius) else unbounded_radius
+        speed = math.hypot(velocity[i, 0], velocity[i, 1]) + abs(angular_velocity[i]) * r
+        reach[i] = min(dt * speed, reach_cap * r)
+        grow = half_margin + reach[i]
+        c = math.cos(angle[i])
+        sn = math.sin(angle[i])
+        x0 = shape_bounds[s, 0]
+        y0 = shape_bounds[s, 1]
+        x1 = shape_bounds[s, 2]
+        y1 = shape_bounds[s, 3]
+        ax_lo, ax_hi = _scaled(c, x0, x1)
+        bx_lo, bx_hi = _scaled(-sn, y0, y1)
+        ay_lo, ay_hi = _scaled(sn, x0, x1)
+        by_lo, by_hi = _scaled(c, y0, y1)
+        boxes[i, 0] = max(ax_lo + bx_lo, -radius) + position[i, 0] - grow
+        boxes[i, 1] = max(ay_lo + by_lo, -radius) + position[i, 1] - grow
+        boxes[i, 2] = min(ax_hi + bx_hi, radius) + position[i, 0] + grow
+        boxes[i, 3] = min(ay_hi + by_hi, radius) + position[i, 1] + grow
+
+
+@njit(cache=True)
+def circle_circle_contacts(pairs: np.ndarray, body_shape: np.ndarray,
+                           shape_radius: np.ndarray, shape_circle: np.ndarray,
+                           position: np.ndarray, reach: np.ndarray, margin: float):
+    """Contacts of the circle-circle candidate pairs; the other pairs' indices.
+
+    pairs: (P, 2) int64 candidate pairs (i < j), sorted by (i, j); body_shape: (B,)
+    int64 index into the distinct shapes, whose order decides the orientation;
+    shape_radius: (S,) m; shape_circle: (S,) bool; position: (B, 2) centres, m;
+    reach: (B,) m; margin: m, the speculative distance (module doc for the rule).
+
+    Returns (body_a, body_b (K,) int64 with body_a < body_b, point (K, 2) m,
+    normal (K, 2) unit a -> b, depth (K,) m > 0 overlapping, rest (R,) int64 indices
+    into ``pairs`` of the pairs with a non-circle, n_circle: how many candidate pairs
+    were circle-circle). Contacts are sorted by (body_a, body_b).
+    """
+    n_pairs = pairs.shape[0]
+    n_shapes = shape_radius.shape[0]
+    group_reach = np.full((n_shapes, n_shapes), -np.inf)
+    first = np.empty(n_pairs, np.int64)
+    rest = np.empty(n_pairs, np.int64)
+    n_rest = 0
+    n_circle = 0
+    for p in range(n_pairs):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        si = body_shape[i]
+        sj = body_shape[j]
+        if shape_circle[si] and shape_circle[sj]:
+            f = j if si > sj else i
+            s = i if si > sj else j
+            first[n_circle] = p if f == i else -p - 1
+            n_circle += 1
+            value = reach[f] + reach[s]
+            if value > group_reach[body_shape[f], body_shape[s]]:
+                group_reach[body_shape[f], body_shape[s]] = value
+        else:
+            rest[n_rest] = p
+            n_rest += 1
+    body_a = np.empty(n_circle, np.int64)
+    body_b = np.empty(n_circle, np.int64)
+    point = np.empty((n_circle, 2))
+    normal = np.empty((n_circle, 2))
+    depth = np.empty(n_circle)
+    k = 0
+    for c in range(n_circle):
+        code = first[c]
+        p = code if code >= 0 else -code - 1
+        f = pairs[p, 0] if code >= 0 else pairs[p, 1]
+        s = pairs[p, 1] if code >= 0 else pairs[p, 0]
+        rf = shape_radius[body_shape[f]]
+        dx = position[s, 0] - position[f, 0]
+        dy = position[s, 1] - position[f, 1]
+        distance = math.hypot(dx, dy)
+        d = (rf + shape_radius[body_shape[s]]) - distance
+        group_margin = margin + group_reach[body_shape[f], body_shape[s]]
+        if not (d > -group_margin and d > -((margin + reach[f]) + reach[s])):
+            continue
+        if distance > _TINY_LENGTH:
+            nx = dx / distance
+            ny = dy / distance
+        else:
+            nx = 1.0
+            ny = 0.0
+        offset = rf - 0.5 * d
+        point[k, 0] = position[f, 0] + offset * nx
+        point[k, 1] = position[f, 1] + offset * ny
+        depth[k] = d
+        if f > s:
+            body_a[k] = s
+            body_b[k] = f
+            normal[k, 0] = -nx
+            normal[k, 1] = -ny
+        else:
+            body_a[k] = f
+            body_b[k] = s
+            normal[k, 0] = nx
+            normal[k, 1] = ny
+        k += 1
+    return (body_a[:k], body_b[:k], point[:k], normal[:k], depth[:k], rest[:n_rest],
+            n_circle)
+
+
+@njit(cache=True)
+def merge_by_pair(n_bodies: int, a_a: np.ndarray, b_a: np.ndarray, point_a: np.ndarray,
+                  normal_a: np.ndarray, depth_a: np.ndarray, feature_a: np.ndarray,
+                  a_b: np.ndarray, b_b: np.ndarray, point_b: np.ndarray,
+                  normal_b: np.ndarray, depth_b: np.ndarray, feature_b: np.ndarray):
+    """Two contact lists sorted by (body_a, body_b) with no body pair in common, merged.
+
+    Arguments: n_bodies (pair key body_a * n_bodies + body_b), then each list's
+    body_a, body_b (K,) int64, point, normal (K, 2), depth (K,), feature (K,) int64.
+    Returns the merged (body_a, body_b, point, normal, depth, feature); rows of the
+    same pair keep their order.
+    """
+    na = a_a.shape[0]
+    nb = a_b.shape[0]
+    total = na + nb
+    body_a = np.empty(total, np.int64)
+    body_b = np.empty(total, np.int64)
+    point = np.empty((total, 2))
+    normal = np.empty((total, 2))
+    depth = np.empty(total)
+    feature = np.empty(total, np.int64)
+    u = 0
+    v = 0
+    for k in range(total):
+        take_a = v >= nb or (u < na and a_a[u] * n_bodies + b_a[u]
+                             < a_b[v] * n_bodies + b_b[v])
+        if take_a:
+            body_a[k] = a_a[u]
+            body_b[k] = b_a[u]
+            point[k, 0] = point_a[u, 0]
+            point[k, 1] = point_a[u, 1]
+            normal[k, 0] = normal_a[u, 0]
+            normal[k, 1] = normal_a[u, 1]
+            depth[k] = depth_a[u]
+            feature[k] = feature_a[u]
+            u += 1
+        else:
+            body_a[k] = a_b[v]
+            body_b[k] = b_b[v]
+            point[k, 0] = point_b[v, 0]
+            point[k, 1] = point_b[v, 1]
+            normal[k, 0] = normal_b[v, 0]
+            normal[k, 1] = normal_b[v, 1]
+            depth[k] = depth_b[v]
+            feature[k] = feature_b[v]
+            v += 1
+    return body_a, body_b, point, normal, depth, feature
