@@ -96,7 +96,7 @@ def test_unsupported_fields_fall_back_and_the_program_is_cached():
     ellipse = field({"type": "ellipse", "size": [2.0, 1.0]})
     assert compiled.compile_field(ellipse) is None
     assert compiled.compile_field(field({"op": "union", "of": [CIRCLE, ellipse]})) is None
-    value, grad = compiled.evaluate(ellipse, POINTS[:10])
+    value, _ = compiled.evaluate(ellipse, POINTS[:10])
     np.testing.assert_array_equal(value, ellipse.evaluate(POINTS[:10])[0])
     f = field(BOX)
     assert compiled.compile_field(f) is compiled.compile_field(f)

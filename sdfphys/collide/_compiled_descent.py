@@ -30,10 +30,20 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..sdf.compiled import eval_point
+from ..sdf.compiled import run, scratch
 from ._descent_kernels import (
-    AT_BEST, BEST, COUNT, HAS_PREVIOUS, IMBALANCE, TRIANGLE, accept, bound, initialize, propose,
-    results, triangle_known,
+    AT_BEST,
+    BEST,
+    COUNT,
+    HAS_PREVIOUS,
+    IMBALANCE,
+    TRIANGLE,
+    accept,
+    bound,
+    initialize,
+    propose,
+    results,
+    triangle_known,
 )
 
 __all__ = ["descend"]
@@ -48,34 +58,44 @@ def _grown(rows: np.ndarray, n: int) -> np.ndarray:
 
 
 @njit(cache=True, error_model="numpy")
-def _evaluate(kind: int, code_a: np.ndarray, consts_a: np.ndarray, stack_a: np.ndarray,
-              frames_a: np.ndarray, code_b: np.ndarray, consts_b: np.ndarray,
-              stack_b: np.ndarray, frames_b: np.ndarray, rotation: np.ndarray,
-              offset: np.ndarray, points: np.ndarray, pair: np.ndarray, n: int,
-              phi: np.ndarray, grad: np.ndarray, data: np.ndarray) -> None:
+def _evaluate(kind: int, code_a: np.ndarray, consts_a: np.ndarray, depth_a: int,
+              nesting_a: int, code_b: np.ndarray, consts_b: np.ndarray, depth_b: int,
+              nesting_b: int, rotation: np.ndarray, offset: np.ndarray, points: np.ndarray,
+              pair: np.ndarray, n: int, phi: np.ndarray, grad: np.ndarray,
+              data: np.ndarray) -> None:
     """The problem at points[:n] (of pairs pair[:n], PAIR): phi, grad phi, data rows.
 
     The operations are those of ``descent._PairProblem.values`` / ``evaluate``
     (``_times`` writes v @ M as v_x M_0j + v_y M_1j).
     """
+    stack, frames, cur = scratch(depth_a, nesting_a, n)
+    fa, ga = np.empty(n), np.empty((n, 2))
+    run(code_a, consts_a, points, n, stack, frames, cur, fa, ga)
+    if kind == TRIANGLE:
+        for j in range(n):
+            phi[j], grad[j, 0], grad[j, 1] = fa[j], ga[j, 0], ga[j, 1]
+            data[j, 0], data[j, 1] = ga[j, 0], ga[j, 1]
+        return
+    q = np.empty((n, 2))
     for j in range(n):
-        x, y = points[j, 0], points[j, 1]
-        fa, gax, gay = eval_point(code_a, consts_a, x, y, stack_a, frames_a)
-        if kind == TRIANGLE:
-            phi[j], grad[j, 0], grad[j, 1] = fa, gax, gay
-            data[j, 0], data[j, 1] = gax, gay
-            continue
+        k = pair[j]
+        px, py = points[j, 0] - offset[k, 0], points[j, 1] - offset[k, 1]
+        q[j, 0] = px * rotation[k, 0, 0] + py * rotation[k, 1, 0]
+        q[j, 1] = px * rotation[k, 0, 1] + py * rotation[k, 1, 1]
+    stack, frames, cur = scratch(depth_b, nesting_b, n)
+    fb, gb = np.empty(n), np.empty((n, 2))
+    run(code_b, consts_b, q, n, stack, frames, cur, fb, gb)
+    for j in range(n):
         k = pair[j]
         r00, r01, r10, r11 = rotation[k, 0, 0], rotation[k, 0, 1], rotation[k, 1, 0], \
             rotation[k, 1, 1]
-        px, py = x - offset[k, 0], y - offset[k, 1]
-        fb, gbx, gby = eval_point(code_b, consts_b, px * r00 + py * r10, px * r01 + py * r11,
-                                  stack_b, frames_b)
-        gbx, gby = gbx * r00 + gby * r01, gbx * r10 + gby * r11    # times the transpose
+        gax, gay = ga[j, 0], ga[j, 1]
+        gbx = gb[j, 0] * r00 + gb[j, 1] * r01                       # times the transpose
+        gby = gb[j, 0] * r10 + gb[j, 1] * r11
         data[j, 0], data[j, 1], data[j, 2], data[j, 3], data[j, 4], data[j, 5] = \
-            fa, fb, gax, gay, gbx, gby
-        sign = 1.0 if fa >= fb else -1.0
-        phi[j] = 0.5 * (fa + fb) + IMBALANCE * abs(fa - fb)
+            fa[j], fb[j], gax, gay, gbx, gby
+        sign = 1.0 if fa[j] >= fb[j] else -1.0
+        phi[j] = 0.5 * (fa[j] + fb[j]) + IMBALANCE * abs(fa[j] - fb[j])
         grad[j, 0] = 0.5 * (gax + gbx) + (IMBALANCE * sign) * (gax - gbx)
         grad[j, 1] = 0.5 * (gay + gby) + (IMBALANCE * sign) * (gay - gby)
 
@@ -113,14 +133,10 @@ def descend(kind: int, barzilai_borwein: bool, kd: int,
     of points evaluated, and the round buffers (possibly grown).
     """
     n_points = points.shape[0]
-    stack_a = np.empty((depth_a, 3))
-    frames_a = np.empty((nesting_a, 2))
-    stack_b = np.empty((depth_b, 3))
-    frames_b = np.empty((nesting_b, 2))
     phi = np.empty(n_points)
     grad = np.empty((n_points, 2))
     data = np.empty((n_points, kd))                      # updated in place by accept
-    _evaluate(kind, code_a, consts_a, stack_a, frames_a, code_b, consts_b, stack_b, frames_b,
+    _evaluate(kind, code_a, consts_a, depth_a, nesting_a, code_b, consts_b, depth_b, nesting_b,
               rotation, offset, points, pair_of, n_points, phi, grad, data)
     least = np.inf
     most = -np.inf
@@ -170,8 +186,8 @@ def descend(kind: int, barzilai_borwein: bool, kd: int,
                     if source > AT_BEST:
                         pair[source] = pair_of[i]
                     row += 1
-        _evaluate(kind, code_a, consts_a, stack_a, frames_a, code_b, consts_b, stack_b,
-                  frames_b, rotation, offset, candidates, pair, n_eval, value, gradient,
+        _evaluate(kind, code_a, consts_a, depth_a, nesting_a, code_b, consts_b, depth_b,
+                  nesting_b, rotation, offset, candidates, pair, n_eval, value, gradient,
                   cand_data)
         evaluated += n_eval
         if uneven:
@@ -196,3 +212,115 @@ def descend(kind: int, barzilai_borwein: bool, kd: int,
                 size = bound(kind, owner, shape, state, flags, running[:n_running])
     best, phi, rounds = results(state, flags)
     return best, phi, data, rounds, evaluated, cand, cand_i, candidates
+
+
+# --------------------------------------------------------------------------------------
+# The patch search of field-field contacts
+# --------------------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def _h(code_a: np.ndarray, consts_a: np.ndarray, work_a, code_b: np.ndarray,
+       consts_b: np.ndarray, work_b, rotation: np.ndarray, offset: np.ndarray, k: int,
+       ox: float, oy: float, dx: float, dy: float, sx: float, sy: float, s: np.ndarray,
+       m: int, value: np.ndarray, slope: np.ndarray) -> None:
+    """h(s) = max(f_a(x), f_b(x - shift)), x = origin + s direction, and its slope in s,
+    at s[:m] into value, slope (``descent._patch_ends``'s ``h``, pair k, the same
+    operations). work_*: (stack, frames, cur, points (M, 2), f (M,), grad (M, 2))."""
+    stack_a, frames_a, cur_a, xa, fa, ga = work_a
+    stack_b, frames_b, cur_b, xb, fb, gb = work_b
+    r00, r01, r10, r11 = rotation[k, 0, 0], rotation[k, 0, 1], rotation[k, 1, 0], \
+        rotation[k, 1, 1]
+    for j in range(m):
+        x, y = ox + s[j] * dx, oy + s[j] * dy
+        xa[j, 0], xa[j, 1] = x, y
+        px, py = (x - sx) - offset[k, 0], (y - sy) - offset[k, 1]
+        xb[j, 0], xb[j, 1] = px * r00 + py * r10, px * r01 + py * r11
+    run(code_a, consts_a, xa, m, stack_a, frames_a, cur_a, fa, ga)
+    run(code_b, consts_b, xb, m, stack_b, frames_b, cur_b, fb, gb)
+    for j in range(m):
+        if fa[j] >= fb[j]:
+            value[j], slope[j] = fa[j], ga[j, 0] * dx + ga[j, 1] * dy
+        else:
+            value[j] = max(fa[j], fb[j])
+            slope[j] = (gb[j, 0] * r00 + gb[j, 1] * r01) * dx + \
+                (gb[j, 0] * r10 + gb[j, 1] * r11) * dy
+
+
+@njit(cache=True, error_model="numpy")
+def _work(depth: int, nesting: int):
+    """Work arrays of ``_h`` for up to 3 points."""
+    stack, frames, cur = scratch(depth, nesting, 3)
+    return stack, frames, cur, np.empty((3, 2)), np.empty(3), np.empty((3, 2))
+
+
+@njit(cache=True, error_model="numpy")
+def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
+               code_b: np.ndarray, consts_b: np.ndarray, depth_b: int, nesting_b: int,
+               rotation: np.ndarray, offset: np.ndarray, pair: np.ndarray, centre: np.ndarray,
+               normal: np.ndarray, depth: np.ndarray, sliver: np.ndarray, reach: np.ndarray,
+               iterations: int, tol: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``descent._patch_ends`` with both fields given by their programs.
+
+    Same arguments (pair (K,), centre (K, 2), normal (K, 2), depth, sliver, reach,
+    tol (K,)) and results (s (K, 2), found (K, 2): column 0 the -t end, 1 the +t
+    end). The Python version iterates all search directions at once while any is
+    unfinished; each direction's iterates depend on its own values only, so here
+    each runs its own loop, with the same steps.
+    """
+    n = depth.shape[0]
+    work_a, work_b = _work(depth_a, nesting_a), _work(depth_b, nesting_b)
+    ends = np.zeros((n, 2))
+    found = np.zeros((n, 2), dtype=np.bool_)
+    trials = np.empty(3)
+    value = np.empty(3)
+    slope = np.empty(3)
+    for c in range(n):
+        k = pair[c]
+        nx, ny = normal[c, 0], normal[c, 1]
+        half = 0.5 * depth[c] - 0.5 * sliver[c]
+        ox, oy = centre[c, 0] + half * nx, centre[c, 1] + half * ny
+        sx, sy = (depth[c] - sliver[c]) * nx, (depth[c] - sliver[c]) * ny
+        for side in range(2):
+            dx, dy = (ny, -nx) if side == 0 else (-ny, nx)       # -t, then t = perp(n)
+            lo, hi = 0.0, reach[c]
+            trials[0], trials[1] = lo, hi
+            _h(code_a, consts_a, work_a, code_b, consts_b, work_b, rotation, offset, k, ox, oy,
+               dx, dy, sx, sy, trials, 2, value, slope)
+            h_lo, h_hi, d_hi = value[0], value[1], slope[1]
+            found[c, side] = h_lo < 0.0
+            if not found[c, side]:
+                continue
+            if not h_hi > 0.0:
+                ends[c, side] = hi
+                continue
+            for _ in range(iterations):
+                if not hi - lo > tol[c]:
+                    break
+                a, b = lo, hi
+                width = b - a
+                middle = a + 0.5 * width
+                trials[0] = b - h_hi / d_hi
+                trials[1] = a - h_lo * width / (h_hi - h_lo)
+                trials[2] = middle
+                low, high = a + 1e-3 * width, b - 1e-3 * width
+                for j in range(3):
+                    t = trials[j] if np.isfinite(trials[j]) else middle
+                    trials[j] = min(max(t, low), high)
+                trials.sort()
+                _h(code_a, consts_a, work_a, code_b, consts_b, work_b, rotation, offset, k, ox,
+                   oy, dx, dy, sx, sy, trials, 3, value, slope)
+                # The new bracket: the last trial with h < 0 and the first with h >= 0 after it.
+                last_in = -1
+                for j in range(3):
+                    if value[j] < 0.0:
+                        last_in = j
+                first_out = 3
+                for j in range(2, last_in, -1):
+                    if not value[j] < 0.0:
+                        first_out = j
+                if last_in >= 0:
+                    lo, h_lo = trials[last_in], value[last_in]
+                if first_out < 3:
+                    hi, h_hi, d_hi = trials[first_out], value[first_out], slope[first_out]
+            ends[c, side] = lo
+    return ends, found

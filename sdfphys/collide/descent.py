@@ -127,8 +127,9 @@ import numpy as np
 
 from ..sdf import Field, safe_normalize
 from ..sdf.compiled import Program, compile_field
+from ..sdf.compiled import distance as compiled_distance
 from . import _descent_kernels as kernels
-from ._compiled_descent import descend
+from ._compiled_descent import descend, patch_ends
 
 __all__ = [
     "START_BARYCENTRIC",
@@ -202,7 +203,8 @@ def triangle_cull(field: Field, triangles: np.ndarray, margin: float = 0.0) -> n
 
     triangles: (T, 3, 2) in the field's frame (m); margin: m. With c, R the
     minimal enclosing circle of a triangle, the triangle is kept iff
-    f(c) < R + margin. One ``field.distance`` call on T points.
+    f(c) < R + margin. One ``field.distance`` call on T points (compiled when the
+    field compiles, ``sdf.compiled``).
 
     Why it never rejects a triangle holding a point q with f(q) < margin: every
     field of ``sdfphys.sdf`` is 1-Lipschitz (an exact distance is; min, max and
@@ -217,7 +219,7 @@ def triangle_cull(field: Field, triangles: np.ndarray, margin: float = 0.0) -> n
     if len(tri) == 0:
         return np.zeros(0, dtype=bool)
     centre, radius = _enclosing_circles(tri)
-    return field.distance(centre) < radius + margin
+    return compiled_distance(field, centre) < radius + margin
 
 
 # --------------------------------------------------------------------------------------
@@ -694,6 +696,13 @@ def _patch_ends(problem: _PairProblem, pair: np.ndarray, centre: np.ndarray,
     column 1 the +t end (s >= 0 along its direction); ``found`` is False where
     the sliver is empty at m (depth overestimated).
     """
+    programs = problem.programs() if USE_COMPILED else None
+    if programs is not None:                          # the same search, compiled
+        a, b = programs
+        c = np.ascontiguousarray
+        return patch_ends(a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
+                          b.nesting, c(problem.rotation), c(problem.offset), c(pair), c(centre),
+                          c(normal), c(depth), c(sliver), c(reach), iterations, c(tol))
     n_contacts = len(depth)
     tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
     direction = np.concatenate([-tangent, tangent])                     # (2K, 2)

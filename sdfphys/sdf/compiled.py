@@ -4,19 +4,20 @@ Why: the descent (``collide.descent``) evaluates a field once per round on a few
 hundred points; a numpy ``field.evaluate`` costs ~30 us of fixed overhead per call
 (per node of the tree), which dominates small batches. ``compile_field(f)`` turns
 the tree of ``f`` into a :class:`Program` (an int64 instruction table and a
-float64 constant table) that :func:`eval_point` runs per point inside njit code,
-with no Python in the loop: value and analytic gradient, the same numbers as
-``f.evaluate`` (the same operations in the same order; libm functions may differ
-in the last bit).
+float64 constant table) that :func:`run` evaluates on a batch of points inside
+njit code (one instruction at a time over the batch), with no Python in the loop: value and analytic gradient, the same numbers as
+``f.evaluate`` (the same operations in the same order, so the same bits, except
+where numpy's exp or a BLAS dot product rounds differently: within an ulp or so).
 
 Program (postfix). ``code`` (I, 4) int64 rows ``(opcode, offset, a, b)``:
 ``offset`` indexes ``consts`` (F,) float64 where the instruction's parameters
-start, ``a`` and ``b`` are small integer arguments. Two stacks, per point:
+start, ``a`` and ``b`` are small integer arguments. Two stacks, of one entry
+per point of the batch:
 
-- the value stack ``stack`` (depth, 3): rows (f, df/dx, df/dy). A primitive
-  pushes one row; an n-ary operator pops its operands and pushes the result.
-- the point stack ``frames`` (nesting, 2): a placement (transform, scale) pushes
-  the current point and replaces it by the operand's local point; the matching
+- the value stack ``stack`` (depth, n, 3): entries (f, df/dx, df/dy). A
+  primitive pushes one; an n-ary operator pops its operands and pushes the result.
+- the point stack ``frames`` (nesting, n, 2): a placement (transform, scale)
+  pushes the current points and replaces them by the operand's local points; the matching
   POP instruction, after the operand's instructions, restores it and maps the
   operand's gradient back (rotation R for a transform, value times s for a scale).
 
@@ -49,7 +50,7 @@ from numba import njit
 from . import curved, operators, polygonal
 from .base import Field, safe_normalize
 
-__all__ = ["Program", "compile_field", "evaluate", "evaluate_points", "eval_point"]
+__all__ = ["Program", "compile_field", "distance", "evaluate", "run", "scratch"]
 
 # Opcodes.
 CIRCLE = 0          # consts: r
@@ -306,141 +307,185 @@ def _smooth_min(a: float, b: float, k: float, blend: int) -> tuple[float, float]
 
 
 @njit(cache=True, error_model="numpy")
-def eval_point(code: np.ndarray, consts: np.ndarray, x: float, y: float,
-               stack: np.ndarray, frames: np.ndarray) -> tuple[float, float, float]:
-    """Value and gradient (f, df/dx, df/dy) of the program at the point (x, y) (m).
+def scratch(depth: int, nesting: int, n: int
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Work arrays of ``run`` for batches of up to n points: the value stack
+    (depth, n, 3), the point stack (nesting, n, 2) and the current points (n, 2)."""
+    return np.empty((depth, n, 3)), np.empty((nesting, n, 2)), np.empty((n, 2))
 
-    stack (depth, 3), frames (nesting, 2): scratch of the program's sizes.
+
+@njit(cache=True, error_model="numpy")
+def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack: np.ndarray,
+        frames: np.ndarray, cur: np.ndarray, value: np.ndarray, grad: np.ndarray) -> None:
+    """Value (n,) and gradient (n, 2) of the program at points[:n] (m), into value, grad.
+
+    One instruction at a time over the whole batch (the dispatch costs once per
+    batch, the inner loops are tight). stack, frames, cur: ``scratch`` arrays of at
+    least the program's depth and nesting and n points.
     """
+    for j in range(n):
+        cur[j, 0], cur[j, 1] = points[j, 0], points[j, 1]
     sp = 0
     fp = 0
     for i in range(code.shape[0]):
         op, o, a, b = code[i, 0], code[i, 1], code[i, 2], code[i, 3]
         if op == CIRCLE:
-            length = math.hypot(x, y)
-            if length > _TINY:
-                gx, gy = x / length, y / length
-            else:
-                gx, gy = 1.0, 0.0
-            stack[sp, 0], stack[sp, 1], stack[sp, 2] = length - consts[o], gx, gy
+            out = stack[sp]
+            r = consts[o]
+            for j in range(n):
+                x, y = cur[j, 0], cur[j, 1]
+                length = math.hypot(x, y)
+                if length > _TINY:
+                    out[j, 0], out[j, 1], out[j, 2] = length - r, x / length, y / length
+                else:
+                    out[j, 0], out[j, 1], out[j, 2] = length - r, 1.0, 0.0
             sp += 1
         elif op == BOX:
-            v, gx, gy = _box(x, y, consts[o], consts[o + 1])
-            stack[sp, 0], stack[sp, 1], stack[sp, 2] = v, gx, gy
+            out = stack[sp]
+            hx, hy = consts[o], consts[o + 1]
+            for j in range(n):
+                out[j, 0], out[j, 1], out[j, 2] = _box(cur[j, 0], cur[j, 1], hx, hy)
             sp += 1
         elif op == ROUNDED_BOX:
-            if y >= 0.0:
-                r = consts[o + 2] if x >= 0.0 else consts[o + 3]
-            else:
-                r = consts[o + 5] if x >= 0.0 else consts[o + 4]
-            v, gx, gy = _box(x, y, consts[o] - r, consts[o + 1] - r)
-            stack[sp, 0], stack[sp, 1], stack[sp, 2] = v - r, gx, gy
+            out = stack[sp]
+            hx, hy = consts[o], consts[o + 1]
+            for j in range(n):
+                x, y = cur[j, 0], cur[j, 1]
+                if y >= 0.0:
+                    r = consts[o + 2] if x >= 0.0 else consts[o + 3]
+                else:
+                    r = consts[o + 5] if x >= 0.0 else consts[o + 4]
+                v, gx, gy = _box(x, y, hx - r, hy - r)
+                out[j, 0], out[j, 1], out[j, 2] = v - r, gx, gy
             sp += 1
         elif op == HALF_PLANE:
-            stack[sp, 0] = (x * consts[o] + y * consts[o + 1]) - consts[o + 2]
-            stack[sp, 1], stack[sp, 2] = consts[o], consts[o + 1]
+            out = stack[sp]
+            nx, ny, level = consts[o], consts[o + 1], consts[o + 2]
+            for j in range(n):
+                out[j, 0] = (cur[j, 0] * nx + cur[j, 1] * ny) - level
+                out[j, 1], out[j, 2] = nx, ny
             sp += 1
         elif op == POLYGON:
-            v, gx, gy = _polygon(consts, o, a, x, y)
-            stack[sp, 0], stack[sp, 1], stack[sp, 2] = v, gx, gy
+            out = stack[sp]
+            for j in range(n):
+                out[j, 0], out[j, 1], out[j, 2] = _polygon(consts, o, a, cur[j, 0], cur[j, 1])
             sp += 1
         elif op == SEGMENT:
-            v, gx, gy = _segment(consts, o, x, y)
-            stack[sp, 0], stack[sp, 1], stack[sp, 2] = v, gx, gy
+            out = stack[sp]
+            for j in range(n):
+                out[j, 0], out[j, 1], out[j, 2] = _segment(consts, o, cur[j, 0], cur[j, 1])
             sp += 1
         elif op == PUSH_T:
-            frames[fp, 0], frames[fp, 1] = x, y
+            saved = frames[fp]
             fp += 1
-            px, py = x - consts[o], y - consts[o + 1]
-            c, s, ms = consts[o + 2], consts[o + 3], consts[o + 4]
-            x, y = c * px + s * py, ms * px + c * py
+            ox, oy, c, s, ms = consts[o], consts[o + 1], consts[o + 2], consts[o + 3], \
+                consts[o + 4]
+            for j in range(n):
+                x, y = cur[j, 0], cur[j, 1]
+                saved[j, 0], saved[j, 1] = x, y
+                px, py = x - ox, y - oy
+                cur[j, 0], cur[j, 1] = c * px + s * py, ms * px + c * py
         elif op == POP_T:
             fp -= 1
-            x, y = frames[fp, 0], frames[fp, 1]
+            saved = frames[fp]
+            top = stack[sp - 1]
             c, s, ms = consts[o + 2], consts[o + 3], consts[o + 4]
-            gx, gy = stack[sp - 1, 1], stack[sp - 1, 2]
-            stack[sp - 1, 1], stack[sp - 1, 2] = c * gx + ms * gy, s * gx + c * gy
+            for j in range(n):
+                cur[j, 0], cur[j, 1] = saved[j, 0], saved[j, 1]
+                gx, gy = top[j, 1], top[j, 2]
+                top[j, 1], top[j, 2] = c * gx + ms * gy, s * gx + c * gy
         elif op == PUSH_S:
-            frames[fp, 0], frames[fp, 1] = x, y
+            saved = frames[fp]
             fp += 1
-            x, y = x / consts[o], y / consts[o]
+            factor = consts[o]
+            for j in range(n):
+                x, y = cur[j, 0], cur[j, 1]
+                saved[j, 0], saved[j, 1] = x, y
+                cur[j, 0], cur[j, 1] = x / factor, y / factor
         elif op == POP_S:
             fp -= 1
-            x, y = frames[fp, 0], frames[fp, 1]
-            stack[sp - 1, 0] = consts[o] * stack[sp - 1, 0]
+            saved = frames[fp]
+            top = stack[sp - 1]
+            factor = consts[o]
+            for j in range(n):
+                cur[j, 0], cur[j, 1] = saved[j, 0], saved[j, 1]
+                top[j, 0] = factor * top[j, 0]
         elif op == SELECT:
+            # min (union), max (intersection) or max(a, -b1, -b2, ...) (difference)
+            # of the a operands on top; the first one wins a tie (numpy's arg-min/max).
             first = sp - a
-            pick = first
-            for j in range(first + 1, sp):
-                if b == 0:
-                    if stack[j, 0] < stack[pick, 0]:
-                        pick = j
-                elif b == 1:
-                    if stack[j, 0] > stack[pick, 0]:
-                        pick = j
-                elif -stack[j, 0] > (stack[pick, 0] if pick == first else -stack[pick, 0]):
-                    pick = j
-            sign = -1.0 if (b == 2 and pick != first) else 1.0
-            v, gx, gy = stack[pick, 0], stack[pick, 1], stack[pick, 2]
-            stack[first, 0], stack[first, 1], stack[first, 2] = sign * v, sign * gx, sign * gy
+            out = stack[first]
+            for j in range(n):
+                pick = first
+                best = stack[first, j, 0]
+                for k in range(first + 1, sp):
+                    d = stack[k, j, 0] if b != 2 else -stack[k, j, 0]
+                    if (d < best) if b == 0 else (d > best):
+                        pick, best = k, d
+                if pick != first:
+                    sign = -1.0 if b == 2 else 1.0
+                    out[j, 0] = sign * stack[pick, j, 0]
+                    out[j, 1] = sign * stack[pick, j, 1]
+                    out[j, 2] = sign * stack[pick, j, 2]
             sp = first + 1
         elif op == XOR:
-            d, g0x, g0y = stack[sp - 2, 0], stack[sp - 2, 1], stack[sp - 2, 2]
-            e, g1x, g1y = stack[sp - 1, 0], stack[sp - 1, 1], stack[sp - 1, 2]
-            low, high = min(d, e), max(d, e)
-            if d <= e:
-                lx, ly = g0x, g0y
-            else:
-                lx, ly = g1x, g1y
-            if d >= e:
-                hx, hy = g0x, g0y
-            else:
-                hx, hy = g1x, g1y
+            left, right = stack[sp - 2], stack[sp - 1]
+            for j in range(n):
+                d, g0x, g0y = left[j, 0], left[j, 1], left[j, 2]
+                e, g1x, g1y = right[j, 0], right[j, 1], right[j, 2]
+                low, high = min(d, e), max(d, e)
+                if d <= e:
+                    lx, ly = g0x, g0y
+                else:
+                    lx, ly = g1x, g1y
+                if d >= e:
+                    hx, hy = g0x, g0y
+                else:
+                    hx, hy = g1x, g1y
+                left[j, 0] = max(low, -high)
+                if low >= -high:
+                    left[j, 1], left[j, 2] = lx, ly
+                else:
+                    left[j, 1], left[j, 2] = -hx, -hy
             sp -= 1
-            stack[sp - 1, 0] = max(low, -high)
-            if low >= -high:
-                stack[sp - 1, 1], stack[sp - 1, 2] = lx, ly
-            else:
-                stack[sp - 1, 1], stack[sp - 1, 2] = -hx, -hy
         elif op == SMOOTH:
-            d, g0x, g0y = stack[sp - 2, 0], stack[sp - 2, 1], stack[sp - 2, 2]
-            e, g1x, g1y = stack[sp - 1, 0], stack[sp - 1, 1], stack[sp - 1, 2]
+            left, right = stack[sp - 2], stack[sp - 1]
             k = consts[o]
+            for j in range(n):
+                d, g0x, g0y = left[j, 0], left[j, 1], left[j, 2]
+                e, g1x, g1y = right[j, 0], right[j, 1], right[j, 2]
+                if a == 0:
+                    v, w = _smooth_min(d, e, k, b)
+                    left[j, 0] = v
+                    left[j, 1] = (1.0 - w) * g0x + w * g1x
+                    left[j, 2] = (1.0 - w) * g0y + w * g1y
+                elif a == 1:
+                    v, w = _smooth_min(-d, -e, k, b)
+                    left[j, 0] = -v
+                    left[j, 1] = (1.0 - w) * g0x + w * g1x
+                    left[j, 2] = (1.0 - w) * g0y + w * g1y
+                else:
+                    v, w = _smooth_min(-d, e, k, b)
+                    left[j, 0] = -v
+                    left[j, 1] = (1.0 - w) * g0x - w * g1x
+                    left[j, 2] = (1.0 - w) * g0y - w * g1y
             sp -= 1
-            if a == 0:
-                v, w = _smooth_min(d, e, k, b)
-                stack[sp - 1, 0] = v
-                stack[sp - 1, 1] = (1.0 - w) * g0x + w * g1x
-                stack[sp - 1, 2] = (1.0 - w) * g0y + w * g1y
-            elif a == 1:
-                v, w = _smooth_min(-d, -e, k, b)
-                stack[sp - 1, 0] = -v
-                stack[sp - 1, 1] = (1.0 - w) * g0x + w * g1x
-                stack[sp - 1, 2] = (1.0 - w) * g0y + w * g1y
-            else:
-                v, w = _smooth_min(-d, e, k, b)
-                stack[sp - 1, 0] = -v
-                stack[sp - 1, 1] = (1.0 - w) * g0x - w * g1x
-                stack[sp - 1, 2] = (1.0 - w) * g0y - w * g1y
         elif op == ROUND:
-            stack[sp - 1, 0] = stack[sp - 1, 0] - consts[o]
+            top = stack[sp - 1]
+            r = consts[o]
+            for j in range(n):
+                top[j, 0] = top[j, 0] - r
         elif op == ONION:
-            v = stack[sp - 1, 0]
-            if v < 0.0:
-                stack[sp - 1, 1], stack[sp - 1, 2] = -stack[sp - 1, 1], -stack[sp - 1, 2]
-            stack[sp - 1, 0] = abs(v) - consts[o]
-    return stack[0, 0], stack[0, 1], stack[0, 2]
-
-
-@njit(cache=True, error_model="numpy")
-def evaluate_points(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int,
-                    points: np.ndarray, value: np.ndarray, grad: np.ndarray) -> None:
-    """Fill value (N,) and grad (N, 2) with the program at points (N, 2)."""
-    stack = np.empty((depth, 3))
-    frames = np.empty((nesting, 2))
-    for n in range(points.shape[0]):
-        value[n], grad[n, 0], grad[n, 1] = eval_point(code, consts, points[n, 0], points[n, 1],
-                                                      stack, frames)
+            top = stack[sp - 1]
+            thickness = consts[o]
+            for j in range(n):
+                v = top[j, 0]
+                if v < 0.0:
+                    top[j, 1], top[j, 2] = -top[j, 1], -top[j, 2]
+                top[j, 0] = abs(v) - thickness
+    result = stack[0]
+    for j in range(n):
+        value[j], grad[j, 0], grad[j, 1] = result[j, 0], result[j, 1], result[j, 2]
 
 
 def evaluate(f: Field, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -454,8 +499,8 @@ def evaluate(f: Field, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     p = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
     value = np.empty(len(p))
     grad = np.empty((len(p), 2))
-    evaluate_points(program.code, program.consts, program.depth, program.nesting, p, value,
-                    grad)
+    stack, frames, cur = scratch(program.depth, program.nesting, len(p))
+    run(program.code, program.consts, p, len(p), stack, frames, cur, value, grad)
     return value, grad
 
 
