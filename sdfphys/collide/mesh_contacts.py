@@ -26,6 +26,9 @@ Stages (derivations in each function's docstring):
    face near the end of a thin overlap strip: SAT's non-minimal axis). Mesh
    vertices are measured against the accepted planes.
 
+Field evaluations go through ``sdf.compiled`` (one numba call instead of a numpy
+pass per node of the field's tree) when the field compiles.
+
 Keys (see ``narrowphase`` for the layout): descent minima keep (triangle, start
 id); a minimum at a mesh vertex, a vertex sample and a vertex measured against a
 face all get the vertex key (element = vertex index, start ``VERTEX_START``), edge
@@ -40,7 +43,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..sdf import Field, safe_normalize
+from ..sdf import Field, compiled, safe_normalize
 from ..settings import Settings
 from ..shapes import Shape
 from . import descent
@@ -153,7 +156,7 @@ def _samples(mesh: Shape, field: Field, vertices: np.ndarray, margin: float) -> 
     m = vertices.shape[1]
     midpoints = 0.5 * (vertices + np.roll(vertices, -1, axis=1))
     points = np.concatenate([vertices, midpoints], axis=1).reshape(-1, 2)
-    f = field.distance(points)
+    f = compiled.distance(field, points)
     index = np.nonzero(f < margin)[0]
     slot = index % (2 * m)
     return _Candidates(index // (2 * m), slot % m,
@@ -175,12 +178,13 @@ def _face_normals(field: Field, p: np.ndarray, depth: np.ndarray
     """
     n = len(p)
     points = np.concatenate([p, (p[:, None, :] + _PROBE * _AXES[None]).reshape(-1, 2)])
-    g = safe_normalize(field.evaluate(points)[1])
+    g = safe_normalize(compiled.evaluate(field, points)[1])
     g0, around = g[:n], g[n:].reshape(n, 4, 2)
     foot = p + depth[:, None] * g0
     tangent = np.stack([-g0[:, 1], g0[:, 0]], axis=1)
     sides = np.concatenate([foot + _PROBE * tangent, foot - _PROBE * tangent])
-    g_foot = safe_normalize(field.evaluate(sides)[1]).reshape(2, n, 2).transpose(1, 0, 2)
+    g_foot = safe_normalize(compiled.evaluate(field, sides)[1])
+    g_foot = g_foot.reshape(2, n, 2).transpose(1, 0, 2)
     turn = np.sum((np.concatenate([around, g_foot], axis=1) - g0[:, None, :]) ** 2, axis=2)
     return g0, np.all(turn <= _KINK ** 2, axis=1)
 
@@ -207,7 +211,8 @@ def _reference_faces(field: Field, c: _Candidates, vertices: np.ndarray, deepest
     r_idx, v_idx = np.nonzero(s < margin)
     sep = s[r_idx, v_idx]
     vv = v[r_idx, v_idx]
-    f = field.distance(np.concatenate([vv - sep[:, None] * c.normal[r_idx], vv]))
+    f = compiled.distance(field,
+                          np.concatenate([vv - sep[:, None] * c.normal[r_idx], vv]))
     supported = ((np.abs(f[:len(vv)]) <= _ON_FACE) & (f[len(vv):] <= margin + _ON_FACE))
     cut = supported & (-sep > deepest[c.pair[r_idx]] + slop)
     accepted = np.ones(len(c.depth), bool)
@@ -257,7 +262,7 @@ def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: 
         if len(c.depth) == 0:
             return c.pair, c.point, c.normal, c.depth, c.element, c.start
     else:
-        c.normal = safe_normalize(other.field.evaluate(c.point)[1])
+        c.normal = safe_normalize(compiled.evaluate(other.field, c.point)[1])
     accepted, measured = _reference_faces(other.field, c, vertices, deepest, margin,
                                           settings.linear_slop)
     c = _Candidates.concatenate([measured, c.take(accepted)])
