@@ -14,6 +14,7 @@ import pytest
 
 from sdfphys.collide import collide
 from sdfphys.collide.narrowphase import SOURCE_SDF_IN_MESH
+from sdfphys.sdf.build import field as build_field
 from sdfphys.settings import Settings
 
 mesh_sdf = importlib.import_module("sdfphys.collide.mesh_sdf")
@@ -135,6 +136,38 @@ def test_mesh_box_on_an_unbounded_sdf_half_plane():
     np.testing.assert_allclose(c.point[order], [[-0.2, -0.005], [0.8, -0.005]], atol=TOL)
     np.testing.assert_allclose(c.depth, 0.01, atol=TOL)
     np.testing.assert_allclose(c.normal, [[0.0, 1.0], [0.0, 1.0]], atol=TOL)
+
+
+@pytest.mark.parametrize("field", [
+    {"type": "half_plane", "normal": [0.0, 1.0]},
+    {"op": "rotate", "by": 0.3, "of": {"op": "translate", "by": [0.0, -0.2],
+                                    "of": {"type": "half_plane", "normal": [0.0, 1.0]}}}])
+def test_a_flat_sdf_skips_the_reverse_direction(field, monkeypatch):
+    """Against a half-plane (moved or not) the mesh's corners are the exact deepest
+    points, so the reverse direction is not run (it would add nothing: measured, the
+    same contacts); a bounded sdf still runs it. The deepest contact is the deepest
+    corner, the normal the plane's."""
+    mesh_sdf = importlib.import_module("sdfphys.collide.mesh_sdf")
+    calls = []
+    real = mesh_sdf.sdf_in_mesh
+
+    def spy(*args, **kwargs):
+        calls.append(args[1].field)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(mesh_sdf, "sdf_in_mesh", spy)
+    mesh = {"type": "box", "size": [1.0, 0.5]}
+    c = collide({"type": "sdf", "field": field}, (0.0, 0.0, 0.0), mesh, (0.3, 0.1, 0.2))
+    assert calls == []
+    assert len(c) >= 2 and np.all((c.feature >> 56) == 1)
+    f = build_field(field)
+    corners = np.array([[-0.5, -0.25], [0.5, -0.25], [0.5, 0.25], [-0.5, 0.25]])
+    rot = np.array([[math.cos(0.2), -math.sin(0.2)], [math.sin(0.2), math.cos(0.2)]])
+    world = corners @ rot.T + [0.3, 0.1]
+    np.testing.assert_allclose(np.max(c.depth), np.max(-f.distance(world)), atol=TOL)
+    np.testing.assert_allclose(c.normal, f.evaluate(c.point)[1], atol=TOL)
+    collide(SDF_BOX, (0.0, 0.0, 0.0), mesh, (0.3, 0.1, 0.2))
+    assert len(calls) == 1
 
 
 @pytest.mark.parametrize("sdf_shape", [

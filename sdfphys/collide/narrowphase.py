@@ -56,6 +56,9 @@ from collections.abc import Callable
 import numpy as np
 
 from ..sdf import safe_normalize
+from ..sdf.base import Field
+from ..sdf.operators import Scale, Transform
+from ..sdf.polygonal import HalfPlane
 from ..settings import Settings
 from ..shapes import Shape
 from .contacts import Contacts
@@ -171,6 +174,18 @@ def collide_meshes(mesh_a: Shape, mesh_b: Shape, body_a: np.ndarray, body_b: np.
     return Contacts.concatenate([first, second])
 
 
+def _flat(field: Field) -> bool:
+    """True when ``field``'s solid is a half-plane (through rigid motions and scaling).
+
+    A half-plane has no corner and no bulge that could press into a mesh face: the
+    mesh's vertices in it are the exact deepest points, so the reverse view of
+    ``collide_mesh_and_sdf`` adds nothing and is skipped (the ground of most scenes).
+    """
+    while isinstance(field, (Transform, Scale)):
+        field = field.of
+    return isinstance(field, HalfPlane)
+
+
 def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
                          pose_a: np.ndarray, pose_b: np.ndarray, margin: float,
                          settings: Settings) -> Contacts:
@@ -190,6 +205,7 @@ def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b
        underestimates the depth (a square corner pressed straight in: by 29 %) and
        takes the corner's side as normal.
 
+    A flat sdf (a half-plane, ``_flat``) runs the first direction only: it is exact there.
     Each direction's wrong view of the other's case (shallower, within its depth of
     the right one) is shadowed in the reduction (``reduce``). Cost per group: the
     first direction's ``descent_iterations + 3`` evaluations of the sdf field, one
@@ -202,6 +218,8 @@ def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b
                                                           margin, settings, False)
     forward = Contacts(body_a[pair], body_b[pair], point, -out_b, depth,
                        feature_key(SOURCE_A_IN_B, tri, start))
+    if _flat(sdf_b.field):
+        return forward
     angle = pose_a[:, 2] - pose_b[:, 2]
     offset = _to_local(pose_a[:, :2], pose_b)
     region = _overlap_region(sdf_b.bounds(), mesh_a.bounds(), angle, offset, margin)
