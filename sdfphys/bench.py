@@ -484,9 +484,10 @@ def relevant_knobs(counts: dict[str, int], knobs: Sequence[str]) -> list[str]:
     """The knobs of ``knobs`` that can act on a scene whose balanced run counted ``counts``."""
     ran = {k for k, v in counts.items() if v > 0}
     mesh = bool(ran & {"mesh_mesh", "mesh_sdf"})
+    fields = bool(ran & {"mesh_sdf", "sdf_sdf"})     # mesh-sdf runs a field-field descent too
     rules = {
         "descent_iterations": mesh, "descent_starts": mesh,
-        "field_descent_iterations": "sdf_sdf" in ran, "field_descent_starts": "sdf_sdf" in ran,
+        "field_descent_iterations": fields, "field_descent_starts": fields,
         "gradient": bool(ran & set(_SDF_PAIRS)), "grid_cell": bool(ran & set(_SDF_PAIRS)),
         "restitution_passes": "restitution" in ran,
         "time_of_impact": "time_of_impact" in ran,

@@ -89,6 +89,9 @@ def test_each_scene_sweeps_only_the_knobs_that_can_act_on_it(quick):
     assert relevant_knobs(counts, ["descent_starts", "gradient", "restitution_passes",
                                    "contact_hertz", "field_descent_starts", "dt"]) == [
         "restitution_passes", "contact_hertz", "dt"]
+    # mesh-sdf pairs run a field-field descent for the sdf's view of the mesh.
+    assert relevant_knobs({"mesh_sdf": 3, "solve": 12}, ["field_descent_starts"]) == [
+        "field_descent_starts"]
 
 
 @pytest.mark.parametrize("knob", ["dt", "substeps"])
