@@ -106,3 +106,22 @@ def test_compiled_field_field_descent_equals_the_python_loop(name, monkeypatch):
         for x, y in zip(fast, slow):
             assert x.shape == y.shape
             np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-12)
+
+
+def test_compiled_triangle_helpers_equal_the_numpy_ones(monkeypatch):
+    rng = np.random.default_rng(9)
+    tri = rng.uniform(-1.0, 1.0, (3000, 3, 2))
+    tri[:10, 2] = 0.5 * (tri[:10, 0] + tri[:10, 1])                # collinear
+    tri[10:20] = tri[10:20, :1]                                     # points
+    tri[20:30, 1] = tri[20:30, 0]                                   # a repeated vertex
+    tri[30:40] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]               # right angle
+    centre, radius = descent.enclosing_circles(tri)
+    expected_centre, expected_radius = descent._enclosing_circles(tri)
+    np.testing.assert_array_equal(centre, expected_centre)
+    np.testing.assert_array_equal(radius, expected_radius)
+    point = rng.uniform(0.0, 2e-6, (2000, 7, 2))
+    point[::3] = 0.5
+    monkeypatch.setattr(descent, "USE_COMPILED", True)
+    fast = descent.merge_minima(point, 1e-6)
+    monkeypatch.setattr(descent, "USE_COMPILED", False)
+    np.testing.assert_array_equal(fast, descent.merge_minima(point, 1e-6))

@@ -324,3 +324,56 @@ def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a
                     hi, h_hi, d_hi = trials[first_out], value[first_out], slope[first_out]
             ends[c, side] = lo
     return ends, found
+
+
+# --------------------------------------------------------------------------------------
+# Triangle helpers of ``descent`` (the numpy versions there are the reference)
+# --------------------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def merge_minima(point: np.ndarray, radius: float) -> np.ndarray:
+    """``descent.merge_minima``: (T, K) bool, False for a start that ended within
+    ``radius`` (m) of a start with a lower id of the same triangle; point (T, K, 2)."""
+    n_tri, n_start = point.shape[0], point.shape[1]
+    keep = np.ones((n_tri, n_start), dtype=np.bool_)
+    r2 = radius * radius
+    for t in range(n_tri):
+        for k in range(1, n_start):
+            for j in range(k):
+                dx, dy = point[t, k, 0] - point[t, j, 0], point[t, k, 1] - point[t, j, 1]
+                if dx * dx + dy * dy < r2:
+                    keep[t, k] = False
+                    break
+    return keep
+
+
+@njit(cache=True, error_model="numpy")
+def enclosing_circles(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``descent._enclosing_circles``: centres (T, 2) and radii (T,) of the minimal
+    enclosing circles of triangles (T, 3, 2), with the same operations."""
+    n = tri.shape[0]
+    centre = np.empty((n, 2))
+    radius = np.empty(n)
+    for t in range(n):
+        k = 0
+        longest = -np.inf
+        for e in range(3):
+            f = (e + 1) % 3
+            ex, ey = tri[t, f, 0] - tri[t, e, 0], tri[t, f, 1] - tri[t, e, 1]
+            length2 = ex * ex + ey * ey
+            if length2 > longest:                       # np.argmax: the first of a tie
+                k, longest = e, length2
+        ax, ay = tri[t, k, 0], tri[t, k, 1]
+        bx, by = tri[t, (k + 1) % 3, 0], tri[t, (k + 1) % 3, 1]
+        cx, cy = tri[t, (k + 2) % 3, 0], tri[t, (k + 2) % 3, 1]
+        px, py, rx, ry = ax - cx, ay - cy, bx - cx, by - cy
+        if px * rx + py * ry <= 0.0:                    # obtuse or right: the longest edge
+            centre[t, 0], centre[t, 1] = 0.5 * (ax + bx), 0.5 * (ay + by)
+            radius[t] = 0.5 * np.sqrt(longest)
+            continue
+        det = 2.0 * (px * ry - py * rx)
+        pp, rr = px * px + py * py, rx * rx + ry * ry
+        ox, oy = (ry * pp - py * rr) / det, (px * rr - rx * pp) / det
+        centre[t, 0], centre[t, 1] = cx + ox, cy + oy
+        radius[t] = np.hypot(ox, oy)
+    return centre, radius

@@ -129,7 +129,8 @@ from ..sdf import Field, safe_normalize
 from ..sdf.compiled import Program, compile_field
 from ..sdf.compiled import distance as compiled_distance
 from . import _descent_kernels as kernels
-from ._compiled_descent import descend, patch_ends
+from ._compiled_descent import descend, enclosing_circles, patch_ends
+from ._compiled_descent import merge_minima as compiled_merge_minima
 
 __all__ = [
     "START_BARYCENTRIC",
@@ -218,7 +219,7 @@ def triangle_cull(field: Field, triangles: np.ndarray, margin: float = 0.0) -> n
     tri = np.asarray(triangles, dtype=np.float64).reshape(-1, 3, 2)
     if len(tri) == 0:
         return np.zeros(0, dtype=bool)
-    centre, radius = _enclosing_circles(tri)
+    centre, radius = enclosing_circles(np.ascontiguousarray(tri))   # _enclosing_circles, compiled
     return compiled_distance(field, centre) < radius + margin
 
 
@@ -528,6 +529,8 @@ def merge_minima(point: np.ndarray, radius: float) -> np.ndarray:
     lowest start id of each cluster is kept (a stable feature key).
     """
     p = np.asarray(point, dtype=np.float64)
+    if USE_COMPILED:                                              # the same test, compiled
+        return compiled_merge_minima(np.ascontiguousarray(p), float(radius))
     gap = p[:, :, None, :] - p[:, None, :, :]                     # (T, K, K, 2): k - j
     near = np.einsum("tkjd,tkjd->tkj", gap, gap) < radius * radius
     earlier = np.tril(np.ones(near.shape[1:], dtype=bool), k=-1)  # j < k
