@@ -18,11 +18,11 @@ One step of ``find_contacts`` (no Python loop over bodies, pairs or contacts):
    ``contacts_per_pair`` per pair (``reduce``), sorted by (body_a, body_b, feature).
 
 Fast path for circles (``circle_kernels``, the default): steps 1-2 are one compiled
-pass over the bodies and the grid broadphase; the circle-circle candidate pairs go
-straight from the sorted pair list to their contacts (one compiled pass, same
-arithmetic, same order: a circle pair has one contact, so grouping and reduction
-change nothing for it), only the other pairs take steps 3-4, and the two sorted
-lists are merged. The result is identical to the general path
+pass over the bodies and the grid broadphase; the circle-circle and circle-box
+(``TriangleMesh.box``) candidate pairs go straight from the sorted pair list to
+their contacts (one compiled pass, same arithmetic, same order: such a pair has one
+contact, so grouping and reduction change nothing for it), only the other pairs
+take steps 3-4, and the two sorted lists are merged. The result is identical to the general path
 (``find_contacts(..., fast_circles=False)``), bit for bit.
 
 Velocity-aware speculative margin. A contact found before the bodies touch costs
@@ -55,10 +55,11 @@ import numpy as np
 from ..settings import Settings
 from ..shapes import Shape, shape_from_spec
 from .broadphase import candidate_pairs, world_bounds
-from .circle_kernels import circle_circle_contacts, merge_by_pair, reach_and_boxes
+from .circle_kernels import BOX, CIRCLE, OTHER, analytic_contacts, merge_by_pair, reach_and_boxes
 from .contacts import Contacts
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .reduce import reduce_contacts
+from ..sdf.polygonal import Box
 
 __all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "Contacts", "collide", "find_contacts",
            "speculative_reach"]
@@ -76,6 +77,15 @@ def _distinct(shapes: Sequence[Shape]) -> tuple[list[Shape], np.ndarray]:
     canonical = np.array([first.setdefault(id(s), len(first)) for s in shapes], np.int64)
     unique = list({id(s): s for s in shapes}.values())
     return unique, canonical
+
+
+def _shape_class(shape: Shape) -> int:
+    """CIRCLE, BOX (a mesh whose field is the box primitive) or OTHER (general path)."""
+    if shape.kind == "circle":
+        return CIRCLE
+    if shape.kind == "mesh" and type(shape.field) is Box:
+        return BOX
+    return OTHER
 
 
 def speculative_reach(radius: np.ndarray, velocity: np.ndarray,
@@ -158,7 +168,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     (None: at rest), which widen each pair's margin by its bodies' reach (module doc).
     ran: if given, receives the (kind_a, kind_b) of every pair function called
     (``PAIR_FUNCTIONS`` keys): which narrowphase machinery this query needed.
-    fast_circles: compiled boxes and circle-circle contacts (module doc); False runs
+    fast_circles: compiled boxes, circle-circle and circle-box contacts (module doc); False runs
     every stage in numpy and every pair through ``_narrowphase`` (same result).
     Returns contacts with body_a < body_b, depth > -(settings.speculative_distance +
     reach_a + reach_b), at most settings.contacts_per_pair per pair.
@@ -190,11 +200,22 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                     angular_velocity, float(settings.dt), 0.5 * margin,
                     UNBOUNDED_RADIUS, REACH_CAP_RADII, reach, boxes)
     pairs = candidate_pairs(boxes, movable)
-    circle = np.array([s.kind == "circle" for s in distinct], np.bool_)
-    a, b, point, normal, depth, rest, n_circle = circle_circle_contacts(
-        pairs, body_shape, radius, circle, position, reach, float(margin))
-    if n_circle and ran is not None:
-        ran.add(("circle", "circle"))
+    shape_class = np.array([_shape_class(s) for s in distinct], np.int64)
+    half = np.array([s.field.half if c == BOX else (0.0, 0.0)
+                     for s, c in zip(distinct, shape_class)], np.float64).reshape(-1, 2)
+    trig = np.empty((n, 4))
+    box_body = shape_class[body_shape] == BOX
+    if np.any(box_body):
+        a_box = angle[box_body]
+        trig[box_body] = np.column_stack([np.cos(-a_box), np.sin(-a_box), np.cos(a_box),
+                                          np.sin(a_box)])
+    a, b, point, normal, depth, rest, n_circles, n_boxes = analytic_contacts(
+        pairs, body_shape, shape_class, radius, half, position, trig, reach, float(margin))
+    if ran is not None:
+        if n_circles:
+            ran.add(("circle", "circle"))
+        if n_boxes:
+            ran.add(("circle", "mesh"))
     if len(rest) == 0:
         return Contacts(a, b, point, normal, depth, np.zeros(len(a), np.int64))
     pose = np.column_stack([position, angle])

@@ -1,9 +1,9 @@
-"""Compiled fast paths of ``find_contacts``: body boxes, circle-circle contacts, merge.
+"""Compiled fast paths of ``find_contacts``: body boxes, circle contacts, merge.
 
 ``find_contacts`` (module doc of ``sdfphys.collide``) is a pipeline of numpy stages
 whose Python cost is per stage. For scenes of many circles the per-pair numpy work
-(orienting and grouping the pairs by shape, the circle-circle narrowphase, the
-margin filter, the flip to body_a < body_b, the sort) dominated a step. Here:
+(orienting and grouping the pairs by shape, the circle narrowphase, the margin
+filter, the flip to body_a < body_b, the sort) dominated a step. Here:
 
 ``reach_and_boxes``
     one pass over the bodies: the speculative reach (``speculative_reach``) and the
@@ -11,13 +11,14 @@ margin filter, the flip to body_a < body_b, the sort) dominated a step. Here:
     (``broadphase.world_bounds``), with the same floating-point operations in the
     same order.
 
-``circle_circle_contacts``
+``analytic_contacts``
     one pass over the sorted candidate pairs (``broadphase.candidate_pairs``,
-    sorted by (i, j)): pairs of two circles become contacts directly, the others
-    are handed back for the general narrowphase. A circle pair has at most one
-    contact, so the reduction is a no-op for it and the contacts come out already
-    sorted by (body_a, body_b). The arithmetic reproduces the general path
-    bit for bit:
+    sorted by (i, j)): pairs of two circles, and of a circle and a box mesh
+    (``TriangleMesh.box``, whose field is the ``Box`` primitive), become contacts
+    directly; the others are handed back for the general narrowphase. Such a pair
+    has at most one contact, so the reduction is a no-op for it and the contacts
+    come out already sorted by (body_a, body_b). The arithmetic reproduces the
+    general path bit for bit (circle-box: ``analytic_contacts``); circle-circle:
 
     - orientation: the body whose Shape comes first in the distinct-shape order is
       ``first`` (ties: the lower body id), as ``_narrowphase`` orients a pair;
@@ -30,6 +31,9 @@ margin filter, the flip to body_a < body_b, the sort) dominated a step. Here:
       -((margin + reach_first) + reach_second) (the pair's own margin);
     - if first > second the bodies are swapped and the normal negated (point and
       depth unchanged).
+
+    A bit-identical rotation needs numpy's cos and sin (numba's libm calls may
+    differ in the last bit): the caller passes them per box body.
 
 ``merge_by_pair``
     the circle contacts and the general path's contacts, both sorted by
@@ -47,7 +51,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["circle_circle_contacts", "merge_by_pair", "reach_and_boxes"]
+__all__ = ["BOX", "CIRCLE", "OTHER", "analytic_contacts", "merge_by_pair", "reach_and_boxes"]
 
 #: Rotation coefficients below this count as 0 against infinite bounds
 #: (``broadphase._TINY_COEFFICIENT``).
@@ -106,73 +110,149 @@ def reach_and_boxes(shape_bounds: np.ndarray, shape_radius: np.ndarray,
         boxes[i, 3] = min(ay_hi + by_hi, radius) + position[i, 1] + grow
 
 
+#: Shape classes of ``analytic_contacts``: handled by the general path, circle, box.
+OTHER, CIRCLE, BOX = 0, 1, 2
+
+
 @njit(cache=True)
-def circle_circle_contacts(pairs: np.ndarray, body_shape: np.ndarray,
-                           shape_radius: np.ndarray, shape_circle: np.ndarray,
-                           position: np.ndarray, reach: np.ndarray, margin: float):
-    """Contacts of the circle-circle candidate pairs; the other pairs' indices.
+def _box_field(px: float, py: float, hx: float, hy: float) -> tuple[float, float, float]:
+    """(value, gradient x, gradient y) of the box of half-extents (hx, hy) at (px, py):
+    ``sdf.polygonal._box`` (Quilez's sdgBox) operation for operation."""
+    wx = abs(px) - hx
+    wy = abs(py) - hy
+    ox = wx if wx >= 0.0 else 0.0
+    oy = wy if wy >= 0.0 else 0.0
+    out_len = math.hypot(ox, oy)
+    inner = wx if wx >= wy else wy
+    inner = inner if inner <= 0.0 else 0.0
+    if out_len > 0.0:
+        gx = ox / out_len
+        gy = oy / out_len
+    elif wx >= wy:
+        gx, gy = 1.0, 0.0
+    else:
+        gx, gy = 0.0, 1.0
+    gx *= -1.0 if px < 0.0 else 1.0
+    gy *= -1.0 if py < 0.0 else 1.0
+    return out_len + inner, gx, gy
+
+
+@njit(cache=True)
+def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np.ndarray,
+                      shape_radius: np.ndarray, shape_half: np.ndarray,
+                      position: np.ndarray, trig: np.ndarray, reach: np.ndarray,
+                      margin: float):
+    """Contacts of the circle-circle and circle-box candidate pairs; the others' indices.
 
     pairs: (P, 2) int64 candidate pairs (i < j), sorted by (i, j); body_shape: (B,)
-    int64 index into the distinct shapes, whose order decides the orientation;
-    shape_radius: (S,) m; shape_circle: (S,) bool; position: (B, 2) centres, m;
-    reach: (B,) m; margin: m, the speculative distance (module doc for the rule).
+    int64 index into the distinct shapes, whose order decides the orientation of a
+    circle-circle pair; shape_class: (S,) int64 OTHER / CIRCLE / BOX; shape_radius:
+    (S,) m (circles); shape_half: (S, 2) m, half-extents (boxes); position: (B, 2)
+    centres of mass, m; trig: (B, 4) ``[cos(-a), sin(-a), cos(a), sin(a)]`` of each
+    box body's angle a (numpy's values; other rows unused); reach: (B,) m; margin:
+    m, the speculative distance.
+
+    Circle-circle: module doc. Circle-box (``collide_circle_and_field`` with the box
+    field): the circle is first; its centre in the box frame c = R(-a)(x_c - x_b),
+    (d, g) = box field and gradient at c, g normalized (``safe_normalize``) and
+    turned to the world by R(a); depth = r - d, normal = -g, point = x_c - (d + r)/2 g;
+    kept and flipped by the same rules.
 
     Returns (body_a, body_b (K,) int64 with body_a < body_b, point (K, 2) m,
     normal (K, 2) unit a -> b, depth (K,) m > 0 overlapping, rest (R,) int64 indices
-    into ``pairs`` of the pairs with a non-circle, n_circle: how many candidate pairs
-    were circle-circle). Contacts are sorted by (body_a, body_b).
+    into ``pairs`` of the other pairs, n_circles, n_boxes: the circle-circle and
+    circle-box candidate pairs seen). Contacts are sorted by (body_a, body_b).
     """
     n_pairs = pairs.shape[0]
     n_shapes = shape_radius.shape[0]
     group_reach = np.full((n_shapes, n_shapes), -np.inf)
-    first = np.empty(n_pairs, np.int64)
+    code = np.empty(n_pairs, np.int64)
     rest = np.empty(n_pairs, np.int64)
     n_rest = 0
-    n_circle = 0
+    n_fast = 0
+    n_circles = 0
+    n_boxes = 0
     for p in range(n_pairs):
         i = pairs[p, 0]
         j = pairs[p, 1]
-        si = body_shape[i]
-        sj = body_shape[j]
-        if shape_circle[si] and shape_circle[sj]:
-            f = j if si > sj else i
-            s = i if si > sj else j
-            first[n_circle] = p if f == i else -p - 1
-            n_circle += 1
-            value = reach[f] + reach[s]
-            if value > group_reach[body_shape[f], body_shape[s]]:
-                group_reach[body_shape[f], body_shape[s]] = value
+        ci = shape_class[body_shape[i]]
+        cj = shape_class[body_shape[j]]
+        if ci == CIRCLE and cj == CIRCLE:
+            swap = body_shape[i] > body_shape[j]
+            n_circles += 1
+        elif ci == CIRCLE and cj == BOX:
+            swap = False
+            n_boxes += 1
+        elif ci == BOX and cj == CIRCLE:
+            swap = True
+            n_boxes += 1
         else:
             rest[n_rest] = p
             n_rest += 1
-    body_a = np.empty(n_circle, np.int64)
-    body_b = np.empty(n_circle, np.int64)
-    point = np.empty((n_circle, 2))
-    normal = np.empty((n_circle, 2))
-    depth = np.empty(n_circle)
-    k = 0
-    for c in range(n_circle):
-        code = first[c]
-        p = code if code >= 0 else -code - 1
-        f = pairs[p, 0] if code >= 0 else pairs[p, 1]
-        s = pairs[p, 1] if code >= 0 else pairs[p, 0]
-        rf = shape_radius[body_shape[f]]
-        dx = position[s, 0] - position[f, 0]
-        dy = position[s, 1] - position[f, 1]
-        distance = math.hypot(dx, dy)
-        d = (rf + shape_radius[body_shape[s]]) - distance
-        group_margin = margin + group_reach[body_shape[f], body_shape[s]]
-        if not (d > -group_margin and d > -((margin + reach[f]) + reach[s])):
             continue
-        if distance > _TINY_LENGTH:
-            nx = dx / distance
-            ny = dy / distance
+        f = j if swap else i
+        s = i if swap else j
+        code[n_fast] = -p - 1 if swap else p
+        n_fast += 1
+        value = reach[f] + reach[s]
+        if value > group_reach[body_shape[f], body_shape[s]]:
+            group_reach[body_shape[f], body_shape[s]] = value
+    body_a = np.empty(n_fast, np.int64)
+    body_b = np.empty(n_fast, np.int64)
+    point = np.empty((n_fast, 2))
+    normal = np.empty((n_fast, 2))
+    depth = np.empty(n_fast)
+    k = 0
+    for c in range(n_fast):
+        p = code[c] if code[c] >= 0 else -code[c] - 1
+        f = pairs[p, 0] if code[c] >= 0 else pairs[p, 1]
+        s = pairs[p, 1] if code[c] >= 0 else pairs[p, 0]
+        sf = body_shape[f]
+        ss = body_shape[s]
+        rf = shape_radius[sf]
+        group_margin = margin + group_reach[sf, ss]
+        if shape_class[ss] == CIRCLE:
+            dx = position[s, 0] - position[f, 0]
+            dy = position[s, 1] - position[f, 1]
+            distance = math.hypot(dx, dy)
+            d = (rf + shape_radius[ss]) - distance
+            if not (d > -group_margin and d > -((margin + reach[f]) + reach[s])):
+                continue
+            if distance > _TINY_LENGTH:
+                nx = dx / distance
+                ny = dy / distance
+            else:
+                nx = 1.0
+                ny = 0.0
+            offset = rf - 0.5 * d
+            px = position[f, 0] + offset * nx
+            py = position[f, 1] + offset * ny
         else:
-            nx = 1.0
-            ny = 0.0
-        offset = rf - 0.5 * d
-        point[k, 0] = position[f, 0] + offset * nx
-        point[k, 1] = position[f, 1] + offset * ny
+            vx = position[f, 0] - position[s, 0]
+            vy = position[f, 1] - position[s, 1]
+            cl, sl = trig[s, 0], trig[s, 1]
+            value, gx, gy = _box_field(cl * vx - sl * vy, sl * vx + cl * vy,
+                                       shape_half[ss, 0], shape_half[ss, 1])
+            d = rf - value
+            if not (d > -group_margin and d > -((margin + reach[f]) + reach[s])):
+                continue
+            length = math.hypot(gx, gy)
+            if length > _TINY_LENGTH:
+                gx = gx / length
+                gy = gy / length
+            else:
+                gx = 1.0
+                gy = 0.0
+            cw, sw = trig[s, 2], trig[s, 3]
+            wx = cw * gx - sw * gy
+            wy = sw * gx + cw * gy
+            half = 0.5 * (value + rf)
+            px = position[f, 0] - half * wx
+            py = position[f, 1] - half * wy
+            nx = -wx
+            ny = -wy
+        point[k, 0] = px
+        point[k, 1] = py
         depth[k] = d
         if f > s:
             body_a[k] = s
@@ -186,7 +266,7 @@ def circle_circle_contacts(pairs: np.ndarray, body_shape: np.ndarray,
             normal[k, 1] = ny
         k += 1
     return (body_a[:k], body_b[:k], point[:k], normal[:k], depth[:k], rest[:n_rest],
-            n_circle)
+            n_circles, n_boxes)
 
 
 @njit(cache=True)
