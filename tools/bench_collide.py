@@ -16,9 +16,12 @@ gives:
   thread). Wall time is printed for the default configuration. A first call per
   field, before timing, loads the numba kernels from their cache; its time is
   printed ("cold") together with the field's own evaluation cost per point, which
-  bounds the query cost from below (evals/query x ns/point). The compilation
+  bounds the query cost from below (evals/query x ns/point), numpy's and the
+  compiled program's (``sdf.compiled``, which the descent uses when the field
+  compiles; ``--python`` forces the Python-driven loop). The compilation
   itself (an empty cache, in a fresh process) is timed once at the end.
-- evals/query: points passed to ``field.evaluate`` per triangle.
+- evals/query: points evaluated per triangle (counted through a wrapper field,
+  which does not compile, so on the Python-driven loop: the same points).
 - depth error: the largest amount by which the deepest point over the starts is
   shallower than an independent reference, and how many triangles exceed 1e-6 m.
   Reference (as in the tests): the minimum over a dense barycentric grid
@@ -27,7 +30,7 @@ gives:
   With fewer starts a triangle's deepest point may lie in a basin no start
   reaches; that is the accuracy the starts buy.
 
-Usage: python tools/bench_collide.py [--runs 5] [--grid 48] [--batches 1000 10000]
+Usage: python tools/bench_collide.py [--runs 5] [--grid 48] [--batches 1000 10000] [--python]
 """
 
 from __future__ import annotations
@@ -43,7 +46,7 @@ from functools import partial
 import numpy as np
 
 from sdfphys.collide import descent
-from sdfphys.sdf import field
+from sdfphys.sdf import compiled, field
 
 FIELDS = {
     "box": {"type": "box", "size": [2.0, 1.0], "angle": 0.3},
@@ -166,7 +169,10 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--grid", type=int, default=48)
     parser.add_argument("--batches", type=int, nargs="+", default=[1000, 10000])
+    parser.add_argument("--python", action="store_true",
+                        help="the Python-driven descent loop even for fields that compile")
     args = parser.parse_args()
+    descent.USE_COMPILED = not args.python
     largest = max(args.batches)
     rows = []
     notes = []
@@ -179,9 +185,13 @@ def main() -> None:
         probe = tri.reshape(-1, 2).repeat(3, axis=0)[:70000]
         per_point = _median_time(partial(f.evaluate, probe), args.runs,
                                  time.process_time) / len(probe)
+        compiled.evaluate(f, probe[:10])
+        per_point_compiled = _median_time(partial(compiled.evaluate, f, probe), args.runs,
+                                          time.process_time) / len(probe)
         reference = reference_minimum(f, tri, args.grid)
         notes.append(f"{name}: cold first call {cold:.2f} s; field.evaluate "
-                     f"{per_point * 1e9:.0f} ns/point (CPU, batch of {len(probe)})")
+                     f"{per_point * 1e9:.0f} ns/point, compiled "
+                     f"{per_point_compiled * 1e9:.0f} ns/point (CPU, batch of {len(probe)})")
         for n_starts, which in STARTS.items():
             starts = descent.START_BARYCENTRIC[which]
             for iterations in ITERATIONS:
@@ -215,6 +225,7 @@ def main() -> None:
     print()
     for note in notes:
         print(f"- {note}")
+    print(f"- descent path: {'Python-driven loop' if args.python else 'compiled'}")
     print(f"- first query in a fresh process, numba cache empty (compilation): "
           f"{compile_seconds():.1f} s")
 

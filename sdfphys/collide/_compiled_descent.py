@@ -27,6 +27,8 @@ Both problems of ``descent``:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -203,7 +205,7 @@ def descend(kind: int, barzilai_borwein: bool, kd: int,
             for r in range(n_running):
                 i = running[r]
                 dx, dy = state[i, BEST] - before[i, 0], state[i, BEST + 1] - before[i, 1]
-                moved = np.sqrt(dx * dx + dy * dy)
+                moved = math.sqrt(dx * dx + dy * dy)
                 if not (flags[i, HAS_PREVIOUS] != 0 and moved < tol[i]):
                     running[kept] = i
                     kept += 1
@@ -274,6 +276,8 @@ def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a
     trials = np.empty(3)
     value = np.empty(3)
     slope = np.empty(3)
+    # Batch sizes as variables: a literal argument would compile _h once per value.
+    two, three = trials.shape[0] - 1, trials.shape[0]
     for c in range(n):
         k = pair[c]
         nx, ny = normal[c, 0], normal[c, 1]
@@ -285,7 +289,7 @@ def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a
             lo, hi = 0.0, reach[c]
             trials[0], trials[1] = lo, hi
             _h(code_a, consts_a, work_a, code_b, consts_b, work_b, rotation, offset, k, ox, oy,
-               dx, dy, sx, sy, trials, 2, value, slope)
+               dx, dy, sx, sy, trials, two, value, slope)
             h_lo, h_hi, d_hi = value[0], value[1], slope[1]
             found[c, side] = h_lo < 0.0
             if not found[c, side]:
@@ -304,11 +308,17 @@ def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a
                 trials[2] = middle
                 low, high = a + 1e-3 * width, b - 1e-3 * width
                 for j in range(3):
-                    t = trials[j] if np.isfinite(trials[j]) else middle
+                    t = trials[j] if math.isfinite(trials[j]) else middle
                     trials[j] = min(max(t, low), high)
-                trials.sort()
+                # Sort the three (a network, not ndarray.sort: cheaper to compile).
+                if trials[0] > trials[1]:
+                    trials[0], trials[1] = trials[1], trials[0]
+                if trials[1] > trials[2]:
+                    trials[1], trials[2] = trials[2], trials[1]
+                if trials[0] > trials[1]:
+                    trials[0], trials[1] = trials[1], trials[0]
                 _h(code_a, consts_a, work_a, code_b, consts_b, work_b, rotation, offset, k, ox,
-                   oy, dx, dy, sx, sy, trials, 3, value, slope)
+                   oy, dx, dy, sx, sy, trials, three, value, slope)
                 # The new bracket: the last trial with h < 0 and the first with h >= 0 after it.
                 last_in = -1
                 for j in range(3):
@@ -369,11 +379,11 @@ def enclosing_circles(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         px, py, rx, ry = ax - cx, ay - cy, bx - cx, by - cy
         if px * rx + py * ry <= 0.0:                    # obtuse or right: the longest edge
             centre[t, 0], centre[t, 1] = 0.5 * (ax + bx), 0.5 * (ay + by)
-            radius[t] = 0.5 * np.sqrt(longest)
+            radius[t] = 0.5 * math.sqrt(longest)
             continue
         det = 2.0 * (px * ry - py * rx)
         pp, rr = px * px + py * py, rx * rx + ry * ry
         ox, oy = (ry * pp - py * rr) / det, (px * rr - rx * pp) / det
         centre[t, 0], centre[t, 1] = cx + ox, cy + oy
-        radius[t] = np.hypot(ox, oy)
+        radius[t] = math.hypot(ox, oy)
     return centre, radius

@@ -131,6 +131,20 @@ AT_CORNER = -2
 # contact between two fields). Where w = 0 the larger model's (first on a tie)
 # gradient is followed. With the same plane twice it is plain steepest descent.
 
+# Scalar helpers use math, not numpy's ufuncs (np.isfinite, np.sign on a float):
+# the same values, but a ufunc on a scalar compiles numba's ufunc machinery,
+# seconds at a cold start.
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _sign(x: float) -> float:
+    """np.sign of a float: -1, 0 or +1 (NaN stays NaN)."""
+    if x > 0.0:
+        return 1.0
+    if x < 0.0:
+        return -1.0
+    return x if math.isnan(x) else 0.0
+
+
 @njit(cache=True, inline="always", error_model="numpy")
 def _proximal_step(f1: float, f2: float, g1x: float, g1y: float, g2x: float, g2y: float,
                    tau: float) -> tuple[float, float, float, float]:
@@ -144,7 +158,7 @@ def _proximal_step(f1: float, f2: float, g1x: float, g1y: float, g2x: float, g2y
         lam = 1.0 if gap >= 0.0 else 0.0
         ww = 1.0
     else:
-        lam = ((gap / tau if tau > 0.0 else np.sign(gap) * np.inf) - g2w) / ww
+        lam = ((gap / tau if tau > 0.0 else _sign(gap) * np.inf) - g2w) / ww
         free = lam > 0.0 and lam < 1.0
         lam = min(max(lam, 0.0), 1.0)
     dx = lam * g1x + (1.0 - lam) * g2x
@@ -405,9 +419,9 @@ def _model_steps(state: np.ndarray, i: int) -> tuple[float, float]:
     second = mid
     if dr > dl:
         second = (pr - pl + dl * sl - dr * sr) / (dl - dr)
-    if not np.isfinite(first):
+    if not math.isfinite(first):
         first = mid
-    if not np.isfinite(second):
+    if not math.isfinite(second):
         second = mid
     lo, hi = sl + GUARD * w, sr - GUARD * w
     first = min(max(first, lo), hi)
@@ -437,7 +451,7 @@ def _candidate(kind: int, tri: np.ndarray, t: int, corner: np.ndarray, state: np
         return u
     if kind == TRIANGLE:
         for v in range(3):
-            if x == tri[t, v, 0] and y == tri[t, v, 1] and not np.isnan(corner[t, v, 0]):
+            if x == tri[t, v, 0] and y == tri[t, v, 1] and not math.isnan(corner[t, v, 0]):
                 cand_i[n, 1] = AT_CORNER - v
                 return u
     if (same_as >= 0 and x == cand[same_as, 1] and y == cand[same_as, 2]
@@ -566,7 +580,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 curvature = sx * (state[i, PREVIOUS + 2] - vx) + sy * (state[i, PREVIOUS + 3] - vy)
                 if flags[i, HAS_PREVIOUS] and curvature > 0.0:
                     bb = (sx * sx + sy * sy) / curvature
-                    if not np.isfinite(bb):
+                    if not math.isfinite(bb):
                         bb = sigma
                     scale = min(max(bb, sigma / BB_RANGE), sigma * BB_RANGE)
                 state[i, PREVIOUS], state[i, PREVIOUS + 1] = state[i, BEST], state[i, BEST + 1]
@@ -610,7 +624,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                     end = np.inf
             for k in range(N_RUNGS if ladders else 0):
                 s = min(scale * LADDER[k] if k < N_RUNGS - 1 and code != PLANE else end, end)
-                if not np.isfinite(s):
+                if not math.isfinite(s):
                     break
                 plan_path[count], plan_s[count], plan_twin[count] = 0, s, -1
                 plan_end[count] = s == end
@@ -836,7 +850,7 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             reach2 = max(scale, new_sigma) ** 2
             pick, error = -1, np.inf
             for c in range(N_COLUMNS + 2):
-                if c < N_COLUMNS and not np.isfinite(table[c]):
+                if c < N_COLUMNS and not math.isfinite(table[c]):
                     continue
                 gx, gy = seen[c, 3], seen[c, 4]
                 along = gx * ux + gy * uy               # cosine >= 1 - KINK: the same plane

@@ -451,7 +451,7 @@ def _descend_compiled(problem: _TriangleProblem | _PairProblem,
         problem.at_vertex if not pair else _NO_CORNERS, problem.n_start if not pair else 0,
         not pair and problem.spanning, not pair and problem.convex, points,
         np.ascontiguousarray(sigma, dtype=np.float64), iterations,
-        np.ascontiguousarray(tol), _SHAPE_TOL,
+        np.array(tol, dtype=np.float64), _SHAPE_TOL,          # a copy: writable, as compiled for
         _WORK.rows("state", n_points, kernels.N_STATE),
         _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64),
         _WORK.rows("running", n_points, 1, np.int64)[:, 0],
