@@ -18,7 +18,15 @@ compiled kernels (``_descent_kernels.propose`` writes the candidates, ``accept``
 takes their values): a round costs a constant number of Python calls whatever
 the batch, and a start leaves the batch as soon as it has converged. A candidate
 whose value is already known (b itself, a triangle vertex where a start was
-placed, the same point on another rung) is not evaluated again.
+placed, the same point on another rung) is not evaluated again. When the
+fields compile to stack-machine programs (``sdfphys.sdf.compiled``: the
+primitives and operators that mesh and scene shapes use), the whole loop runs
+inside ONE compiled call instead (``_compiled_descent``: the same kernels in
+the same order, the programs evaluated in between), as do the patch search of
+field-field contacts, ``merge_minima`` and the enclosing circles of
+``triangle_cull``; ``USE_COMPILED = False`` keeps the Python-driven loop, the
+reference the tests compare with (same results, to the bit where the programs
+round as numpy does).
 
 The descent (shared by the triangle and the field-field problems)
 -----------------------------------------------------------------
@@ -462,6 +470,8 @@ def _descend_compiled(problem: _TriangleProblem | _PairProblem,
     return best, phi, data, rounds
 
 
+# Placeholders of the arguments a triangle problem does not use (placements of b,
+# (1, 2, 2) and (1, 2)) and of a pair problem's vertex starts (1, 3).
 _NO_ROTATION = np.zeros((1, 2, 2))
 _NO_OFFSET = np.zeros((1, 2))
 _NO_CORNERS = np.zeros((1, 3), dtype=np.int64)
