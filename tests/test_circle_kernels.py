@@ -18,6 +18,7 @@ import pytest
 
 import sdfphys.world as world_module
 from sdfphys.collide import REACH_CAP_RADII, UNBOUNDED_RADIUS, find_contacts, speculative_reach
+from sdfphys.collide import broadphase
 from sdfphys.collide.broadphase import world_bounds
 from sdfphys.collide.circle_kernels import reach_and_boxes
 from sdfphys.settings import Settings
@@ -172,3 +173,27 @@ def test_world_trajectory_is_bit_identical_with_the_general_path(monkeypatch):
     np.testing.assert_array_equal(fast.center_of_mass, general.center_of_mass)
     np.testing.assert_array_equal(fast.velocity, general.velocity)
     assert fast.stage_counts == general.stage_counts
+
+
+@pytest.mark.parametrize("n", [3, 60, 400])
+def test_grid_and_sweep_give_the_same_pairs(n, monkeypatch):
+    """candidate_pairs: the sort-and-sweep (small scenes) and the hashed grid agree,
+    with infinite boxes, huge boxes, touching and duplicate boxes and static bodies."""
+    rng = np.random.default_rng(n)
+    lo = rng.uniform(0, np.sqrt(n) * 1.5, (n, 2))
+    bounds = np.concatenate([lo, lo + rng.uniform(0.01, 2.0, (n, 2))], axis=1)
+    bounds[::11, 2:] = bounds[::11, :2] + 30.0                 # huge (brute force)
+    bounds[1::13] = bounds[2::13][:len(bounds[1::13])]          # duplicates
+    touch = np.arange(3, n - 1, 17)
+    bounds[touch, 0] = bounds[touch + 1, 2]                     # touching on x
+    bounds[touch, 2] = bounds[touch, 0] + 0.5
+    inf = np.inf
+    bounds = np.vstack([bounds, [[-inf, -inf, inf, 1.0], [2.0, -inf, inf, inf]]])
+    movable = rng.random(len(bounds)) < 0.7
+    movable[-2:] = False
+    monkeypatch.setattr(broadphase, "SWEEP_BODIES", 10 ** 9)
+    swept = broadphase.candidate_pairs(bounds, movable)
+    monkeypatch.setattr(broadphase, "SWEEP_BODIES", 0)
+    gridded = broadphase.candidate_pairs(bounds, movable)
+    assert len(swept) > n // 2
+    np.testing.assert_array_equal(gridded, swept)

@@ -24,7 +24,8 @@ hashing"), all in one numba function (``cache=True``), with no comparison sort:
 1. cell size h = the mean larger side of the finite boxes, leaving out boxes over 4x
    that mean (walls, grounds), so that a typical box covers 2 x 2 cells;
 2. each box is entered in every cell (floor(x / h), floor(y / h)) it covers; boxes
-   covering more than ``_BIG_CELLS`` cells, or with an infinite side, are "big";
+   covering more than ``_BIG_CELLS`` cells, with an infinite side or inverted
+   (lower > upper: never an AABB, but no memory is written out of bounds), are "big";
 3. the entries are counting-sorted by bucket (hash of the cell), boxes in id order;
    within a bucket, two entries of the same cell are tested (closed overlap, one
    body movable) only if that cell holds the low corner of the two boxes'
@@ -34,6 +35,11 @@ hashing"), all in one numba function (``cache=True``), with no comparison sort:
    and walls of a scene);
 5. the pairs are counting-sorted by their first body and insertion-sorted by the
    second within it: (i, j) order, deterministic, O(n + P).
+
+Scenes of at most ``SWEEP_BODIES`` bodies use the sort-and-sweep on x instead
+(Baraff 1992: boxes sorted by lower x, each tested against the following ones
+while their lower x does not pass its upper x): the same pairs, a kernel that
+compiles in a fraction of a second instead of ~2 s on a cold start.
 
 Cost O(n + P) for bounded boxes of similar size (a 5000-circle pile: 0.3-0.9 ms,
 against 1.6-6 ms for the sort-and-sweep on x it replaced, whose inner loop scanned
@@ -49,7 +55,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["candidate_pairs", "world_bounds"]
+__all__ = ["SWEEP_BODIES", "candidate_pairs", "world_bounds"]
 
 #: Rotation coefficients below this count as 0 against infinite bounds (see above).
 _TINY_COEFFICIENT = 1e-12
@@ -90,6 +96,8 @@ def world_bounds(local_bounds: np.ndarray, radius: np.ndarray, position: np.ndar
     return out
 
 
+#: Scenes of up to this many bodies take the sort-and-sweep (see candidate_pairs).
+SWEEP_BODIES = 256
 #: A box covering more grid cells than this is paired by brute force (see above).
 _BIG_CELLS = 64
 #: Cell indices are clamped to +-this (coordinates beyond share the edge cells), so
@@ -148,7 +156,9 @@ def _sorted_pairs(first: np.ndarray, second: np.ndarray, count: int, n: int) -> 
         start[first[k] + 1] += 1
     for i in range(n):
         start[i + 1] += start[i]
-    fill = start[:n].copy()
+    fill = np.empty(n, np.int64)
+    for i in range(n):
+        fill[i] = start[i]
     out = np.empty((count, 2), np.int64)
     for k in range(count):
         p = fill[first[k]]
@@ -189,7 +199,7 @@ def _grid_pairs(box: np.ndarray, movable: np.ndarray) -> np.ndarray:
             cy1[i] = _cell(box[i, 3], inv_h)
             wide = cx1[i] - cx0[i] + 1
             tall = cy1[i] - cy0[i] + 1
-            if wide <= _BIG_CELLS and tall <= _BIG_CELLS and wide * tall <= _BIG_CELLS:
+            if 0 < wide <= _BIG_CELLS and 0 < tall <= _BIG_CELLS and wide * tall <= _BIG_CELLS:
                 n_entries += wide * tall
                 continue
         big[i] = True
@@ -207,7 +217,9 @@ def _grid_pairs(box: np.ndarray, movable: np.ndarray) -> np.ndarray:
                     start[_hash(cx, cy, mask) + 1] += 1
     for b in range(table):
         start[b + 1] += start[b]
-    fill = start[:table].copy()
+    fill = np.empty(table, np.int64)
+    for b in range(table):
+        fill[b] = start[b]
     entry_box = np.empty(n_entries, np.int64)
     entry_cell = np.empty(n_entries, np.int64)
     entry_home = np.empty(n_entries, np.int64)
@@ -266,9 +278,42 @@ def _grid_pairs(box: np.ndarray, movable: np.ndarray) -> np.ndarray:
 
 @njit(cache=True)
 def _grown(a: np.ndarray, capacity: int) -> np.ndarray:
+    """``a`` copied into a new array of ``capacity`` entries (a loop: a slice
+    assignment costs seconds of compilation on a cold start)."""
     out = np.empty(capacity, np.int64)
-    out[:a.shape[0]] = a
+    for k in range(a.shape[0]):
+        out[k] = a[k]
     return out
+
+
+@njit(cache=True)
+def _sweep(order: np.ndarray, box: np.ndarray, movable: np.ndarray, out: np.ndarray) -> int:
+    """Sort-and-sweep on x: overlapping pairs (lo, hi) of body ids into ``out`` (C, 2);
+    returns their count (pairs beyond ``out``'s capacity are counted, not written).
+
+    ``box`` (B, 4) and ``movable`` (B,) are already sorted by lower x; ``order`` maps
+    back to body ids. Each box is tested against the following ones while their
+    lower x does not pass its upper x.
+    """
+    n = order.shape[0]
+    capacity = out.shape[0]
+    count = 0
+    for i in range(n):
+        hi_x = box[i, 2]
+        lo_y = box[i, 1]
+        hi_y = box[i, 3]
+        for j in range(i + 1, n):
+            if box[j, 0] > hi_x:
+                break
+            if not (movable[i] or movable[j]):
+                continue
+            if box[j, 1] > hi_y or lo_y > box[j, 3]:
+                continue
+            if count < capacity:
+                out[count, 0] = min(order[i], order[j])
+                out[count, 1] = max(order[i], order[j])
+            count += 1
+    return count
 
 
 def candidate_pairs(bounds: np.ndarray, movable: np.ndarray) -> np.ndarray:
@@ -276,6 +321,23 @@ def candidate_pairs(bounds: np.ndarray, movable: np.ndarray) -> np.ndarray:
 
     bounds: (B, 4) world AABBs (closed boxes: touching boxes pair).
     movable: (B,) bool. Output sorted by (i, j), deterministic.
+
+    Up to ``SWEEP_BODIES`` bodies: sort-and-sweep on x (``_sweep``); beyond, the grid
+    (``_grid_pairs``). Same pairs either way; the sweep compiles in a fraction of a
+    second, so a small scene's cold start does not pay the grid's ~2 s compilation.
     """
-    return _grid_pairs(np.ascontiguousarray(bounds, dtype=np.float64),
-                       np.ascontiguousarray(movable, dtype=np.bool_))
+    bounds = np.ascontiguousarray(bounds, dtype=np.float64)
+    movable = np.ascontiguousarray(movable, dtype=np.bool_)
+    if len(bounds) > SWEEP_BODIES:
+        return _grid_pairs(bounds, movable)
+    order = np.argsort(bounds[:, 0], kind="stable")
+    box = np.ascontiguousarray(bounds[order])
+    moving = movable[order]
+    pairs = np.empty((4 * len(order) + 16, 2), np.int64)
+    count = _sweep(order, box, moving, pairs)
+    if count > len(pairs):
+        pairs = np.empty((count, 2), np.int64)
+        _sweep(order, box, moving, pairs)
+    n = np.int64(len(order))
+    keys = np.sort(pairs[:count, 0] * n + pairs[:count, 1])
+    return np.stack([keys // n, keys % n], axis=1)

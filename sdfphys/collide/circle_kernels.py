@@ -165,7 +165,10 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     """
     n_pairs = pairs.shape[0]
     n_shapes = shape_radius.shape[0]
-    group_reach = np.full((n_shapes, n_shapes), -np.inf)
+    group_reach = np.empty((n_shapes, n_shapes))
+    for u in range(n_shapes):
+        for v in range(n_shapes):
+            group_reach[u, v] = -np.inf
     code = np.empty(n_pairs, np.int64)
     rest = np.empty(n_pairs, np.int64)
     n_rest = 0

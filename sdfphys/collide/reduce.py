@@ -115,7 +115,10 @@ def _reduce(start: np.ndarray, point: np.ndarray, depth: np.ndarray, budget: int
             u = 0
             while u < n_kept - 1:
                 if _novelty(kept[u], kept, n_kept, u, point, depth) <= tolerance:
-                    kept[u:n_kept - 1] = kept[u + 1:n_kept].copy()
+                    # A loop, not kept[u:n - 1] = kept[u + 1:n]: the slice assignment
+                    # costs seconds of compilation on a cold start.
+                    for v in range(u, n_kept - 1):
+                        kept[v] = kept[v + 1]
                     n_kept -= 1
                 else:
                     u += 1
