@@ -9,7 +9,17 @@ Reported per N: median ms per step over the second half of the run (the pile is
 forming and settling; the first step, which compiles, is excluded), the ratio
 sdfphys / pymunk, and the maximum and mean penetration (over overlapping contacts) in
 each engine's final state, both measured the same way (sdfphys.collide.find_contacts
-on the final positions).
+on the final positions). With ``--runs R`` each N is run R times (sdfphys then
+pymunk each time, so a ratio compares two runs under the same machine load) and the
+medians over the runs are printed (ms of each engine, and the median of the R
+ratios).
+
+Python cost (``--python-cost``): per N, cProfile over 20 steps of the settled pile:
+contacts per step, Python function calls per step (interpreted and builtin; the
+compiled kernels count one call each), and the ms per step spent outside the
+compiled (numba) kernels: interpreter plus numpy. The calls per step must not grow
+with the number of contacts; the ms outside the kernels shows what per-contact numpy
+work is left.
 
 Start-up: wall time of a fresh ``python -c "import sdfphys; <one step>"`` (a circle
 bouncing and a box landing on a box: every solver kernel and the circle and mesh pairs
@@ -18,13 +28,16 @@ empty numba cache (cold: every kernel compiles) and again with that cache filled
 (warm). The cache lives in a temporary NUMBA_CACHE_DIR, so the shared
 ``__pycache__`` of the checkout is left alone.
 
-Usage: python tools/bench_vs_pymunk.py [--sizes 500 2000 5000] [--steps 300] [--no-startup]
+Usage: python tools/bench_vs_pymunk.py [--sizes 500 2000 5000] [--steps 300] [--runs 1]
+    [--no-startup] [--python-cost]
 """
 
 from __future__ import annotations
 
 import argparse
+import cProfile
 import os
+import pstats
 import subprocess
 import sys
 import tempfile
@@ -149,6 +162,50 @@ def compare(n: int, steps: int) -> dict[str, float]:
     return result
 
 
+def compare_runs(n: int, steps: int, runs: int) -> dict[str, float]:
+    """``compare`` repeated: medians over ``runs`` of each figure (ratio: the median of
+    the per-run ratios, each of two runs under the same load)."""
+    results = [compare(n, steps) for _ in range(runs)]
+    return {key: float(np.median([r[key] for r in results])) for key in results[0]}
+
+
+def _compiled_functions() -> set[tuple[str, int, str]]:
+    """cProfile keys (file, first line, name) of every numba dispatcher in sdfphys."""
+    keys = set()
+    for name, module in list(sys.modules.items()):
+        if not name.startswith("sdfphys"):
+            continue
+        for value in vars(module).values():
+            code = getattr(getattr(value, "py_func", None), "__code__", None)
+            if code is not None and hasattr(value, "signatures"):
+                keys.add((code.co_filename, code.co_firstlineno, code.co_name))
+    return keys
+
+
+def python_cost(n: int, warmup: int = 200, steps: int = 20) -> dict[str, float]:
+    """Contacts, Python calls and ms outside compiled kernels per step (module doc)."""
+    centres, _, walls = scene(n)
+    world = build_sdfphys(centres, walls)
+    for _ in range(warmup):
+        world.step()
+    profile = cProfile.Profile()
+    contacts = []
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        profile.enable()
+        world.step()
+        profile.disable()
+        contacts.append(len(world.contacts))
+    wall = (time.perf_counter() - t0) / steps
+    stats = pstats.Stats(profile).stats
+    compiled = _compiled_functions()
+    calls = sum(primitive for primitive, *_ in stats.values())
+    inside = sum(row[2] for key, row in stats.items() if key in compiled)
+    total = sum(row[2] for row in stats.values())
+    return {"n": n, "contacts": float(np.median(contacts)), "calls": calls / steps,
+            "outside_ms": 1e3 * (total - inside) / steps, "step_ms": 1e3 * wall}
+
+
 def startup() -> tuple[float, float]:
     """(cold, warm) wall seconds of a fresh process importing sdfphys and stepping once."""
     with tempfile.TemporaryDirectory() as cache:
@@ -166,16 +223,26 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[500, 2000, 5000])
     parser.add_argument("--steps", type=int, default=300)
+    parser.add_argument("--runs", type=int, default=1)
     parser.add_argument("--no-startup", action="store_true")
+    parser.add_argument("--python-cost", action="store_true")
     args = parser.parse_args()
     if not args.no_startup:
         cold, warm = startup()
         print(f"start-up (import + one step): cold {cold:.2f} s, warm {warm:.2f} s")
+    if args.python_cost:
+        print(f"{'N':>6} {'contacts':>9} {'calls/step':>11} {'ms outside kernels':>19} "
+              f"{'ms/step (profiled)':>19}")
+        for n in args.sizes:
+            r = python_cost(n)
+            print(f"{n:>6} {r['contacts']:>9.0f} {r['calls']:>11.0f} {r['outside_ms']:>19.3f} "
+                  f"{r['step_ms']:>19.3f}", flush=True)
+        return
     print(f"{'N':>6} {'sdfphys ms':>11} {'pymunk ms':>10} {'ratio':>6} "
           f"{'pen max (sdfphys / pymunk)':>27} {'pen mean (sdfphys / pymunk)':>28}")
     for n in args.sizes:
-        r = compare(n, args.steps)
-        print(f"{r['n']:>6} {r['sdfphys_ms']:>11.2f} {r['pymunk_ms']:>10.2f} {r['ratio']:>6.2f} "
+        r = compare_runs(n, args.steps, args.runs)
+        print(f"{r['n']:>6.0f} {r['sdfphys_ms']:>11.2f} {r['pymunk_ms']:>10.2f} {r['ratio']:>6.2f} "
               f"{r['sdfphys_pen']:>18.4f} / {r['pymunk_pen']:.4f} "
               f"{r['sdfphys_mean_pen']:>19.4f} / {r['pymunk_mean_pen']:.4f}", flush=True)
 
