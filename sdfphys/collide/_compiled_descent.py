@@ -251,8 +251,9 @@ def _h(code_a: np.ndarray, consts_a: np.ndarray, work_a, code_b: np.ndarray,
 @njit(cache=True, error_model="numpy")
 def _work(depth: int, nesting: int):
     """Work arrays of ``_h`` for up to 3 points."""
-    stack, frames, cur = scratch(depth, nesting, 3)
-    return stack, frames, cur, np.empty((3, 2)), np.empty(3), np.empty((3, 2))
+    points = np.empty((3, 2))
+    stack, frames, cur = scratch(depth, nesting, points.shape[0])   # not a literal 3
+    return stack, frames, cur, points, np.empty(3), np.empty((3, 2))
 
 
 @njit(cache=True, error_model="numpy")
