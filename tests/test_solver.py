@@ -168,6 +168,23 @@ def test_speculative_contact_closes_the_gap_exactly_without_impact():
     np.testing.assert_allclose(state.velocity[1], [0.0, 0.0], atol=1e-12)
 
 
+def test_separation_follows_each_body_s_own_surface_point_across_a_wide_gap():
+    """A body spinning clockwise by pi/6 in one step carries a corner at local (1, 0)
+    from 1 m above the ground (y = 0) down to 1 - sin(pi/6) = 0.5 m. The speculative
+    contact found 1 m early is re-measured from the corner itself, not from the point
+    midway across the gap (which would turn with the body to report 0.567 m)."""
+    settings = Settings()
+    turn = -math.pi / 6.0
+    state = bodies([[0.0, -1.0], [0.0, 1.0]], inv_mass=[0.0, 1.0], inv_inertia=[0.0, 1.0],
+                   angular_velocity=[0.0, turn / settings.dt])
+    c = prepare_contacts(contact(0, 1, [1.0, 0.5], [0.0, 1.0], -1.0), state, np.zeros(2),
+                         np.zeros(2), ImpulseCache.empty(), True)
+    solve_substeps(state, c, np.zeros(2), settings, False)
+    assert state.angle[1] == pytest.approx(turn, abs=1e-12)
+    assert c.separation[0] == pytest.approx(1.0 + math.sin(turn), abs=1e-12)
+    assert c.total_normal_impulse[0] == 0.0
+
+
 def test_coulomb_friction_decelerates_a_sliding_body_by_mu_g():
     """A body resting on static ground (s = 0), sliding at 3 m/s, rotation locked: each
     substep the normal impulse is m g h and friction its mu-multiple, so the speed
