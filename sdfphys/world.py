@@ -39,7 +39,7 @@ from .solver import (
     solve_substeps,
     store_impulses,
 )
-from .toi import fast_bodies, time_of_impact
+from .toi import fast_bodies, time_of_impact, vertex_time_of_impact
 
 __all__ = ["KINDS", "PAIR_STAGES", "STAGES", "World"]
 
@@ -338,12 +338,20 @@ class World:
         if not s.time_of_impact:
             return
         core = np.maximum(self._view("core_radius"), s.speculative_distance)
-        fast = fast_bodies(start_com, bodies.com, core, self._view("kind") == _DYNAMIC)
+        radius = self._view("radius")
+        fast = fast_bodies(start_com, bodies.com, core, self._view("kind") == _DYNAMIC,
+                           bodies.angle - start_angle, radius)
         if len(fast) == 0:
             return
-        fraction = time_of_impact([shape.field for shape in self._shapes],
-                                  self._view("shape_id"), start_com, bodies.com, bodies.angle,
-                                  self._view("radius"), core, fast, s.linear_slop)
+        fields = [shape.field for shape in self._shapes]
+        shape_id = self._view("shape_id")
+        fraction = np.minimum(
+            time_of_impact(fields, shape_id, start_com, bodies.com, bodies.angle, radius,
+                           core, fast, s.linear_slop),
+            vertex_time_of_impact(fields, [getattr(shape, "vertices", None)
+                                           for shape in self._shapes], shape_id,
+                                  start_com, bodies.com, start_angle, bodies.angle, radius,
+                                  fast, s.linear_slop))
         t = fraction[:, None]
         bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])
         bodies.angle[fast] = start_angle[fast] + fraction * (bodies.angle[fast]

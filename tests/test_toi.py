@@ -7,7 +7,7 @@ import pytest
 
 from sdfphys.settings import Settings
 from sdfphys.shapes import shape_from_spec
-from sdfphys.toi import fast_bodies, time_of_impact
+from sdfphys.toi import fast_bodies, time_of_impact, vertex_time_of_impact
 from sdfphys.world import World
 
 SLOP = 0.005
@@ -80,6 +80,59 @@ def test_fast_means_moving_more_than_half_the_core_radius():
     core = np.array([0.1, 0.1, 0.1])
     movable = np.array([True, True, False])
     np.testing.assert_array_equal(fast_bodies(start, end, core, movable), [0])
+
+
+def test_fast_also_means_turning_the_outline_more_than_half_the_core_radius():
+    """A body spinning in place is fast when a point at its bounding radius moves more
+    than half the core radius (0.05 m here: a turn of 0.0501 rad at radius 1)."""
+    start = np.zeros((2, 2))
+    core, radius = np.array([0.1, 0.1]), np.array([1.0, 1.0])
+    movable = np.array([True, True])
+    turn = np.array([0.0501, -0.0499])
+    assert len(fast_bodies(start, start, core, movable)) == 0
+    np.testing.assert_array_equal(fast_bodies(start, start, core, movable, turn, radius), [0])
+
+
+PLANK = {"type": "box", "size": [2.0, 0.02]}
+GROUND = {"type": "sdf", "field": {"type": "half_plane", "normal": [0.0, 1.0]}}
+
+
+def spin(turn: float, centre=(0.0, 0.5), start: float = 0.0):
+    """vertex_time_of_impact of PLANK turning from angle ``start`` by ``turn`` about a
+    fixed centre above the ground y = 0; returns the fraction and the lowest vertex
+    height at that fraction."""
+    shapes = [shape_from_spec(GROUND), shape_from_spec(PLANK)]
+    pos = np.array([[0.0, 0.0], centre])
+    t = vertex_time_of_impact([s.field for s in shapes], [None, shapes[1].vertices],
+                              np.arange(2), pos, pos, np.array([0.0, start]),
+                              np.array([0.0, start + turn]),
+                              np.array([np.inf, shapes[1].radius]), np.array([1]), SLOP)
+    a = start + turn * t[0]
+    v = shapes[1].vertices
+    lowest = centre[1] + np.min(np.sin(a) * v[:, 0] + np.cos(a) * v[:, 1])
+    return t[0], lowest
+
+
+def test_a_spinning_plank_stops_where_its_corner_reaches_the_ground():
+    """Turning by -pi/3 about a centre 0.5 m up, the corner (1, -0.01) reaches y = 0 at
+    sin(a) - 0.01 cos(a) = -0.5; the trace stops it inside the [slop, 2 slop] band, before
+    that angle (the translation trace, about the centre, sees nothing)."""
+    turn = -math.pi / 3.0
+    t, lowest = spin(turn)
+    exact = (-math.asin(0.5 / math.hypot(1.0, 0.01)) - math.atan2(0.01, 1.0)) / turn
+    assert SLOP <= lowest <= 2.0 * SLOP
+    assert 0.0 < t < exact
+    assert spin(-0.4)[0] == 1.0                    # a smaller turn clears the ground
+
+
+def test_a_vertex_already_on_the_ground_is_left_to_the_solver():
+    """A plank tilted by 0.3 rad resting on its corner (-1, -0.01) (at y = 0) turns flat:
+    the resting vertex is not traced (it would stop the turn at t = 0), the others come
+    down to 0.29 m and stay clear."""
+    centre = (0.0, math.sin(0.3) + 0.01 * math.cos(0.3))
+    t, lowest = spin(-0.3, centre=centre, start=0.3)
+    assert t == 1.0
+    assert lowest == pytest.approx(centre[1] - 0.01, abs=1e-12)
 
 
 def bullets(time_of_impact: bool, lanes: int = 200) -> float:
