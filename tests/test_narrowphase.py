@@ -17,6 +17,7 @@ from sdfphys.settings import Settings
 
 ROOT = Path(__file__).resolve().parents[1]
 from sdfphys.shapes import SdfShape, shape_from_spec
+from sdfphys.world import World
 
 BALL = {"type": "circle", "radius": 0.5}
 
@@ -434,6 +435,29 @@ def test_sdf_box_resting_flat_on_an_sdf_box():
     np.testing.assert_allclose(point, [[-0.2, 0.495], [0.8, 0.495]], atol=1e-6)
     np.testing.assert_allclose(normal, [[0.0, 1.0], [0.0, 1.0]], atol=1e-6)
     np.testing.assert_allclose(depth, [0.01, 0.01], atol=1e-6)
+
+
+@pytest.mark.parametrize("bounded_first", [True, False])
+def test_sdf_box_on_an_unbounded_sdf_ground_in_either_order(bounded_first):
+    """The half-plane may be either body of the pair (its shape made first or not): the
+    same two corners, 0.01 deep, normal from a toward b. (Bounded first used to raise:
+    the descent's region was the half-plane's bounds placed in the box's frame.)"""
+    plane = {"type": "sdf", "field": {"type": "half_plane", "normal": [0.0, 1.0]}}
+    box = {"type": "sdf", "field": TOP}
+    world = World(gravity=(0.0, 0.0))
+    if bounded_first:
+        world.add_body(box, position=(0.3, 0.24))
+        world.add_body(plane, kind="static")
+    else:
+        world.add_body(plane, kind="static")
+        world.add_body(box, position=(0.3, 0.24))
+    world.step()
+    c = world.contacts
+    box_body = 0 if bounded_first else 1
+    sign = -1.0 if c.body_a[0] == box_body else 1.0
+    np.testing.assert_allclose(np.sort(c.point[:, 0]), [-0.2, 0.8], atol=1e-6)
+    np.testing.assert_allclose(c.normal, [[0.0, sign], [0.0, sign]], atol=1e-6)
+    np.testing.assert_allclose(c.depth, [0.01, 0.01], atol=1e-6)
 
 
 def test_sdf_pair_group_field_calls_do_not_grow_with_pairs(rng):

@@ -261,6 +261,9 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     Points, normals (a toward b) and depths come back in a's frame and are rotated
     to the world; keys are (source 3, start id).
 
+    The region needs b bounded: when only a is bounded (an sdf body whose shape was
+    made before the sdf ground's), the pair is solved the other way round and flipped.
+
     Cost: one ``field_field_contacts`` call for the whole group (the pairs share
     the two fields; only b's pose in a's frame and the region differ), so each
     descent iteration is one evaluation of each field over the points of all
@@ -268,6 +271,11 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     """
     from .descent import field_field_contacts
 
+    if not np.all(np.isfinite(sdf_b.bounds())) and np.all(np.isfinite(sdf_a.bounds())):
+        # The descent's region is b's bounds placed in a's frame: solve with the
+        # unbounded shape (a ground) as a, then give the contacts back a -> b.
+        c = collide_sdfs(sdf_b, sdf_a, body_b, body_a, pose_b, pose_a, margin, settings)
+        return Contacts(c.body_b, c.body_a, c.point, -c.normal, c.depth, c.feature)
     angle = pose_b[:, 2] - pose_a[:, 2]
     offset = _to_local(pose_b[:, :2], pose_a)
     region = _overlap_region(sdf_a.bounds(), sdf_b.bounds(), angle, offset, margin)
