@@ -207,11 +207,13 @@ class ImpulseCache:
               ) -> tuple[np.ndarray, np.ndarray]:
         """Normal and tangent impulses (K,) for the given keys; 0 where there is no match.
 
-        First by key, vectorized: the features of both sets are ranked together
-        (np.unique), each key (a, b, feature) becomes one int64 ((a * nb + b) * nf +
-        rank), and the new keys are looked up in the sorted old ones with searchsorted.
-        Valid while nb^2 nf < 2^63 (nb bodies, nf distinct features), e.g. 10^5 bodies
-        and 10^8 contacts.
+        First by key: when both lists are sorted by (body_a, body_b, feature), as
+        ``find_contacts`` returns them, one compiled merge join (O(K)); otherwise,
+        vectorized, the features of both sets are ranked together (np.unique), each key
+        (a, b, feature) becomes one int64 ((a * nb + b) * nf + rank), and the new keys
+        are looked up in the sorted old ones with searchsorted. Valid while
+        nb^2 nf < 2^63 (nb bodies, nf distinct features), e.g. 10^5 bodies and 10^8
+        contacts.
 
         Then by place, if ``anchor`` (K, 2) (points in body a's frame, as
         ``ImpulseCache.anchor``) and ``tolerance`` > 0 are given: a new contact that
@@ -228,20 +230,26 @@ class ImpulseCache:
         if k == 0 or len(self) == 0:
             return normal, tangent
         nb = int(max(self.body_b.max(), body_b.max(), self.body_a.max(), body_a.max())) + 1
-        ranks = np.unique(np.concatenate([self.feature, feature]), return_inverse=True)[1]
-        nf = int(ranks.max()) + 1
-        old_key = (self.body_a * nb + self.body_b) * nf + ranks[:len(self)]
-        new_key = (body_a * nb + body_b) * nf + ranks[len(self):]
-        order = np.argsort(old_key, kind="stable")
-        sorted_key = old_key[order]
-        where = np.minimum(np.searchsorted(sorted_key, new_key), len(sorted_key) - 1)
-        hit = sorted_key[where] == new_key
         source = np.full(k, -1, np.int64)
-        source[hit] = order[where[hit]]
+        if _merge_keys(self.body_a, self.body_b, self.feature, body_a, body_b, feature,
+                       source):
+            pair_order = np.arange(len(self))           # already sorted by pair
+        else:
+            ranks = np.unique(np.concatenate([self.feature, feature]), return_inverse=True)[1]
+            nf = int(ranks.max()) + 1
+            old_key = (self.body_a * nb + self.body_b) * nf + ranks[:len(self)]
+            new_key = (body_a * nb + body_b) * nf + ranks[len(self):]
+            order = np.argsort(old_key, kind="stable")
+            sorted_key = old_key[order]
+            where = np.minimum(np.searchsorted(sorted_key, new_key), len(sorted_key) - 1)
+            hit = sorted_key[where] == new_key
+            source[hit] = order[where[hit]]
+            pair_order = None
         if anchor is not None and tolerance > 0.0 and len(self.anchor) == len(self) \
-                and not np.all(hit):
+                and np.any(source < 0):
             old_pair = self.body_a * nb + self.body_b
-            pair_order = np.argsort(old_pair, kind="stable")
+            if pair_order is None:
+                pair_order = np.argsort(old_pair, kind="stable")
             new_pair = body_a * nb + body_b
             lo = np.searchsorted(old_pair[pair_order], new_pair, side="left")
             hi = np.searchsorted(old_pair[pair_order], new_pair, side="right")
@@ -252,6 +260,28 @@ class ImpulseCache:
         normal[found] = self.normal_impulse[source[found]]
         tangent[found] = self.tangent_impulse[source[found]]
         return normal, tangent
+
+
+@njit(cache=True)
+def _merge_keys(old_a, old_b, old_f, new_a, new_b, new_f, source):
+    """Key match as a merge join when both lists are sorted by (body_a, body_b, feature)
+    (``find_contacts``' order): source[k] = the old row with new row k's key. Returns
+    False, leaving ``source`` untouched, if either list is not sorted."""
+    for k in range(1, old_a.shape[0]):
+        if (old_a[k], old_b[k], old_f[k]) < (old_a[k - 1], old_b[k - 1], old_f[k - 1]):
+            return False
+    for k in range(1, new_a.shape[0]):
+        if (new_a[k], new_b[k], new_f[k]) < (new_a[k - 1], new_b[k - 1], new_f[k - 1]):
+            return False
+    u = 0
+    n_old = old_a.shape[0]
+    for k in range(new_a.shape[0]):
+        key = (new_a[k], new_b[k], new_f[k])
+        while u < n_old and (old_a[u], old_b[u], old_f[u]) < key:
+            u += 1
+        if u < n_old and (old_a[u], old_b[u], old_f[u]) == key:
+            source[k] = u
+    return True
 
 
 @njit(cache=True)

@@ -288,6 +288,28 @@ def test_impulse_cache_matches_by_body_pair_and_feature():
     np.testing.assert_array_equal(tangent, [-3.0, -2.0, -1.0, 0.0, 0.0])
 
 
+def test_sorted_key_match_equals_the_general_one():
+    """Lists sorted by (body_a, body_b, feature) take a merge join; the same rows in a
+    shuffled order take the ranked searchsorted path: the same impulses per row."""
+    rng = np.random.default_rng(5)
+
+    def keys(n):
+        k = np.unique(rng.integers(0, 6, (n, 3)), axis=0)       # sorted, distinct rows
+        return k[:, 0], k[:, 0] + 1 + k[:, 1], k[:, 2] << np.int64(50)
+
+    a, b, f = keys(120)
+    old = ImpulseCache(a, b, f, rng.uniform(0, 1, len(f)), rng.uniform(-1, 1, len(f)))
+    na, nb, nf = keys(120)
+    sorted_n, sorted_t = old.match(na, nb, nf)
+    perm = rng.permutation(len(nf))
+    shuffled = ImpulseCache(a[::-1], b[::-1], f[::-1], old.normal_impulse[::-1],
+                            old.tangent_impulse[::-1])
+    n, t = shuffled.match(na[perm], nb[perm], nf[perm])
+    assert np.count_nonzero(sorted_n) > 10
+    np.testing.assert_array_equal(n, sorted_n[perm])
+    np.testing.assert_array_equal(t, sorted_t[perm])
+
+
 def test_impulse_cache_falls_back_to_the_nearest_unused_contact_of_the_pair():
     """Keys first; an unmatched key takes the nearest old contact of its pair within the
     tolerance that no other contact took; other pairs and farther points never match."""
