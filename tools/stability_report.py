@@ -52,6 +52,10 @@ def rows(base_40: bool) -> list[Row]:
     out.append(Row("4 x 1 box, 400 kg, dropped 0.5 m on two 1 kg unit boxes", "big box sink, "
                    "max over 5 s", "sink", stacking.NOT_CRUSHED, stacking.ours_big_box_drop,
                    stacking.pymunk_big_box_drop))
+    out += [Row(f"base-5 pyramid of 1 kg unit boxes, top box {r} kg, 10 s", "top box "
+                "displacement", "top", stacking.STANDS,
+                lambda r=r: stacking.ours_heavy_top_pyramid(r),
+                lambda r=r: stacking.pymunk_heavy_top_pyramid(r)) for r in (100, 300)]
     out.append(Row("20-box stack, 30 s", "top box displacement", "top", stacking.STANDS,
                    stacking.ours_tall_stack, stacking.pymunk_tall_stack))
     if base_40:

@@ -1,10 +1,10 @@
 """Stability study, stacking: mass ratios, tall stacks, big pyramids, scale, distance, rest.
 
 Cases (figures in metres unless said): ``*_mass_ratio`` and ``*_big_box_drop`` (sink of
-the heavy box), ``*_tall_stack`` and ``*_pyramid`` (top box displacement),
-``*_scaled_pyramid`` (displacement over side), ``*_far_pyramid`` (difference from the
-same pyramid at the origin), ``*_resting_stacks`` (fastest box point, m/s). See
-``stability_common`` for the conventions.
+the heavy box), ``*_tall_stack``, ``*_pyramid`` and ``*_heavy_top_pyramid`` (top box
+displacement), ``*_scaled_pyramid`` (displacement over side), ``*_far_pyramid``
+(difference from the same pyramid at the origin), ``*_resting_stacks`` (fastest box
+point, m/s). See ``stability_common`` for the conventions.
 """
 
 from __future__ import annotations
@@ -182,6 +182,43 @@ def pymunk_pyramid(base: int, seconds: float) -> dict[str, float]:
     for _ in pm_steps(space, round(seconds / DT)):
         pass
     return {"top": float(np.linalg.norm(np.array(boxes[-1].position) - start))}
+
+
+HEAVY_TOP_BASE = 5
+HEAVY_TOP_SECONDS = 10.0
+
+
+@cache
+def ours_heavy_top_pyramid(ratio: float) -> dict[str, float]:
+    """A base-5 pyramid of 1 kg unit boxes whose top box weighs ``ratio`` kg, 10 s.
+
+    top: displacement of the top box at the end; sink: how far it went below its start
+    at most (the boxes under it crushed).
+    """
+    world = ground_world(width=4.0 * HEAVY_TOP_BASE + 20.0)
+    cells = pyramid_cells(HEAVY_TOP_BASE, 1.0)
+    for k, (x, y) in enumerate(cells):
+        mass = float(ratio) if k == len(cells) - 1 else 1.0
+        world.add_body(UNIT_BOX, position=(x, y), mass=mass, friction=MU)
+    start = world.position[-1].copy()
+    sink = 0.0
+    for _ in advance(world, round(HEAVY_TOP_SECONDS / DT)):
+        sink = max(sink, start[1] - world.position[-1, 1])
+    return {"top": float(np.linalg.norm(world.position[-1] - start)), "sink": sink}
+
+
+def pymunk_heavy_top_pyramid(ratio: float) -> dict[str, float]:
+    """The same case in pymunk."""
+    space = pm_space()
+    pm_ground(space, width=4.0 * HEAVY_TOP_BASE + 20.0)
+    cells = pyramid_cells(HEAVY_TOP_BASE, 1.0)
+    boxes = [pm_box(space, (1, 1), c, mass=float(ratio) if k == len(cells) - 1 else 1.0)
+             for k, c in enumerate(cells)]
+    start = np.array(boxes[-1].position)
+    sink = 0.0
+    for _ in pm_steps(space, round(HEAVY_TOP_SECONDS / DT)):
+        sink = max(sink, start[1] - boxes[-1].position.y)
+    return {"top": float(np.linalg.norm(np.array(boxes[-1].position) - start)), "sink": sink}
 
 
 # ---------------------------------------------------------------------------------------
