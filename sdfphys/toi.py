@@ -45,11 +45,13 @@ are not fast), and the motion of the obstacle during the step (its end pose is u
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from .sdf import Field
 
-__all__ = ["fast_bodies", "time_of_impact", "vertex_time_of_impact"]
+__all__ = ["fast_bodies", "step_fractions", "time_of_impact", "vertex_time_of_impact"]
 
 #: Conservative-advancement iterations per pair; a trace still running after them stops
 #: where it is, which is safe (never past a contact) and only stops the body early.
@@ -95,7 +97,7 @@ def _candidate_pairs(fast: np.ndarray, start: np.ndarray, end: np.ndarray,
         olo = end[others] - radius[others, None]
         ohi = end[others] + radius[others, None]
     rows = max(1, PAIR_BATCH // max(1, len(others)))
-    found_f, found_o = [], []
+    found_f, found_o = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
     for first in range(0, len(fast), rows):
         block = slice(first, first + rows)
         hit = np.all((lo[block, None, :] <= ohi[None, :, :])
@@ -123,6 +125,102 @@ def _distance(fields: list[Field], shape_id: np.ndarray, com: np.ndarray,
     return d
 
 
+def _advance(gap: np.ndarray, speed: np.ndarray, slop: float,
+             gap_at: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> np.ndarray:
+    """Conservative advancement of R independent traces; the stop time of each (R,), inf
+    for a trace that reaches t = 1 clear.
+
+    gap: (R,) m, the clearance at t = 0; speed: (R,) m per unit of t, a bound on how fast
+    the clearance can shrink; gap_at(rows, t): the clearance of traces ``rows`` at times
+    ``t``. A trace runs while its gap exceeds 2 slop and it moves; each advancement
+    t <- t + (gap - slop) / speed never passes the first contact (module docstring). A
+    trace still running after MAX_ITERATIONS stops where it is (safe, early).
+    """
+    t = np.zeros(len(gap))
+    stop = np.full(len(gap), np.inf)
+    active = (gap > 2.0 * slop) & (speed > 0.0)
+    for _ in range(MAX_ITERATIONS):
+        rows = np.flatnonzero(active)
+        if len(rows) == 0:
+            break
+        t[rows] += (gap[rows] - slop) / speed[rows]
+        beyond = t[rows] >= 1.0
+        active[rows[beyond]] = False
+        rows = rows[~beyond]
+        gap[rows] = gap_at(rows, t[rows])
+        close = rows[gap[rows] <= 2.0 * slop]
+        stop[close] = t[close]
+        active[close] = False
+    stop[active] = t[active]
+    return stop
+
+
+def _disc_fractions(fields: list[Field], shape_id: np.ndarray, start: np.ndarray,
+                    end: np.ndarray, end_angle: np.ndarray, radius: np.ndarray,
+                    core_radius: np.ndarray, fast: np.ndarray, slop: float,
+                    pairs: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """``time_of_impact`` over given candidate ``pairs`` (indices into fast, other bodies)."""
+    fraction = np.ones(len(fast))
+    pair_fast, pair_other = pairs
+    if len(pair_fast) == 0:
+        return fraction
+    body = fast[pair_fast]
+    c0 = start[body]
+    path = end[body] - c0
+    d0 = _distance(fields, shape_id, end, end_angle, pair_other, c0)
+    # The disc traced for each pair: bounding if clear at t = 0, else core, else none.
+    disc = np.where(d0 - radius[body] > 2.0 * slop, radius[body], core_radius[body])
+
+    def gap_at(rows: np.ndarray, t: np.ndarray) -> np.ndarray:
+        return _distance(fields, shape_id, end, end_angle, pair_other[rows],
+                         c0[rows] + t[:, None] * path[rows]) - disc[rows]
+
+    stop = _advance(d0 - disc, np.hypot(path[:, 0], path[:, 1]), slop, gap_at)
+    np.minimum.at(fraction, pair_fast, stop)
+    return fraction
+
+
+def _vertex_fractions(fields: list[Field], vertices: list[np.ndarray | None],
+                      shape_id: np.ndarray, start: np.ndarray, end: np.ndarray,
+                      start_angle: np.ndarray, end_angle: np.ndarray, fast: np.ndarray,
+                      slop: float, pairs: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """``vertex_time_of_impact`` over given candidate ``pairs``.
+
+    One row per (pair, vertex of the fast body's polygon), gathered from one table of
+    every shape's vertices (a loop over the shapes, never over bodies or pairs).
+    """
+    fraction = np.ones(len(fast))
+    count = np.array([0 if v is None else len(v) for v in vertices], np.int64)
+    if len(pairs[0]) == 0 or not np.any(count):
+        return fraction
+    table = np.concatenate([v for v in vertices if v is not None])
+    offset = np.cumsum(count) - count
+    pair_fast, pair_other = pairs
+    shape = shape_id[fast[pair_fast]]
+    n = count[shape]
+    row_pair = np.repeat(np.arange(len(pair_fast)), n)
+    within = np.arange(len(row_pair)) - np.repeat(np.cumsum(n) - n, n)
+    local = table[offset[shape][row_pair] + within]
+    body = fast[pair_fast[row_pair]]
+    other = pair_other[row_pair]
+    c0, path = start[body], end[body] - start[body]
+    a0, turn = start_angle[body], end_angle[body] - start_angle[body]
+    speed = np.hypot(path[:, 0], path[:, 1]) + np.abs(turn) * np.hypot(local[:, 0], local[:, 1])
+
+    def gap_at(rows: np.ndarray, t: np.ndarray) -> np.ndarray:
+        a = a0[rows] + t * turn[rows]
+        c, s = np.cos(a), np.sin(a)
+        v = local[rows]
+        p = c0[rows] + t[:, None] * path[rows] + np.column_stack(
+            [c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]])
+        return _distance(fields, shape_id, end, end_angle, other[rows], p)
+
+    rows = np.arange(len(row_pair))
+    stop = _advance(gap_at(rows, np.zeros(len(rows))), speed, slop, gap_at)
+    np.minimum.at(fraction, pair_fast[row_pair], stop)
+    return fraction
+
+
 def time_of_impact(fields: list[Field], shape_id: np.ndarray, start: np.ndarray,
                    end: np.ndarray, end_angle: np.ndarray, radius: np.ndarray,
                    core_radius: np.ndarray, fast: np.ndarray, slop: float) -> np.ndarray:
@@ -134,40 +232,8 @@ def time_of_impact(fields: list[Field], shape_id: np.ndarray, start: np.ndarray,
     bounding and core disc radii about the centre of mass (module docstring).
     fast: (F,) indices of the traced bodies. 1 means no impact within the step.
     """
-    fraction = np.ones(len(fast))
-    if len(fast) == 0:
-        return fraction
-    pair_fast, pair_other = _candidate_pairs(fast, start, end, radius)
-    if len(pair_fast) == 0:
-        return fraction
-    body = fast[pair_fast]
-    c0 = start[body]
-    path = end[body] - c0
-    length = np.hypot(path[:, 0], path[:, 1])
-    d0 = _distance(fields, shape_id, end, end_angle, pair_other, c0)
-    # The disc traced for each pair: bounding if clear at t = 0, else core, else none.
-    disc = np.where(d0 - radius[body] > 2.0 * slop, radius[body], core_radius[body])
-    gap = d0 - disc
-    active = gap > 2.0 * slop
-    t = np.zeros(len(body))
-    hit = np.zeros(len(body), bool)
-    for _ in range(MAX_ITERATIONS):
-        rows = np.flatnonzero(active)
-        if len(rows) == 0:
-            break
-        t[rows] += (gap[rows] - slop) / length[rows]
-        beyond = t[rows] >= 1.0
-        active[rows[beyond]] = False
-        rows = rows[~beyond]
-        gap[rows] = _distance(fields, shape_id, end, end_angle, pair_other[rows],
-                              c0[rows] + t[rows, None] * path[rows]) - disc[rows]
-        close = gap[rows] <= 2.0 * slop
-        hit[rows[close]] = True
-        active[rows[close]] = False
-    # Pairs still running after MAX_ITERATIONS stop where they are (safe, early).
-    hit |= active
-    np.minimum.at(fraction, pair_fast[hit], t[hit])
-    return fraction
+    return _disc_fractions(fields, shape_id, start, end, end_angle, radius, core_radius,
+                           fast, slop, _candidate_pairs(fast, start, end, radius))
 
 
 def vertex_time_of_impact(fields: list[Field], vertices: list[np.ndarray | None],
@@ -182,50 +248,21 @@ def vertex_time_of_impact(fields: list[Field], vertices: list[np.ndarray | None]
     centres of mass, m; start_angle, end_angle: (B,) rad; the obstacles are taken at
     their end poses. radius: (B,) bounding radii, m. fast: (F,) traced bodies.
     """
-    fraction = np.ones(len(fast))
-    has = np.array([vertices[k] is not None for k in shape_id[fast]], bool) \
-        if len(fast) else np.zeros(0, bool)
-    if not np.any(has):
-        return fraction
-    pair_fast, pair_other = _candidate_pairs(fast, start, end, radius)
-    keep = has[pair_fast]
-    pair_fast, pair_other = pair_fast[keep], pair_other[keep]
-    if len(pair_fast) == 0:
-        return fraction
-    # One row per (pair, vertex of the fast body's polygon).
-    counts = np.array([len(vertices[k]) for k in shape_id[fast[pair_fast]]])
-    row_pair = np.repeat(np.arange(len(pair_fast)), counts)
-    local = np.concatenate([vertices[k] for k in shape_id[fast[pair_fast]]])
-    body = fast[pair_fast[row_pair]]
-    other = pair_other[row_pair]
-    c0, path = start[body], end[body] - start[body]
-    a0, turn = start_angle[body], end_angle[body] - start_angle[body]
-    speed = np.hypot(path[:, 0], path[:, 1]) + np.abs(turn) * np.hypot(local[:, 0], local[:, 1])
+    return _vertex_fractions(fields, vertices, shape_id, start, end, start_angle, end_angle,
+                             fast, slop, _candidate_pairs(fast, start, end, radius))
 
-    def place(rows: np.ndarray, t: np.ndarray) -> np.ndarray:
-        a = a0[rows] + t * turn[rows]
-        c, s = np.cos(a), np.sin(a)
-        v = local[rows]
-        return c0[rows] + t[:, None] * path[rows] + np.column_stack(
-            [c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]])
 
-    t = np.zeros(len(body))
-    gap = _distance(fields, shape_id, end, end_angle, other, place(np.arange(len(body)), t))
-    active = (gap > 2.0 * slop) & (speed > 0.0)
-    hit = np.zeros(len(body), bool)
-    for _ in range(MAX_ITERATIONS):
-        rows = np.flatnonzero(active)
-        if len(rows) == 0:
-            break
-        t[rows] += (gap[rows] - slop) / speed[rows]
-        beyond = t[rows] >= 1.0
-        active[rows[beyond]] = False
-        rows = rows[~beyond]
-        gap[rows] = _distance(fields, shape_id, end, end_angle, other[rows],
-                              place(rows, t[rows]))
-        close = gap[rows] <= 2.0 * slop
-        hit[rows[close]] = True
-        active[rows[close]] = False
-    hit |= active
-    np.minimum.at(fraction, pair_fast[row_pair[hit]], t[hit])
-    return fraction
+def step_fractions(fields: list[Field], vertices: list[np.ndarray | None],
+                   shape_id: np.ndarray, start: np.ndarray, end: np.ndarray,
+                   start_angle: np.ndarray, end_angle: np.ndarray, radius: np.ndarray,
+                   core_radius: np.ndarray, fast: np.ndarray, slop: float) -> np.ndarray:
+    """The world's stage: min of ``time_of_impact`` and ``vertex_time_of_impact`` (F,),
+    the candidate pairs found once for both (arguments as theirs)."""
+    if len(fast) == 0:
+        return np.ones(0)
+    pairs = _candidate_pairs(fast, start, end, radius)
+    return np.minimum(
+        _disc_fractions(fields, shape_id, start, end, end_angle, radius, core_radius, fast,
+                        slop, pairs),
+        _vertex_fractions(fields, vertices, shape_id, start, end, start_angle, end_angle,
+                          fast, slop, pairs))

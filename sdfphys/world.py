@@ -39,7 +39,7 @@ from .solver import (
     solve_substeps,
     store_impulses,
 )
-from .toi import fast_bodies, time_of_impact, vertex_time_of_impact
+from .toi import fast_bodies, step_fractions
 
 __all__ = ["KINDS", "PAIR_STAGES", "STAGES", "World"]
 
@@ -343,15 +343,10 @@ class World:
                            bodies.angle - start_angle, radius)
         if len(fast) == 0:
             return
-        fields = [shape.field for shape in self._shapes]
-        shape_id = self._view("shape_id")
-        fraction = np.minimum(
-            time_of_impact(fields, shape_id, start_com, bodies.com, bodies.angle, radius,
-                           core, fast, s.linear_slop),
-            vertex_time_of_impact(fields, [getattr(shape, "vertices", None)
-                                           for shape in self._shapes], shape_id,
-                                  start_com, bodies.com, start_angle, bodies.angle, radius,
-                                  fast, s.linear_slop))
+        fraction = step_fractions([shape.field for shape in self._shapes],
+                                  [getattr(shape, "vertices", None) for shape in self._shapes],
+                                  self._view("shape_id"), start_com, bodies.com, start_angle,
+                                  bodies.angle, radius, core, fast, s.linear_slop)
         t = fraction[:, None]
         bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])
         bodies.angle[fast] = start_angle[fast] + fraction * (bodies.angle[fast]
