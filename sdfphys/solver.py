@@ -597,6 +597,38 @@ def _update_anchors(com, com0, angle, angle0, round_body, cos_d, sin_d, inv_mass
 
 
 @njit(cache=True)
+def _load(velocity, angular_velocity, a, b):
+    """(vax, vay, wa, vbx, vby, wb): the velocities of a pair's two bodies."""
+    return (velocity[a, 0], velocity[a, 1], angular_velocity[a],
+            velocity[b, 0], velocity[b, 1], angular_velocity[b])
+
+
+@njit(cache=True)
+def _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb):
+    """Write a pair's velocities back (``_load``'s inverse)."""
+    velocity[a, 0] = vax
+    velocity[a, 1] = vay
+    angular_velocity[a] = wa
+    velocity[b, 0] = vbx
+    velocity[b, 1] = vby
+    angular_velocity[b] = wb
+
+
+@njit(cache=True)
+def _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby):
+    """(dvx, dvy) = v_b + w_b x rb - v_a - w_a x ra: b's point against a's, m/s."""
+    return vbx - wb * rby - vax + wa * ray, vby + wb * rbx - vay - wa * rax
+
+
+@njit(cache=True)
+def _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib, rax, ray, rbx, rby, px, py):
+    """The two bodies' velocities after the impulse P = (px, py) (N s) on b at arm rb and
+    -P on a at arm ra (ma, mb inverse masses; ia, ib inverse inertias)."""
+    return (vax - ma * px, vay - ma * py, wa - ia * (rax * py - ray * px),
+            vbx + mb * px, vby + mb * py, wb + ib * (rbx * py - rby * px))
+
+
+@njit(cache=True)
 def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pair_start,
                 normal, anchor_a, anchor_b, normal_impulse, tangent_impulse, total_normal_impulse):
     """Apply the accumulated impulses P = l_n n + l_t t at the current anchors."""
@@ -608,30 +640,17 @@ def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_
         mb = inv_mass[b]
         ia = inv_inertia[a]
         ib = inv_inertia[b]
-        vax = velocity[a, 0]
-        vay = velocity[a, 1]
-        wa = angular_velocity[a]
-        vbx = velocity[b, 0]
-        vby = velocity[b, 1]
-        wb = angular_velocity[b]
+        vax, vay, wa, vbx, vby, wb = _load(velocity, angular_velocity, a, b)
         for k in range(first, pair_start[p + 1]):
             nx = normal[k, 0]
             ny = normal[k, 1]
             px = normal_impulse[k] * nx + tangent_impulse[k] * ny
             py = normal_impulse[k] * ny - tangent_impulse[k] * nx
             total_normal_impulse[k] += normal_impulse[k]
-            vax -= ma * px
-            vay -= ma * py
-            wa -= ia * (anchor_a[k, 0] * py - anchor_a[k, 1] * px)
-            vbx += mb * px
-            vby += mb * py
-            wb += ib * (anchor_b[k, 0] * py - anchor_b[k, 1] * px)
-        velocity[a, 0] = vax
-        velocity[a, 1] = vay
-        angular_velocity[a] = wa
-        velocity[b, 0] = vbx
-        velocity[b, 1] = vby
-        angular_velocity[b] = wb
+            vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
+                                               anchor_a[k, 0], anchor_a[k, 1],
+                                               anchor_b[k, 0], anchor_b[k, 1], px, py)
+        _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
 
 
 @njit(cache=True)
@@ -655,12 +674,7 @@ def _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pa
         mb = inv_mass[b]
         ia = inv_inertia[a]
         ib = inv_inertia[b]
-        vax = velocity[a, 0]
-        vay = velocity[a, 1]
-        wa = angular_velocity[a]
-        vbx = velocity[b, 0]
-        vby = velocity[b, 1]
-        wb = angular_velocity[b]
+        vax, vay, wa, vbx, vby, wb = _load(velocity, angular_velocity, a, b)
         for k in range(first, last):
             nx = normal[k, 0]
             ny = normal[k, 1]
@@ -679,8 +693,7 @@ def _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pa
             ray = anchor_a[k, 1]
             rbx = anchor_b[k, 0]
             rby = anchor_b[k, 1]
-            dvx = vbx - wb * rby - vax + wa * ray
-            dvy = vby + wb * rbx - vay - wa * rax
+            dvx, dvy = _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby)
             vn = dvx * nx + dvy * ny
             impulse = -normal_mass[k] * (m_scale * vn + bias) - i_scale * normal_impulse[k]
             accumulated = max(normal_impulse[k] + impulse, 0.0)
@@ -689,12 +702,8 @@ def _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pa
             total_normal_impulse[k] += impulse
             px = impulse * nx
             py = impulse * ny
-            vax -= ma * px
-            vay -= ma * py
-            wa -= ia * (rax * py - ray * px)
-            vbx += mb * px
-            vby += mb * py
-            wb += ib * (rbx * py - rby * px)
+            vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
+                                               rax, ray, rbx, rby, px, py)
         if use_friction:
             for k in range(first, last):
                 mu = friction[k]
@@ -706,8 +715,7 @@ def _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pa
                 ray = anchor_a[k, 1]
                 rbx = anchor_b[k, 0]
                 rby = anchor_b[k, 1]
-                dvx = vbx - wb * rby - vax + wa * ray
-                dvy = vby + wb * rbx - vay - wa * rax
+                dvx, dvy = _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby)
                 vt = dvx * tx + dvy * ty
                 limit = mu * normal_impulse[k]
                 accumulated = min(max(tangent_impulse[k] - tangent_mass[k] * vt, -limit), limit)
@@ -715,24 +723,15 @@ def _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pa
                 tangent_impulse[k] = accumulated
                 px = impulse * tx
                 py = impulse * ty
-                vax -= ma * px
-                vay -= ma * py
-                wa -= ia * (rax * py - ray * px)
-                vbx += mb * px
-                vby += mb * py
-                wb += ib * (rbx * py - rby * px)
-        velocity[a, 0] = vax
-        velocity[a, 1] = vay
-        angular_velocity[a] = wa
-        velocity[b, 0] = vbx
-        velocity[b, 1] = vby
-        angular_velocity[b] = wb
+                vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
+                                                   rax, ray, rbx, rby, px, py)
+        _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
 
 
 @njit(cache=True)
 def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
-                     linear_damping, angular_damping, round_body, gravity, body_a, body_b, pair_start,
-                     normal, anchor_a0, anchor_b0, anchor_a, anchor_b, base_separation,
+                     linear_damping, angular_damping, round_body, gravity, body_a, body_b,
+                     pair_start, normal, anchor_a0, anchor_b0, anchor_a, anchor_b, base_separation,
                      separation, normal_mass, tangent_mass, friction, stiff, bias_rate,
                      mass_scale, impulse_scale, normal_impulse, tangent_impulse,
                      total_normal_impulse, h, substeps, relax_passes, max_push_out, max_speed,
@@ -820,6 +819,7 @@ def _restitution_kernel(velocity, angular_velocity, inv_mass, inv_inertia, body_
             mb = inv_mass[b]
             ia = inv_inertia[a]
             ib = inv_inertia[b]
+            vax, vay, wa, vbx, vby, wb = _load(velocity, angular_velocity, a, b)
             for k in range(first, last):
                 e = restitution[k]
                 if e == 0.0 or relative_velocity[k] > -threshold or total_normal_impulse[k] == 0.0:
@@ -830,10 +830,7 @@ def _restitution_kernel(velocity, angular_velocity, inv_mass, inv_inertia, body_
                 ray = anchor_a[k, 1]
                 rbx = anchor_b[k, 0]
                 rby = anchor_b[k, 1]
-                dvx = (velocity[b, 0] - angular_velocity[b] * rby
-                       - velocity[a, 0] + angular_velocity[a] * ray)
-                dvy = (velocity[b, 1] + angular_velocity[b] * rbx
-                       - velocity[a, 1] - angular_velocity[a] * rax)
+                dvx, dvy = _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby)
                 vn = dvx * nx + dvy * ny
                 impulse = -normal_mass[k] * (vn + e * relative_velocity[k])
                 accumulated = max(normal_impulse[k] + impulse, 0.0)
@@ -842,12 +839,9 @@ def _restitution_kernel(velocity, angular_velocity, inv_mass, inv_inertia, body_
                 total_normal_impulse[k] += impulse
                 px = impulse * nx
                 py = impulse * ny
-                velocity[a, 0] -= ma * px
-                velocity[a, 1] -= ma * py
-                angular_velocity[a] -= ia * (rax * py - ray * px)
-                velocity[b, 0] += mb * px
-                velocity[b, 1] += mb * py
-                angular_velocity[b] += ib * (rbx * py - rby * px)
+                vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
+                                                   rax, ray, rbx, rby, px, py)
+            _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
 
 
 def apply_restitution(bodies: BodyState, constraints: ContactConstraints,
