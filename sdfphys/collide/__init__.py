@@ -55,7 +55,7 @@ import numpy as np
 from ..settings import Settings
 from ..shapes import Shape, shape_from_spec
 from .broadphase import candidate_pairs, world_bounds
-from .circle_kernels import BOX, CIRCLE, OTHER, analytic_contacts, merge_by_pair, reach_and_boxes
+from .circle_kernels import BOX, CIRCLE, OTHER, analytic_contacts, merge_order, reach_and_boxes
 from .contacts import Contacts
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .reduce import reduce_contacts
@@ -221,11 +221,9 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     pose = np.column_stack([position, angle])
     other = _narrowphase(distinct, body_shape, pairs[rest], pose, margin, reach, settings,
                          ran)
-    return Contacts(*merge_by_pair(
-        np.int64(n), a, b, point, normal, depth, np.zeros(len(a), np.int64),
-        other.body_a, other.body_b, np.ascontiguousarray(other.point, np.float64),
-        np.ascontiguousarray(other.normal, np.float64),
-        np.ascontiguousarray(other.depth, np.float64), other.feature))
+    circles = Contacts(a, b, point, normal, depth, np.zeros(len(a), np.int64))
+    order = merge_order(a * np.int64(n) + b, other.body_a * np.int64(n) + other.body_b)
+    return Contacts.concatenate([circles, other]).take(order)
 
 
 def collide(shape_a: Any, pose_a: Sequence[float], shape_b: Any, pose_b: Sequence[float],

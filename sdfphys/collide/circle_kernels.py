@@ -35,9 +35,9 @@ filter, the flip to body_a < body_b, the sort) dominated a step. Here:
     A bit-identical rotation needs numpy's cos and sin (numba's libm calls may
     differ in the last bit): the caller passes them per box body.
 
-``merge_by_pair``
-    the circle contacts and the general path's contacts, both sorted by
-    (body_a, body_b[, feature]) and never sharing a body pair, merged into one
+``merge_order``
+    the order that merges the circle contacts and the general path's contacts, both
+    sorted by (body_a, body_b[, feature]) and never sharing a body pair, into one
     sorted list.
 
 All kernels are ``cache=True`` and run without a Python loop over bodies, pairs or
@@ -51,7 +51,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["BOX", "CIRCLE", "OTHER", "analytic_contacts", "merge_by_pair", "reach_and_boxes"]
+__all__ = ["BOX", "CIRCLE", "OTHER", "analytic_contacts", "merge_order", "reach_and_boxes"]
 
 #: Rotation coefficients below this count as 0 against infinite bounds
 #: (``broadphase._TINY_COEFFICIENT``).
@@ -273,49 +273,20 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
 
 
 @njit(cache=True)
-def merge_by_pair(n_bodies: int, a_a: np.ndarray, b_a: np.ndarray, point_a: np.ndarray,
-                  normal_a: np.ndarray, depth_a: np.ndarray, feature_a: np.ndarray,
-                  a_b: np.ndarray, b_b: np.ndarray, point_b: np.ndarray,
-                  normal_b: np.ndarray, depth_b: np.ndarray, feature_b: np.ndarray):
-    """Two contact lists sorted by (body_a, body_b) with no body pair in common, merged.
-
-    Arguments: n_bodies (pair key body_a * n_bodies + body_b), then each list's
-    body_a, body_b (K,) int64, point, normal (K, 2), depth (K,), feature (K,) int64.
-    Returns the merged (body_a, body_b, point, normal, depth, feature); rows of the
-    same pair keep their order.
-    """
-    na = a_a.shape[0]
-    nb = a_b.shape[0]
-    total = na + nb
-    body_a = np.empty(total, np.int64)
-    body_b = np.empty(total, np.int64)
-    point = np.empty((total, 2))
-    normal = np.empty((total, 2))
-    depth = np.empty(total)
-    feature = np.empty(total, np.int64)
+def merge_order(key_a: np.ndarray, key_b: np.ndarray) -> np.ndarray:
+    """The order (K_a + K_b,) that merges two lists sorted by their pair keys (body_a *
+    n_bodies + body_b), as indices into their concatenation [a, b]; the lists share no
+    key, and rows with one key keep their order."""
+    na = key_a.shape[0]
+    nb = key_b.shape[0]
+    order = np.empty(na + nb, np.int64)
     u = 0
     v = 0
-    for k in range(total):
-        take_a = v >= nb or (u < na and a_a[u] * n_bodies + b_a[u]
-                             < a_b[v] * n_bodies + b_b[v])
-        if take_a:
-            body_a[k] = a_a[u]
-            body_b[k] = b_a[u]
-            point[k, 0] = point_a[u, 0]
-            point[k, 1] = point_a[u, 1]
-            normal[k, 0] = normal_a[u, 0]
-            normal[k, 1] = normal_a[u, 1]
-            depth[k] = depth_a[u]
-            feature[k] = feature_a[u]
+    for k in range(na + nb):
+        if v >= nb or (u < na and key_a[u] < key_b[v]):
+            order[k] = u
             u += 1
         else:
-            body_a[k] = a_b[v]
-            body_b[k] = b_b[v]
-            point[k, 0] = point_b[v, 0]
-            point[k, 1] = point_b[v, 1]
-            normal[k, 0] = normal_b[v, 0]
-            normal[k, 1] = normal_b[v, 1]
-            depth[k] = depth_b[v]
-            feature[k] = feature_b[v]
+            order[k] = na + v
             v += 1
-    return body_a, body_b, point, normal, depth, feature
+    return order
