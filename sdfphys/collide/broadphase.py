@@ -1,7 +1,7 @@
 """Broadphase: world bounding boxes of every body and candidate pairs on a hashed grid.
 
-World AABB of one body (vectorized over all bodies, one numpy pass, no loop over
-shapes or bodies): the shape's body-frame AABB ``[x0, y0, x1, y1]`` rotated by the
+World AABB of one body (``body_box``; ``world_bounds`` runs it over all bodies in one
+compiled pass, as the circle fast path's ``reach_and_boxes`` does): the shape's body-frame AABB ``[x0, y0, x1, y1]`` rotated by the
 body angle ``a`` and moved to its centre of mass ``c``, by interval arithmetic,
 
     x-extent = c_x + cos(a) [x0, x1] - sin(a) [y0, y1]
@@ -61,12 +61,42 @@ __all__ = ["SWEEP_BODIES", "candidate_pairs", "world_bounds"]
 _TINY_COEFFICIENT = 1e-12
 
 
-def _scaled(k: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Interval ``k * [lo, hi]`` (all (B,)); ``k ~ 0`` gives ``[0, 0]`` for infinite ends."""
-    with np.errstate(invalid="ignore"):
-        a, b = k * lo, k * hi
-    zero = (k == 0.0) | ((np.abs(k) < _TINY_COEFFICIENT) & ~(np.isfinite(lo) & np.isfinite(hi)))
-    return (np.where(zero, 0.0, np.minimum(a, b)), np.where(zero, 0.0, np.maximum(a, b)))
+@njit(cache=True)
+def _scaled(k: float, lo: float, hi: float) -> tuple[float, float]:
+    """Interval ``k * [lo, hi]``; ``k ~ 0`` gives ``[0, 0]`` for infinite ends."""
+    if k == 0.0 or (abs(k) < _TINY_COEFFICIENT
+                    and not (math.isfinite(lo) and math.isfinite(hi))):
+        return 0.0, 0.0
+    a = k * lo
+    b = k * hi
+    return min(a, b), max(a, b)
+
+
+@njit(cache=True)
+def body_box(bounds: np.ndarray, radius: float, x: float, y: float, angle: float,
+             grow: float, out: np.ndarray) -> None:
+    """Write one body's world AABB ``[xmin, ymin, xmax, ymax]`` (m) into ``out`` (4,).
+
+    bounds: (4,) body-frame AABB (may be infinite); radius: bounding radius about the
+    centre of mass (inf if unbounded); (x, y), angle: the pose; grow: m added all round.
+    """
+    c = math.cos(angle)
+    s = math.sin(angle)
+    ax_lo, ax_hi = _scaled(c, bounds[0], bounds[2])
+    bx_lo, bx_hi = _scaled(-s, bounds[1], bounds[3])
+    ay_lo, ay_hi = _scaled(s, bounds[0], bounds[2])
+    by_lo, by_hi = _scaled(c, bounds[1], bounds[3])
+    out[0] = max(ax_lo + bx_lo, -radius) + x - grow
+    out[1] = max(ay_lo + by_lo, -radius) + y - grow
+    out[2] = min(ax_hi + bx_hi, radius) + x + grow
+    out[3] = min(ay_hi + by_hi, radius) + y + grow
+
+
+@njit(cache=True)
+def _world_bounds(local_bounds, radius, position, angle, margin, out):
+    for i in range(angle.shape[0]):
+        body_box(local_bounds[i], radius[i], position[i, 0], position[i, 1], angle[i],
+                 margin[i], out[i])
 
 
 def world_bounds(local_bounds: np.ndarray, radius: np.ndarray, position: np.ndarray,
@@ -79,20 +109,16 @@ def world_bounds(local_bounds: np.ndarray, radius: np.ndarray, position: np.ndar
     local_bounds: (B, 4) body-frame AABBs (centre of mass at the origin; entries may
         be infinite for unbounded fields). radius: (B,) bounding radius about the
         centre of mass (inf if unbounded). position: (B, 2) centres of mass, world.
-        angle: (B,) radians, counter-clockwise.
+        angle: (B,) radians, counter-clockwise. One compiled pass (``body_box``).
     """
-    c, s = np.cos(angle), np.sin(angle)
-    x0, y0, x1, y1 = local_bounds.T
-    ax_lo, ax_hi = _scaled(c, x0, x1)
-    bx_lo, bx_hi = _scaled(-s, y0, y1)
-    ay_lo, ay_hi = _scaled(s, x0, x1)
-    by_lo, by_hi = _scaled(c, y0, y1)
-    px, py = position[:, 0], position[:, 1]
-    out = np.empty((len(angle), 4))
-    out[:, 0] = np.maximum(ax_lo + bx_lo, -radius) + px - margin
-    out[:, 1] = np.maximum(ay_lo + by_lo, -radius) + py - margin
-    out[:, 2] = np.minimum(ax_hi + bx_hi, radius) + px + margin
-    out[:, 3] = np.minimum(ay_hi + by_hi, radius) + py + margin
+    n = len(angle)
+    out = np.empty((n, 4))
+    _world_bounds(np.ascontiguousarray(local_bounds, np.float64).reshape(-1, 4),
+                  np.ascontiguousarray(radius, np.float64).reshape(-1),
+                  np.ascontiguousarray(position, np.float64).reshape(-1, 2),
+                  np.ascontiguousarray(angle, np.float64).reshape(-1),
+                  np.ascontiguousarray(np.broadcast_to(np.asarray(margin, np.float64), (n,))),
+                  out)
     return out
 
 

@@ -8,8 +8,7 @@ filter, the flip to body_a < body_b, the sort) dominated a step. Here:
 ``reach_and_boxes``
     one pass over the bodies: the speculative reach (``speculative_reach``) and the
     world AABB grown by half the speculative distance plus the reach
-    (``broadphase.world_bounds``), with the same floating-point operations in the
-    same order.
+    (``broadphase.body_box``, the kernel of ``world_bounds``).
 
 ``analytic_contacts``
     one pass over the sorted candidate pairs (``broadphase.candidate_pairs``,
@@ -51,24 +50,12 @@ import math
 import numpy as np
 from numba import njit
 
+from .broadphase import body_box
+
 __all__ = ["BOX", "CIRCLE", "OTHER", "analytic_contacts", "merge_order", "reach_and_boxes"]
 
-#: Rotation coefficients below this count as 0 against infinite bounds
-#: (``broadphase._TINY_COEFFICIENT``).
-_TINY_COEFFICIENT = 1e-12
 #: Vectors not longer than this normalize to (1, 0) (``sdf.base._TINY``).
 _TINY_LENGTH = 1e-300
-
-
-@njit(cache=True)
-def _scaled(k: float, lo: float, hi: float) -> tuple[float, float]:
-    """Interval ``k * [lo, hi]``; ``k ~ 0`` gives [0, 0] for infinite ends."""
-    if k == 0.0 or (abs(k) < _TINY_COEFFICIENT
-                    and not (math.isfinite(lo) and math.isfinite(hi))):
-        return 0.0, 0.0
-    a = k * lo
-    b = k * hi
-    return min(a, b), max(a, b)
 
 
 @njit(cache=True)
@@ -85,7 +72,7 @@ def reach_and_boxes(shape_bounds: np.ndarray, shape_radius: np.ndarray,
     velocity: (B, 2) m/s; angular_velocity: (B,) rad/s; dt: s.
     reach = min(dt (|v| + |w| r), reach_cap r), r = radius or ``unbounded_radius``
     if infinite (``collide.speculative_reach``); box = world AABB grown by
-    half_margin + reach (``broadphase.world_bounds``).
+    half_margin + reach (``broadphase.body_box``, as ``world_bounds``).
     """
     for i in range(angle.shape[0]):
         s = body_shape[i]
@@ -93,21 +80,8 @@ def reach_and_boxes(shape_bounds: np.ndarray, shape_radius: np.ndarray,
         r = radius if math.isfinite(radius) else unbounded_radius
         speed = math.hypot(velocity[i, 0], velocity[i, 1]) + abs(angular_velocity[i]) * r
         reach[i] = min(dt * speed, reach_cap * r)
-        grow = half_margin + reach[i]
-        c = math.cos(angle[i])
-        sn = math.sin(angle[i])
-        x0 = shape_bounds[s, 0]
-        y0 = shape_bounds[s, 1]
-        x1 = shape_bounds[s, 2]
-        y1 = shape_bounds[s, 3]
-        ax_lo, ax_hi = _scaled(c, x0, x1)
-        bx_lo, bx_hi = _scaled(-sn, y0, y1)
-        ay_lo, ay_hi = _scaled(sn, x0, x1)
-        by_lo, by_hi = _scaled(c, y0, y1)
-        boxes[i, 0] = max(ax_lo + bx_lo, -radius) + position[i, 0] - grow
-        boxes[i, 1] = max(ay_lo + by_lo, -radius) + position[i, 1] - grow
-        boxes[i, 2] = min(ax_hi + bx_hi, radius) + position[i, 0] + grow
-        boxes[i, 3] = min(ay_hi + by_hi, radius) + position[i, 1] + grow
+        body_box(shape_bounds[s], radius, position[i, 0], position[i, 1], angle[i],
+                 half_margin + reach[i], boxes[i])
 
 
 #: Shape classes of ``analytic_contacts``: handled by the general path, circle, box.
