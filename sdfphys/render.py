@@ -32,6 +32,8 @@ import numpy as np
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import pygame
 
+from .collide.broadphase import world_bounds
+
 __all__ = ["DYNAMIC", "KINEMATIC", "SPRITE_TOLERANCE", "STATIC", "BodyFrames", "Camera", "Overlays", "Palette",
            "Renderer", "body_frames"]
 
@@ -464,26 +466,14 @@ class Renderer:
     # ----------------------------------------------------------------------------------
 
     def world_bounds(self, frames: BodyFrames, index: np.ndarray) -> np.ndarray:
-        """World AABBs (n, 4) ``[xmin, ymin, xmax, ymax]`` (m) of bodies ``index``: the
-        body-frame ``bounds()`` box rotated into the world (circles: exact; unbounded
-        shapes: infinite or NaN components)."""
-        out = np.empty((len(index), 4))
+        """World AABBs (n, 4) ``[xmin, ymin, xmax, ymax]`` (m) of bodies ``index``, as the
+        broadphase computes them (``collide.broadphase.world_bounds``: the body-frame
+        ``bounds()`` box rotated into the world, cut by the bounding disc; unbounded
+        shapes give infinite components)."""
         sid = frames.shape_id[index]
-        for shape_id in np.unique(sid):
-            rows = np.flatnonzero(sid == shape_id)
-            bodies = index[rows]
-            shape = frames.shapes[shape_id]
-            com = frames.com[bodies]
-            if shape.kind == "circle":
-                r = float(shape.radius)
-                out[rows] = np.concatenate([com - r, com + r], axis=1)
-                continue
-            x0, y0, x1, y1 = np.asarray(shape.bounds(), dtype=np.float64)
-            corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
-            with np.errstate(invalid="ignore"):
-                world = _rotate(corners, frames.angle[bodies]) + com[:, None, :]
-            out[rows] = np.concatenate([world.min(axis=1), world.max(axis=1)], axis=1)
-        return out
+        local = np.array([s.bounds() for s in frames.shapes], np.float64).reshape(-1, 4)
+        radius = np.array([getattr(s, "radius", np.inf) for s in frames.shapes], np.float64)
+        return world_bounds(local[sid], radius[sid], frames.com[index], frames.angle[index])
 
     def _draw_bounds(self, surface: pygame.Surface, frames: BodyFrames,
                      index: np.ndarray) -> None:
