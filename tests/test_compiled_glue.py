@@ -1,8 +1,8 @@
 """The compiled narrowphase glue gives the numpy reference's contacts, bit for bit.
 
-``mesh_contacts.mesh_in_field`` runs its stages in compiled kernels when the other
-field compiles and in numpy otherwise (``USE_COMPILED = False``, the reference);
-the bench scene's pair kinds (boxes on boxes, walls and a half-plane ground, a
+``mesh_contacts.mesh_in_field`` and ``mesh_sdf.sdf_in_mesh`` run their stages in
+compiled kernels when the fields compile and in numpy otherwise (each module's
+``USE_COMPILED = False``, the reference); the bench scene's pair kinds (boxes on boxes, walls and a half-plane ground, a
 ring and a smooth union) and concave meshes, at random poses and margins, must
 give the same rows (pair, point, normal, depth, key element, key start) in the
 same order, with the same bits.
@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sdfphys.collide import mesh_contacts
+from sdfphys.collide import mesh_contacts, mesh_sdf
+from sdfphys.collide.narrowphase import _overlap_region, _to_local
 from sdfphys.settings import Settings
 from sdfphys.shapes import shape_from_spec
 
@@ -32,10 +33,10 @@ SDFS = [
 ]
 
 
-def _both(monkeypatch, fn, *args):
-    monkeypatch.setattr(mesh_contacts, "USE_COMPILED", False)
+def _both(monkeypatch, module, fn, *args):
+    monkeypatch.setattr(module, "USE_COMPILED", False)
     reference = fn(*args)
-    monkeypatch.setattr(mesh_contacts, "USE_COMPILED", True)
+    monkeypatch.setattr(module, "USE_COMPILED", True)
     return reference, fn(*args)
 
 
@@ -60,8 +61,36 @@ def test_mesh_in_field_compiled_equals_numpy(monkeypatch, other_kind):
             pose_other[:, 2] = 0.0
         margin = float(rng.choice([0.0, 0.01, 0.05]))
         settings = Settings(descent_starts=int(rng.choice([4, 7])))
-        reference, got = _both(monkeypatch, mesh_contacts.mesh_in_field, mesh, other,
-                               pose_mesh, pose_other, margin, settings, other_kind == "mesh")
+        reference, got = _both(monkeypatch, mesh_contacts, mesh_contacts.mesh_in_field, mesh,
+                               other, pose_mesh, pose_other, margin, settings,
+                               other_kind == "mesh")
         assert _same(reference, got)
         contacts += len(reference[0])
     assert contacts > 500
+
+
+def test_sdf_in_mesh_compiled_equals_numpy(monkeypatch):
+    rng = np.random.default_rng(2026)
+    meshes = [shape_from_spec(s) for s in MESHES[:2] + [{"type": "box", "size": [0.5, 9.0]}]]
+    sdfs = [shape_from_spec(s) for s in SDFS[:2] + [{"type": "sdf", "field": {
+        "type": "box", "size": [0.6, 0.3]}}]]
+    contacts = far_ends = 0
+    for _ in range(120):
+        mesh, sdf = meshes[rng.integers(len(meshes))], sdfs[rng.integers(len(sdfs))]
+        n = int(rng.integers(1, 10))
+        pose_mesh = np.column_stack([rng.uniform(-0.5, 0.5, (n, 2)), rng.uniform(-4, 4, n)])
+        pose_sdf = np.column_stack([rng.uniform(-0.2, 0.2, (n, 2)), rng.uniform(-4, 4, n)])
+        if rng.random() < 0.3:
+            pose_mesh[:, 2] = np.round(pose_mesh[:, 2] / (np.pi / 2)) * (np.pi / 2)
+            pose_mesh[:, 2] += rng.uniform(-0.05, 0.05, n)          # slightly tilted
+            pose_sdf[:, 2] = 0.0
+        margin = float(rng.choice([0.0, 0.01, 0.05]))
+        angle = pose_mesh[:, 2] - pose_sdf[:, 2]
+        region = _overlap_region(sdf.bounds(), mesh.bounds(), angle,
+                                 _to_local(pose_mesh[:, :2], pose_sdf), margin)
+        reference, got = _both(monkeypatch, mesh_sdf, mesh_sdf.sdf_in_mesh, mesh, sdf,
+                               pose_mesh, pose_sdf, region, margin, Settings())
+        assert _same(reference, got)
+        contacts += len(reference[0])
+        far_ends += int(np.sum(reference[5] >= mesh_sdf.FAR_END))
+    assert contacts > 500 and far_ends > 20

@@ -53,12 +53,16 @@ instead of one numpy call per node of the field's tree) when the field compiles.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 from ..sdf import Field, compiled, safe_normalize
 from ..settings import Settings
 from ..shapes import Shape
 from . import descent
+from .mesh_contacts import _evaluate, _unit
 
 __all__ = ["FAR_END", "REFINE_ROUNDS", "SDF_CALLS", "sdf_in_mesh"]
 
@@ -92,6 +96,11 @@ FAR_END = 4096
 #: Evaluations of the sdf field after the field-field descent: the projection of
 #: the starts, one per support-search round, the far ends' probes and ladder.
 SDF_CALLS = REFINE_ROUNDS + 3
+#: Run stages 2 and 3 in one compiled kernel (``_support``) when both fields compile
+#: (``sdf.compiled``); False forces the numpy stages (the tests compare the two).
+USE_COMPILED = True
+#: Relative tolerance of the support search's decrease test (4 ulps).
+_FALL = 4.0 * np.finfo(float).eps
 
 
 def _rotate(v: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
@@ -169,7 +178,7 @@ def _deepest_on_sdf(sdf: Field, mesh: _MeshInSdfFrame, pair: np.ndarray, start: 
         fc, nc = mesh.evaluate(zc, np.repeat(pair[rows], rungs))
         fc = fc.reshape(-1, rungs)
         before = np.column_stack([phi[rows], fc[:, :-1]])
-        tol = 4.0 * np.finfo(float).eps * np.maximum(1.0, np.abs(before))
+        tol = _FALL * np.maximum(1.0, np.abs(before))
         falling = np.cumprod(fc < before - tol, axis=1).astype(bool)
         count = falling.sum(axis=1)
         better = count > 0
@@ -275,7 +284,28 @@ def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.nda
     empty = (pair, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), pair.copy(), pair.copy())
     if len(pair) == 0:
         return empty
+    programs = (compiled.compile_field(sdf.field), compiled.compile_field(mesh.field))
+    if USE_COMPILED and programs[0] is not None and programs[1] is not None:
+        a, b = programs
+        return _support(a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
+                        b.nesting, mesh.vertices, np.cos(angle), np.sin(angle), offset, co, so,
+                        np.ascontiguousarray(pose_sdf, dtype=np.float64), region, float(margin),
+                        pair, point, depth, start)
+    return _support_numpy(mesh, sdf, pose_sdf, angle, offset, co, so, region, margin, pair,
+                          point, depth, start)
 
+
+def _support_numpy(mesh: Shape, sdf: Shape, pose_sdf: np.ndarray, angle: np.ndarray,
+                   offset: np.ndarray, co: np.ndarray, so: np.ndarray, region: np.ndarray,
+                   margin: float, pair: np.ndarray, point: np.ndarray, depth: np.ndarray,
+                   start: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                              np.ndarray]:
+    """Stages 2 and 3 of ``sdf_in_mesh`` in numpy from the field-field contacts (pair,
+    point, depth, start), for fields that do not compile; the reference of the
+    compiled ``_support`` (same results, bit for bit). angle (n,): the mesh's angle
+    in the sdf's frame, offset (n, 2) its position there; co, so (n,): cos and sin
+    of the sdf's angle."""
     in_sdf = _MeshInSdfFrame(mesh.field, angle, offset)
     extent = region[pair, 2:] - region[pair, :2]
     diagonal = np.hypot(extent[:, 0], extent[:, 1])
@@ -317,3 +347,266 @@ def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.nda
     co, so = co[pair], so[pair]
     world_mid = _rotate(mid, co, so) + pose_sdf[pair, :2]
     return pair, world_mid, _rotate(n, co, so), depth, edge, start
+
+
+# --------------------------------------------------------------------------------------
+# Stages 2 and 3 compiled: the operations of the numpy functions above, per contact
+# --------------------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def _project_compiled(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int,
+                      w: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``_project`` of w[:n] with the sdf's program: (z (n, 2), unit normal g (n, 2))."""
+    f, g = _evaluate(code, consts, depth, nesting, w, n)
+    z = np.empty((n, 2))
+    for j in range(n):
+        g[j, 0], g[j, 1] = _unit(g[j, 0], g[j, 1])
+        z[j, 0], z[j, 1] = w[j, 0] - f[j] * g[j, 0], w[j, 1] - f[j] * g[j, 1]
+    return z, g
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _to_mesh(x: float, y: float, k: int, cos: np.ndarray, sin: np.ndarray,
+             offset: np.ndarray) -> tuple[float, float]:
+    """``_MeshInSdfFrame.to_mesh`` of one point of pair k."""
+    vx, vy = x - offset[k, 0], y - offset[k, 1]
+    c, s = cos[k], -sin[k]
+    return c * vx - s * vy, s * vx + c * vy
+
+
+@njit(cache=True, error_model="numpy")
+def _mesh_compiled(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int,
+                   cos: np.ndarray, sin: np.ndarray, offset: np.ndarray, points: np.ndarray,
+                   pair: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``_MeshInSdfFrame.evaluate`` of points[:n] of pairs pair[:n] with the mesh's program."""
+    q = np.empty((n, 2))
+    for j in range(n):
+        q[j, 0], q[j, 1] = _to_mesh(points[j, 0], points[j, 1], pair[j], cos, sin, offset)
+    f, g = _evaluate(code, consts, depth, nesting, q, n)
+    for j in range(n):
+        ux, uy = _unit(g[j, 0], g[j, 1])
+        c, s = cos[pair[j]], sin[pair[j]]
+        g[j, 0], g[j, 1] = c * ux - s * uy, s * ux + c * uy
+    return f, g
+
+
+@njit(cache=True, error_model="numpy")
+def _support(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting_s: int,
+             code_m: np.ndarray, consts_m: np.ndarray, depth_m: int, nesting_m: int,
+             vertices: np.ndarray, cos: np.ndarray, sin: np.ndarray, offset: np.ndarray,
+             co: np.ndarray, so: np.ndarray, pose_sdf: np.ndarray, region: np.ndarray,
+             margin: float, pair: np.ndarray, point: np.ndarray, depth: np.ndarray,
+             start: np.ndarray):
+    """``_support_numpy`` with the sdf's (``*_s``) and the mesh's (``*_m``) programs.
+
+    vertices (M, 2): the mesh's outline; cos, sin (n,): of the mesh's angle in the
+    sdf's frame, offset (n, 2) its position there; co, so (n,): of the sdf's angle
+    (numpy's cos and sin, from the caller); pose_sdf (n, 3), region (n, 4); the
+    field-field contacts pair (K,), point (K, 2), depth (K,), start (K,). Returns
+    ``sdf_in_mesh``'s six arrays. Each support-search round and the far ends'
+    probes and ladder evaluate the rows of all contacts in one batch, as numpy does.
+    """
+    n_c = pair.shape[0]
+    m = vertices.shape[0]
+    rungs = _LADDER.shape[0]
+    diagonal = np.empty(n_c)
+    step = np.empty(n_c)
+    min_step = np.empty(n_c)
+    for i in range(n_c):
+        k = pair[i]
+        ex, ey = region[k, 2] - region[k, 0], region[k, 3] - region[k, 1]
+        diagonal[i] = math.hypot(ex, ey)
+        step[i] = abs(depth[i]) + 1e-3 * diagonal[i]
+        min_step[i] = _MIN_STEP * diagonal[i]
+    # Stage 2: the support search (``_deepest_on_sdf``).
+    z, g = _project_compiled(code_s, consts_s, depth_s, nesting_s, point, n_c)
+    phi, n = _mesh_compiled(code_m, consts_m, depth_m, nesting_m, cos, sin, offset, z, pair,
+                            n_c)
+    active = np.ones(n_c, dtype=np.bool_)
+    rows = np.empty(n_c, dtype=np.int64)
+    t = np.empty((n_c, 2))
+    w = np.empty((n_c * rungs, 2))
+    w_pair = np.empty(n_c * rungs, dtype=np.int64)
+    for _ in range(REFINE_ROUNDS):
+        n_rows = 0
+        for i in range(n_c):
+            if not active[i]:
+                continue
+            ng = 0.0 + n[i, 0] * g[i, 0] + n[i, 1] * g[i, 1]
+            tx, ty = -n[i, 0] + ng * g[i, 0], -n[i, 1] + ng * g[i, 1]
+            length = math.hypot(tx, ty)
+            if not length > _PARALLEL:
+                active[i] = False
+                continue
+            rows[n_rows] = i
+            t[n_rows, 0], t[n_rows, 1] = tx / length, ty / length
+            n_rows += 1
+        if n_rows == 0:
+            break
+        for r in range(n_rows):
+            i = rows[r]
+            for j in range(rungs):
+                s = step[i] * _LADDER[j]
+                w[r * rungs + j, 0] = z[i, 0] + s * t[r, 0]
+                w[r * rungs + j, 1] = z[i, 1] + s * t[r, 1]
+                w_pair[r * rungs + j] = pair[i]
+        zc, gc = _project_compiled(code_s, consts_s, depth_s, nesting_s, w, n_rows * rungs)
+        fc, nc = _mesh_compiled(code_m, consts_m, depth_m, nesting_m, cos, sin, offset, zc,
+                                w_pair, n_rows * rungs)
+        for r in range(n_rows):
+            i = rows[r]
+            count = 0
+            before = phi[i]
+            for j in range(rungs):
+                value = fc[r * rungs + j]
+                if not value < before - _FALL * max(1.0, abs(before)):
+                    break
+                count += 1
+                before = value
+            if count > 0:
+                best = count - 1
+                flat = r * rungs + best
+                z[i, 0], z[i, 1], g[i, 0], g[i, 1] = zc[flat, 0], zc[flat, 1], gc[flat, 0], \
+                    gc[flat, 1]
+                phi[i], n[i, 0], n[i, 1] = fc[flat], nc[flat, 0], nc[flat, 1]
+                grow = 4.0 if best == rungs - 1 else 1.0
+                step[i] = step[i] * _LADDER[best] * grow
+            else:
+                step[i] /= _SHRINK
+                active[i] = step[i] >= min_step[i]
+    # Contacts within the margin and their outline edges (``_nearest_edges``).
+    keep = np.empty(n_c, dtype=np.int64)
+    n_k = 0
+    for i in range(n_c):
+        if -phi[i] > -margin:
+            keep[n_k] = i
+            n_k += 1
+    edge = np.empty(n_k, dtype=np.int64)
+    for h in range(n_k):
+        i = keep[h]
+        d = -phi[i]
+        fx, fy = _to_mesh(z[i, 0] + d * n[i, 0], z[i, 1] + d * n[i, 1], pair[i], cos, sin,
+                          offset)
+        nearest, arg = np.inf, 0
+        for j in range(m):
+            ax, ay = vertices[j, 0], vertices[j, 1]
+            q = (j + 1) % m
+            ex, ey = vertices[q, 0] - ax, vertices[q, 1] - ay
+            rx, ry = fx - ax, fy - ay
+            along = min(max((rx * ex + ry * ey) / (ex * ex + ey * ey), 0.0), 1.0)
+            gx, gy = rx - along * ex, ry - along * ey
+            gap = gx * gx + gy * gy
+            if gap < nearest or (j == 0 and math.isnan(gap)):
+                nearest, arg = gap, j
+        edge[h] = arg
+    # Stage 3: the far ends (``_far_ends``): two probes per contact, then the ladder.
+    probes = np.empty((2 * n_k, 2))
+    for h in range(n_k):
+        i = keep[h]
+        tx, ty = -n[i, 1], n[i, 0]
+        size = _PROBE * diagonal[i]
+        probes[h, 0], probes[h, 1] = z[i, 0] + size * tx, z[i, 1] + size * ty
+        probes[n_k + h, 0], probes[n_k + h, 1] = z[i, 0] - size * tx, z[i, 1] - size * ty
+    _, gp = _project_compiled(code_s, consts_s, depth_s, nesting_s, probes, 2 * n_k)
+    facing = np.empty(n_k)
+    face_g = np.empty((n_k, 2))
+    u = np.empty((n_k, 2))
+    rung = np.empty((n_k * _RUNGS, 2))
+    lengths = np.empty(_RUNGS)
+    for r in range(_RUNGS):
+        lengths[r] = 2.0 ** (r - _RUNGS + 1)
+    for h in range(n_k):
+        i = keep[h]
+        f0 = -(0.0 + gp[h, 0] * n[i, 0] + gp[h, 1] * n[i, 1])
+        f1 = -(0.0 + gp[n_k + h, 0] * n[i, 0] + gp[n_k + h, 1] * n[i, 1])
+        side = 1 if f1 > f0 or (math.isnan(f1) and not math.isnan(f0)) else 0
+        facing[h] = f1 if side == 1 else f0
+        gx, gy = gp[side * n_k + h, 0], gp[side * n_k + h, 1]
+        face_g[h, 0], face_g[h, 1] = gx, gy
+        sign = 1.0 if side == 0 else -1.0
+        ux, uy = -gy, gx
+        flip = 1.0 if (0.0 + ux * -n[i, 1] + uy * n[i, 0]) * sign >= 0.0 else -1.0
+        u[h, 0], u[h, 1] = ux * flip, uy * flip
+        for r in range(_RUNGS):
+            length = diagonal[i] * lengths[r]
+            rung[h * _RUNGS + r, 0] = z[i, 0] + length * u[h, 0]
+            rung[h * _RUNGS + r, 1] = z[i, 1] + length * u[h, 1]
+    projected, _ = _project_compiled(code_s, consts_s, depth_s, nesting_s, rung,
+                                     n_k * _RUNGS)
+    # The far ends measured against the deepest point's mesh face, kept or not.
+    far = np.zeros(n_k, dtype=np.bool_)
+    end = np.empty((n_k, 2))
+    end_depth = np.empty(n_k)
+    on_face = np.empty(_RUNGS, dtype=np.bool_)
+    for h in range(n_k):
+        i = keep[h]
+        tol = _ON_LINE * diagonal[i]
+        first_off = 0                                   # argmin of the cumprod: 0 if none
+        for r in range(_RUNGS):
+            dx = projected[h * _RUNGS + r, 0] - rung[h * _RUNGS + r, 0]
+            dy = projected[h * _RUNGS + r, 1] - rung[h * _RUNGS + r, 1]
+            on_face[r] = math.sqrt(dx * dx + dy * dy) <= tol
+        for r in range(_RUNGS):
+            if not on_face[r]:
+                first_off = r
+                break
+        off_face = not on_face[first_off]
+        reached = diagonal[i] * lengths[first_off - 1] if first_off > 0 else 0.0
+        ex, ey = projected[h * _RUNGS + first_off, 0], projected[h * _RUNGS + first_off, 1]
+        along = 0.0 + (ex - z[i, 0]) * u[h, 0] + (ey - z[i, 1]) * u[h, 1]
+        off_line = abs(0.0 + (ex - z[i, 0]) * face_g[h, 0] + (ey - z[i, 1]) * face_g[h, 1])
+        found = (facing[h] >= _FACING and off_face and off_line <= tol and along > reached
+                 and along <= diagonal[i] * lengths[first_off])
+        d = -phi[i]
+        e_d = d + (0.0 + (z[i, 0] - ex) * n[i, 0] + (z[i, 1] - ey) * n[i, 1])
+        end[h, 0], end[h, 1], end_depth[h] = ex, ey, e_d
+        fx, fy = _to_mesh(ex + e_d * n[i, 0], ey + e_d * n[i, 1], pair[i], cos, sin, offset)
+        v0x, v0y = vertices[edge[h], 0], vertices[edge[h], 1]
+        q = (edge[h] + 1) % m
+        evx, evy = vertices[q, 0] - v0x, vertices[q, 1] - v0y
+        e_length2 = 0.0 + evx * evx + evy * evy
+        t_foot = (0.0 + (fx - v0x) * evx + (fy - v0y) * evy) / e_length2
+        k = pair[i]
+        mx, my = _to_mesh(n[i, 0] + offset[k, 0], n[i, 1] + offset[k, 1], k, cos, sin, offset)
+        face_normal = abs(0.0 + mx * evx + my * evy) <= _FACE_NORMAL * math.sqrt(e_length2)
+        far[h] = (found and face_normal and t_foot >= -_ON_LINE and t_foot <= 1.0 + _ON_LINE
+                  and e_d > -margin and e_d <= d + _ON_LINE * diagonal[i])
+    # The contacts, then their far ends, stably by pair; to the world.
+    n_far = 0
+    for h in range(n_k):
+        if far[h]:
+            n_far += 1
+    rows_of = np.empty(n_k + n_far, dtype=np.int64)          # h, or n_k + h for a far end
+    of_pair = np.empty(n_k + n_far, dtype=np.int64)
+    for h in range(n_k):
+        rows_of[h], of_pair[h] = h, pair[keep[h]]
+    j = n_k
+    for h in range(n_k):
+        if far[h]:
+            rows_of[j], of_pair[j] = n_k + h, pair[keep[h]]
+            j += 1
+    order = np.argsort(of_pair, kind="mergesort")
+    total = n_k + n_far
+    out_pair = np.empty(total, dtype=np.int64)
+    out_mid = np.empty((total, 2))
+    out_normal = np.empty((total, 2))
+    out_depth = np.empty(total)
+    out_edge = np.empty(total, dtype=np.int64)
+    out_start = np.empty(total, dtype=np.int64)
+    for o in range(total):
+        row = rows_of[order[o]]
+        h = row % n_k
+        i = keep[h]
+        k = pair[i]
+        nx, ny = n[i, 0], n[i, 1]
+        if row < n_k:
+            px, py, d, s_id = z[i, 0], z[i, 1], -phi[i], start[i]
+        else:
+            px, py, d, s_id = end[h, 0], end[h, 1], end_depth[h], start[i] + FAR_END
+        half = 0.5 * d
+        mx, my = px + half * nx, py + half * ny
+        out_pair[o], out_depth[o], out_edge[o], out_start[o] = k, d, edge[h], s_id
+        out_mid[o, 0] = (co[k] * mx - so[k] * my) + pose_sdf[k, 0]
+        out_mid[o, 1] = (so[k] * mx + co[k] * my) + pose_sdf[k, 1]
+        out_normal[o, 0], out_normal[o, 1] = co[k] * nx - so[k] * ny, so[k] * nx + co[k] * ny
+    return out_pair, out_mid, out_normal, out_depth, out_edge, out_start
