@@ -37,9 +37,12 @@ from ._descent_kernels import (
     AT_BEST,
     BEST,
     COUNT,
+    EPS,
     HAS_PREVIOUS,
     IMBALANCE,
+    PAIR,
     TRIANGLE,
+    _stationarity,
     accept,
     bound,
     initialize,
@@ -48,7 +51,7 @@ from ._descent_kernels import (
     triangle_known,
 )
 
-__all__ = ["descend"]
+__all__ = ["descend", "enclosing_circles", "field_contacts", "merge_minima", "patch_ends"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -335,6 +338,185 @@ def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a
                     hi, h_hi, d_hi = trials[first_out], value[first_out], slope[first_out]
             ends[c, side] = lo
     return ends, found
+
+
+# --------------------------------------------------------------------------------------
+# Field-field contacts after the descent
+# --------------------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def _clusters(group: np.ndarray, point: np.ndarray, key: np.ndarray, score: np.ndarray,
+              tiebreak: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``descent._clusters`` (same arguments and results): per group (a run of equal
+    ``group``), each point's leader is the lowest-key point within the group's
+    radius (numpy's argmin: the first on ties, slot 0 when none); per head, the
+    member with the lowest score (to 4 ulps) and then the lowest tiebreak."""
+    n = point.shape[0]
+    leader = np.empty(n, dtype=np.int64)
+    head = np.empty(n, dtype=np.int64)
+    best = np.empty(n, dtype=np.int64)
+    count = 0
+    lo = 0
+    while lo < n:
+        hi = lo + 1
+        while hi < n and group[hi] == group[lo]:
+            hi += 1
+        r2 = radius[lo] * radius[lo]
+        for k in range(lo, hi):
+            lowest_key, arg = np.iinfo(np.int64).max, lo
+            for j in range(lo, hi):
+                dx, dy = point[k, 0] - point[j, 0], point[k, 1] - point[j, 1]
+                if 0.0 + dx * dx + dy * dy < r2 and key[j] < lowest_key:
+                    lowest_key, arg = key[j], j
+            leader[k] = arg
+        for h in range(lo, hi):
+            if leader[h] != h:
+                continue
+            lowest = np.inf
+            for k in range(lo, hi):
+                if leader[k] == h and (score[k] < lowest or math.isnan(score[k])) \
+                        and not math.isnan(lowest):
+                    lowest = score[k]
+            rounding = 4.0 * EPS * max(1.0, abs(lowest))
+            arg, top = lo, np.inf
+            for k in range(lo, hi):
+                v = tiebreak[k] if leader[k] == h and score[k] <= lowest + rounding else np.inf
+                if k == lo:
+                    top = v
+                elif not math.isnan(top) and (v < top or math.isnan(v)):
+                    arg, top = k, v
+            head[count], best[count] = h, arg
+            count += 1
+        lo = hi
+    return head[:count], best[:count]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _safe_unit(x: float, y: float) -> tuple[float, float]:
+    """``sdf.safe_normalize`` of one row ((1, 0) for a zero vector)."""
+    length = math.hypot(x, y)
+    if length > 1e-300:
+        return x / length, y / length
+    return 1.0, 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def field_contacts(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
+                   code_b: np.ndarray, consts_b: np.ndarray, depth_b: int, nesting_b: int,
+                   rotation: np.ndarray, offset: np.ndarray, pair_of: np.ndarray,
+                   best: np.ndarray, phi: np.ndarray, data: np.ndarray, scale: np.ndarray,
+                   n_starts: int, margin: float, iterations: int, merge: float, sliver: float):
+    """``descent.field_field_contacts`` from the descent's results on: contacts of the
+    starts that hit, merged (``_clusters``), flat patches replaced by their ends
+    (``patch_ends``), merged again. The same operations in the same order.
+
+    rotation (L, 2, 2), offset (L, 2): b's placements; pair_of (S,): each start's
+    pair (S = L n_starts, start id = row % n_starts); best (S, 2), phi (S,),
+    data (S, 6): the descent's results; scale (L,): the regions' diagonals;
+    merge, sliver: ``descent._MERGE`` and ``descent._SLIVER``. Returns (pair (K,)
+    into the L placements, point (K, 2), depth (K,), normal (K, 2), start id (K,)).
+    """
+    n_s = phi.shape[0]
+    hits = np.empty(n_s, dtype=np.int64)
+    n_hit = 0
+    for i in range(n_s):
+        if phi[i] < 0.5 * margin:
+            hits[n_hit] = i
+            n_hit += 1
+    group = np.empty(n_hit, dtype=np.int64)
+    at = np.empty((n_hit, 2))
+    key = np.empty(n_hit, dtype=np.int64)
+    score = np.empty(n_hit)
+    tiebreak = np.empty(n_hit)
+    radius = np.empty(n_hit)
+    point = np.empty((n_hit, 2))
+    depth = np.empty(n_hit)
+    normal = np.empty((n_hit, 2))
+    for h in range(n_hit):
+        i = hits[h]
+        k = pair_of[i]
+        fa, fb = data[i, 0], data[i, 1]
+        gax, gay, gbx, gby = data[i, 2], data[i, 3], data[i, 4], data[i, 5]
+        if abs(fa - fb) <= 1e-9 * scale[k]:
+            nx, ny = _safe_unit(gax - gbx, gay - gby)
+        elif fa > fb:
+            nx, ny = _safe_unit(-gbx, -gby)
+        else:
+            nx, ny = _safe_unit(gax, gay)
+        normal[h, 0], normal[h, 1] = nx, ny
+        depth[h] = -(fa + fb)
+        half = 0.5 * (fb - fa)
+        point[h, 0], point[h, 1] = best[i, 0] + half * nx, best[i, 1] + half * ny
+        group[h], at[h, 0], at[h, 1], key[h] = k, best[i, 0], best[i, 1], i % n_starts
+        score[h], tiebreak[h] = phi[i], _stationarity(PAIR, data, i)
+        radius[h] = merge * scale[k]
+    head, chosen = _clusters(group, at, key, score, tiebreak, radius)
+    n_c = head.shape[0]
+    pair = np.empty(n_c, dtype=np.int64)
+    c_point = np.empty((n_c, 2))
+    c_depth = np.empty(n_c)
+    c_normal = np.empty((n_c, 2))
+    start_id = np.empty(n_c, dtype=np.int64)
+    c_sliver, reach, tol = np.empty(n_c), np.empty(n_c), np.empty(n_c)
+    for c in range(n_c):
+        h = chosen[c]
+        pair[c] = group[h]
+        c_point[c, 0], c_point[c, 1], c_depth[c] = point[h, 0], point[h, 1], depth[h]
+        c_normal[c, 0], c_normal[c, 1] = normal[h, 0], normal[h, 1]
+        start_id[c] = key[head[c]]
+        s = scale[pair[c]]
+        c_sliver[c], reach[c], tol[c] = sliver * s, 2.0 * s, 1e-12 * s
+    ends, found = patch_ends(code_a, consts_a, depth_a, nesting_a, code_b, consts_b, depth_b,
+                             nesting_b, rotation, offset, pair, c_point, c_normal, c_depth,
+                             c_sliver, reach, iterations, tol)
+    # Per pair: its contacts kept as they are, then the -t ends, then the +t ends.
+    flat = np.empty(n_c, dtype=np.bool_)
+    n_flat = 0
+    for c in range(n_c):
+        r = merge * scale[pair[c]]
+        flat[c] = (found[c, 0] and ends[c, 0] > r) or (found[c, 1] and ends[c, 1] > r)
+        n_flat += flat[c]
+    total = n_c + n_flat
+    o_pair = np.empty(total, dtype=np.int64)
+    source = np.empty(total, dtype=np.int64)         # c, or (side + 1) n_c + c for an end
+    j = 0
+    for c in range(n_c):
+        if not flat[c]:
+            o_pair[j], source[j] = pair[c], c
+            j += 1
+    for side in range(2):
+        for c in range(n_c):
+            if flat[c]:
+                o_pair[j], source[j] = pair[c], (side + 1) * n_c + c
+                j += 1
+    order = np.argsort(o_pair, kind="mergesort")
+    e_pair = np.empty(total, dtype=np.int64)
+    e_point = np.empty((total, 2))
+    e_depth = np.empty(total)
+    e_normal = np.empty((total, 2))
+    e_id = np.empty(total, dtype=np.int64)
+    e_score = np.empty(total)
+    e_tiebreak = np.empty(total)
+    e_radius = np.empty(total)
+    for o in range(total):
+        src = source[order[o]]
+        c = src % n_c
+        nx, ny = c_normal[c, 0], c_normal[c, 1]
+        x, y = c_point[c, 0], c_point[c, 1]
+        if src < n_c:
+            e_id[o] = start_id[c]
+        elif src < 2 * n_c:
+            x, y = x - ends[c, 0] * -ny, y - ends[c, 0] * nx
+            e_id[o] = n_starts + 2 * start_id[c]
+        else:
+            x, y = x + ends[c, 1] * -ny, y + ends[c, 1] * nx
+            e_id[o] = n_starts + 2 * start_id[c] + 1
+        e_pair[o], e_point[o, 0], e_point[o, 1], e_depth[o] = pair[c], x, y, c_depth[c]
+        e_normal[o, 0], e_normal[o, 1] = nx, ny
+        e_score[o], e_tiebreak[o] = -c_depth[c], float(e_id[o])
+        e_radius[o] = merge * scale[pair[c]]
+    head, chosen = _clusters(e_pair, e_point, e_id, e_score, e_tiebreak, e_radius)
+    return e_pair[chosen], e_point[chosen], e_depth[chosen], e_normal[chosen], e_id[head]
 
 
 # --------------------------------------------------------------------------------------

@@ -137,7 +137,7 @@ from ..sdf import Field, safe_normalize
 from ..sdf.compiled import Program, compile_field
 from ..sdf.compiled import distance as compiled_distance
 from . import _descent_kernels as kernels
-from ._compiled_descent import descend, enclosing_circles, patch_ends
+from ._compiled_descent import descend, enclosing_circles, field_contacts, patch_ends
 from ._compiled_descent import merge_minima as compiled_merge_minima
 
 __all__ = [
@@ -639,6 +639,17 @@ class _PairProblem:
         return kernels.stationarity(kernels.PAIR, data)
 
 
+_STARTS: dict[int, np.ndarray] = {}
+
+
+def _starts(n_starts: int) -> np.ndarray:
+    """The Halton (2, 3) points 1..n_starts (n_starts, 2) in the unit square (cached)."""
+    if n_starts not in _STARTS:
+        index = np.arange(1, n_starts + 1)
+        _STARTS[n_starts] = np.column_stack([_halton(index, 2), _halton(index, 3)])
+    return _STARTS[n_starts]
+
+
 def _halton(index: np.ndarray, base: int) -> np.ndarray:
     """Radical inverse of the integers ``index`` (n,) in ``base``: values in [0, 1)."""
     result = np.zeros(len(index))
@@ -846,12 +857,20 @@ def field_field_contacts(field_a: Field, field_b: Field, poses_b_in_a: np.ndarra
     scale = np.maximum(np.hypot(extent[:, 0], extent[:, 1]), _TINY)    # (L,) diagonals
 
     # Starts and descent.
-    index = np.arange(1, n_starts + 1)
-    unit = np.column_stack([_halton(index, 2), _halton(index, 3)])
+    unit = _starts(n_starts)
     starts = (lo[:, None, :] + extent[:, None, :] * unit[None, :, :]).reshape(-1, 2)
     scale_of = scale[pair_of]
     best, phi, data, _ = _descend(problem, starts, iterations, 0.25 * scale_of,
                                   1e-12 * scale_of)
+    programs = problem.programs() if USE_COMPILED else None
+    if programs is not None:                          # the rest compiled, same operations
+        a, b = programs
+        pair, point, depth, normal, start_id = field_contacts(
+            a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth, b.nesting,
+            np.ascontiguousarray(problem.rotation), np.ascontiguousarray(problem.offset),
+            pair_of, best, phi, data, scale, n_starts, float(margin), iterations, _MERGE,
+            _SLIVER)
+        return live[pair], point, depth, normal, start_id
     fa, fb, ga, gb = data[:, 0], data[:, 1], data[:, 2:4], data[:, 4:6]
     hit = phi < 0.5 * margin
     balanced = np.abs(fa - fb) <= 1e-9 * scale_of
