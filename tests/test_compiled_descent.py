@@ -10,7 +10,7 @@ import pytest
 from test_descent import CIRCLE, FIELDS, UNION, random_triangles
 
 from sdfphys.collide import descent
-from sdfphys.sdf import compiled, field
+from sdfphys.sdf import Field, compiled, field
 
 CASES = dict(FIELDS, plain_circle=CIRCLE, union_again=UNION,
              rounded={"op": "round", "r": 0.1, "of": {"type": "box", "size": [1.0, 0.5]}},
@@ -58,8 +58,21 @@ def test_compiled_descent_handles_batches_of_every_size(monkeypatch):
         np.testing.assert_array_equal(r1, r2)
 
 
+class _Uncompiled(Field):
+    """An ellipse behind a user class: ``compile_field`` knows no user classes."""
+
+    def __init__(self, of: Field):
+        self.of, self.exact = of, of.exact
+
+    def evaluate(self, points):
+        return self.of.evaluate(points)
+
+    def bounds(self):
+        return self.of.bounds()
+
+
 def test_fields_that_do_not_compile_take_the_python_loop():
-    f = field({"type": "ellipse", "size": [2.0, 1.0]})
+    f = _Uncompiled(field({"type": "ellipse", "size": [2.0, 1.0]}))
     assert compiled.compile_field(f) is None
     tri = random_triangles(f, 20, np.random.default_rng(0))
     point, value = descent.triangle_deepest(f, tri)
