@@ -2,10 +2,11 @@
 
 ``mesh_contacts.mesh_in_field`` and ``mesh_sdf.sdf_in_mesh`` run their stages in
 compiled kernels when the fields compile and in numpy otherwise (each module's
-``USE_COMPILED = False``, the reference); the bench scene's pair kinds (boxes on boxes, walls and a half-plane ground, a
-ring and a smooth union) and concave meshes, at random poses and margins, must
-give the same rows (pair, point, normal, depth, key element, key start) in the
-same order, with the same bits.
+``USE_COMPILED = False``, the reference), as does the tail of
+``descent.field_field_contacts`` (``_compiled_descent.field_contacts``). The bench
+scene's pair kinds (boxes on boxes, walls and a half-plane ground, a ring and a
+smooth union) and concave meshes, at random poses and margins, must give the same
+rows (pair, point, normal, depth, keys) in the same order, with the same bits.
 """
 
 from __future__ import annotations

@@ -43,7 +43,7 @@ def test_projection_is_the_closest_point_with_its_derivative():
     for t in range(len(tri)):
         for x in rng.uniform(-2.0, 2.0, (10, 2)):
             u = rng.normal(size=2)
-            q = np.array(kernels.project(tri, t, x[0], x[1], u[0], u[1]))
+            q = np.array(kernels.project(kernels._vertices(tri, t), x[0], x[1], u[0], u[1]))
             expected = closest_point(tri[t], x)
             np.testing.assert_allclose(q[:2], expected, atol=1e-12)
             ahead = closest_point(tri[t], x + h * u)
@@ -58,7 +58,7 @@ def test_projection_returns_vertices_exactly():
     for v in range(3):
         outward = tri[0, v] - tri[0].mean(axis=0)
         x = tri[0, v] + 3.0 * outward
-        q = kernels.project(tri, 0, x[0], x[1], 1.0, 0.0)
+        q = kernels.project(kernels._vertices(tri, 0), x[0], x[1], 1.0, 0.0)
         assert (q[0], q[1]) == (tri[0, v, 0], tri[0, v, 1])
         assert (q[2], q[3]) == (0.0, 0.0)
 
@@ -72,16 +72,16 @@ def test_the_projected_ray_stops_at_its_computed_end():
         w = rng.dirichlet(np.ones(3))
         b = w @ tri[t]
         u = rng.normal(size=2)
-        end, dx, dy = kernels._ray_end(tri, t, b[0], b[1], u[0], u[1])
-        at_end = np.array(kernels.project(tri, t, *(b + end * u), *u))
+        end, dx, dy = kernels._ray_end(kernels._vertices(tri, t), b[0], b[1], u[0], u[1])
+        at_end = np.array(kernels.project(kernels._vertices(tri, t), *(b + end * u), *u))
         np.testing.assert_allclose(at_end[:2], closest_point(tri[t], b + end * u), atol=1e-12)
         for later in (1.5, 4.0, 100.0):
-            after = kernels.project(tri, t, *(b + later * end * u), *u)
+            after = kernels.project(kernels._vertices(tri, t), *(b + later * end * u), *u)
             np.testing.assert_allclose(after[:2], at_end[:2], atol=1e-12)
         if end > 1e-6:
             # Just before the end the path still moves, with dq/ds as returned.
             s = end * (1.0 - 1e-6)
-            before = np.array(kernels.project(tri, t, *(b + s * u), *u))
+            before = np.array(kernels.project(kernels._vertices(tri, t), *(b + s * u), *u))
             np.testing.assert_allclose((at_end[:2] - before[:2]) / (end - s), [dx, dy],
                                        atol=1e-6)
             np.testing.assert_allclose(before[2:], [dx, dy], atol=1e-12)

@@ -191,14 +191,14 @@ def _on_edge(px: float, py: float, ex: float, ey: float, t: float, ux: float, uy
 
 
 @njit(cache=True, error_model="numpy")
-def _project_edges(tri: np.ndarray, t: int, x: float, y: float, ux: float, uy: float
+def _project_edges(v: tuple, x: float, y: float, ux: float, uy: float
                    ) -> tuple[float, float, float, float]:
-    """``project`` onto the three edges of triangle tri[t] (a degenerate triangle)."""
+    """``project`` onto the three edges of triangle v (a degenerate triangle)."""
     best = np.inf
     qx = qy = dqx = dqy = 0.0
     for k in range(3):
-        px, py = tri[t, k, 0], tri[t, k, 1]
-        nx, ny = tri[t, (k + 1) % 3, 0], tri[t, (k + 1) % 3, 1]
+        px, py = v[2 * k], v[2 * k + 1]
+        nx, ny = v[2 * ((k + 1) % 3)], v[2 * ((k + 1) % 3) + 1]
         ex, ey = nx - px, ny - py
         along = ((x - px) * ex + (y - py) * ey) / max(ex * ex + ey * ey, TINY)
         if along <= 0.0:
@@ -214,15 +214,23 @@ def _project_edges(tri: np.ndarray, t: int, x: float, y: float, ux: float, uy: f
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def project(tri: np.ndarray, t: int, x: float, y: float, ux: float, uy: float
+def _vertices(tri: np.ndarray, t: int) -> tuple[float, float, float, float, float, float]:
+    """Triangle tri[t] (tri: (T, 3, 2)) as the tuple (ax, ay, bx, by, cx, cy).
+
+    The hot helpers below take triangles and paths as tuples of floats, not as
+    arrays: an array passed to an inlined function is a new reference, whose
+    atomic count updates cost more than the arithmetic of a path point."""
+    return tri[t, 0, 0], tri[t, 0, 1], tri[t, 1, 0], tri[t, 1, 1], tri[t, 2, 0], tri[t, 2, 1]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def project(v: tuple, x: float, y: float, ux: float, uy: float
             ) -> tuple[float, float, float, float]:
-    """Closest point q of triangle tri[t] (tri: (T, 3, 2)) to (x, y) and dq = D Proj_T(x) u."""
-    ax, ay = tri[t, 0, 0], tri[t, 0, 1]
-    bx, by = tri[t, 1, 0], tri[t, 1, 1]
-    cx, cy = tri[t, 2, 0], tri[t, 2, 1]
+    """Closest point q of triangle v (``_vertices``) to (x, y) and dq = D Proj_T(x) u."""
+    ax, ay, bx, by, cx, cy = v
     abx, aby, acx, acy = bx - ax, by - ay, cx - ax, cy - ay
     if abx * acy - aby * acx == 0.0:
-        return _project_edges(tri, t, x, y, ux, uy)
+        return _project_edges(v, x, y, ux, uy)
     d1 = abx * (x - ax) + aby * (y - ay)
     d2 = acx * (x - ax) + acy * (y - ay)
     if d1 <= 0.0 and d2 <= 0.0:
@@ -256,19 +264,19 @@ def project(tri: np.ndarray, t: int, x: float, y: float, ux: float, uy: float
 # s = -(b - v) . u / |u|^2, arriving with dq/ds = u.
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _ray_end(tri: np.ndarray, t: int, bx: float, by: float, ux: float, uy: float
+def _ray_end(v: tuple, bx: float, by: float, ux: float, uy: float
              ) -> tuple[float, float, float]:
-    """Step s >= 0 from which Proj_T(b + s u) no longer moves (triangle t of tri), and
+    """Step s >= 0 from which Proj_T(b + s u) no longer moves (triangle v), and
     dq/ds just before it."""
     top = 0
     for k in range(1, 3):
-        if ux * tri[t, k, 0] + uy * tri[t, k, 1] > ux * tri[t, top, 0] + uy * tri[t, top, 1]:
+        if ux * v[2 * k] + uy * v[2 * k + 1] > ux * v[2 * top] + uy * v[2 * top + 1]:
             top = k
-    vx, vy = tri[t, top, 0], tri[t, top, 1]
+    vx, vy = v[2 * top], v[2 * top + 1]
     end, dx, dy = 0.0, 0.0, 0.0
     for k in range(1, 3):
         w = (top + k) % 3
-        ex, ey = tri[t, w, 0] - vx, tri[t, w, 1] - vy
+        ex, ey = v[2 * w] - vx, v[2 * w + 1] - vy
         be = (bx - vx) * ex + (by - vy) * ey
         if be <= 0.0:
             continue
@@ -285,12 +293,12 @@ def _ray_end(tri: np.ndarray, t: int, bx: float, by: float, ux: float, uy: float
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _path(kind: int, tri: np.ndarray, t: int, p: np.ndarray, s: float
-          ) -> tuple[float, float, float, float]:
-    """Point and dq/ds at step s of the path with parameters p (8,)."""
+def _path(kind: int, v: tuple, p: tuple, s: float) -> tuple[float, float, float, float]:
+    """Point and dq/ds at step s of the path with parameters p (8 floats: origin,
+    the two models' values and gradients), projected onto triangle v (TRIANGLE)."""
     dx, dy, ddx, ddy = _proximal_step(p[2], p[3], p[4], p[5], p[6], p[7], s)
     if kind == TRIANGLE:
-        return project(tri, t, p[0] + dx, p[1] + dy, ddx, ddy)
+        return project(v, p[0] + dx, p[1] + dy, ddx, ddy)
     return p[0] + dx, p[1] + dy, ddx, ddy
 
 
@@ -308,8 +316,8 @@ def _unit(x: float, y: float) -> tuple[float, float]:
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _bundle_free(tri: np.ndarray, t: int, p: np.ndarray, probe: float) -> bool:
-    """The bundle path p (8,) enters triangle t: its first direction (-g1) or its ridge
+def _bundle_free(v: tuple, p: tuple, probe: float) -> bool:
+    """The bundle path p (8 parameters) enters triangle v: its first direction (-g1) or its ridge
     direction (-m, the min-norm element of the two gradients' hull) is not cut by
     the projection at b.
 
@@ -326,42 +334,51 @@ def _bundle_free(tri: np.ndarray, t: int, p: np.ndarray, probe: float) -> bool:
             ux, uy = _unit(-g1x, -g1y)
         else:
             ux, uy = _unit(-(g2x - g2w * wx), -(g2y - g2w * wy))
-        _, _, dqx, dqy = project(tri, t, p[0] + probe * ux, p[1] + probe * uy, ux, uy)
+        _, _, dqx, dqy = project(v, p[0] + probe * ux, p[1] + probe * uy, ux, uy)
         if (dqx - ux) ** 2 + (dqy - uy) ** 2 <= STATIONARY * STATIONARY:
             return True
     return False
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _steep_path(kind: int, state: np.ndarray, data: np.ndarray, i: int, out: np.ndarray
-                ) -> None:
-    """out (8,) = the steepest path from b: the linearisation at b twice
-    (TRIANGLE), or the two planes whose max is phi (PAIR: phi = max(A, B) with
-    A, B = (1/2 +- k) f_a + (1/2 -+ k) f_b, k = IMBALANCE)."""
-    out[0], out[1] = state[i, BEST], state[i, BEST + 1]
+def _steep_path(kind: int, state: np.ndarray, data: np.ndarray, i: int) -> tuple:
+    """The steepest path from b (8 floats, see ``_path``): the linearisation at b
+    twice (TRIANGLE), or the two planes whose max is phi (PAIR: phi = max(A, B)
+    with A, B = (1/2 +- k) f_a + (1/2 -+ k) f_b, k = IMBALANCE)."""
     if kind == TRIANGLE:
-        out[2] = out[3] = state[i, PHI]
-        out[4] = out[6] = state[i, GRAD]
-        out[5] = out[7] = state[i, GRAD + 1]
-        return
+        phi, gx, gy = state[i, PHI], state[i, GRAD], state[i, GRAD + 1]
+        return state[i, BEST], state[i, BEST + 1], phi, phi, gx, gy, gx, gy
     high, low = 0.5 + IMBALANCE, 0.5 - IMBALANCE
-    out[2] = high * data[i, 0] + low * data[i, 1]
-    out[3] = low * data[i, 0] + high * data[i, 1]
-    out[4] = high * data[i, 2] + low * data[i, 4]
-    out[5] = high * data[i, 3] + low * data[i, 5]
-    out[6] = low * data[i, 2] + high * data[i, 4]
-    out[7] = low * data[i, 3] + high * data[i, 5]
+    return (state[i, BEST], state[i, BEST + 1],
+            high * data[i, 0] + low * data[i, 1], low * data[i, 0] + high * data[i, 1],
+            high * data[i, 2] + low * data[i, 4], high * data[i, 3] + low * data[i, 5],
+            low * data[i, 2] + high * data[i, 4], low * data[i, 3] + high * data[i, 5])
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _bundle_path(state: np.ndarray, i: int, out: np.ndarray) -> None:
-    """out (8,) = the bundle path from b: b's linearisation and the second plane,
+def _bundle_path(state: np.ndarray, i: int) -> tuple:
+    """The bundle path from b (8 floats): b's linearisation and the second plane,
     capped at phi(b)."""
-    out[0], out[1], out[2] = state[i, BEST], state[i, BEST + 1], state[i, PHI]
-    out[3] = min(state[i, ALT + 2] + state[i, ALT + 3] * (state[i, BEST] - state[i, ALT])
-                 + state[i, ALT + 4] * (state[i, BEST + 1] - state[i, ALT + 1]), state[i, PHI])
-    out[4], out[5] = state[i, GRAD], state[i, GRAD + 1]
-    out[6], out[7] = state[i, ALT + 3], state[i, ALT + 4]
+    cap = min(state[i, ALT + 2] + state[i, ALT + 3] * (state[i, BEST] - state[i, ALT])
+              + state[i, ALT + 4] * (state[i, BEST + 1] - state[i, ALT + 1]), state[i, PHI])
+    return (state[i, BEST], state[i, BEST + 1], state[i, PHI], cap, state[i, GRAD],
+            state[i, GRAD + 1], state[i, ALT + 3], state[i, ALT + 4])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _store_path(state: np.ndarray, i: int, p: tuple) -> None:
+    """Keep path p (8 floats) as start i's line-search path (``PATH`` columns)."""
+    state[i, PATH], state[i, PATH + 1], state[i, PATH + 2], state[i, PATH + 3] = \
+        p[0], p[1], p[2], p[3]
+    state[i, PATH + 4], state[i, PATH + 5], state[i, PATH + 6], state[i, PATH + 7] = \
+        p[4], p[5], p[6], p[7]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _stored_path(state: np.ndarray, i: int) -> tuple:
+    """Start i's line-search path (8 floats)."""
+    return (state[i, PATH], state[i, PATH + 1], state[i, PATH + 2], state[i, PATH + 3],
+            state[i, PATH + 4], state[i, PATH + 5], state[i, PATH + 6], state[i, PATH + 7])
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -402,10 +419,9 @@ def stationarity(kind: int, data: np.ndarray) -> np.ndarray:
 # Both are kept GUARD w away from the ends; invalid models fall back to the midpoint.
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _model_steps(state: np.ndarray, i: int) -> tuple[float, float]:
-    """The two model steps (ascending) in the bracket of start i."""
-    sl, pl, dl = state[i, LEFT], state[i, LEFT + 1], state[i, LEFT + 2]
-    sr, pr, dr = state[i, RIGHT], state[i, RIGHT + 1], state[i, RIGHT + 2]
+def _model_steps(sl: float, pl: float, dl: float, sr: float, pr: float, dr: float
+                 ) -> tuple[float, float]:
+    """The two model steps (ascending) in a bracket: s, value and slope at its ends."""
     w = sr - sl
     mid = sl + 0.5 * w
     first = mid
@@ -434,54 +450,30 @@ def _model_steps(state: np.ndarray, i: int) -> tuple[float, float]:
 # --------------------------------------------------------------------------------------
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _candidate(kind: int, tri: np.ndarray, t: int, corner: np.ndarray, state: np.ndarray,
-               i: int, x: float, y: float, dx: float, dy: float, s: float, col: int,
-               same_as: int, n: int, u: int, cand: np.ndarray, cand_i: np.ndarray,
-               points: np.ndarray) -> int:
-    """Write candidate n (point (x, y), dq/ds (dx, dy), step s, column col); returns
-    the new number of points to evaluate. A candidate at b, at a vertex of the
-    triangle whose value is known, or at the same point and derivative as
-    candidate ``same_as`` (>= 0; the same rung of the other ladder, or the
-    previous rung past the end of a path) reuses that value instead of adding a
-    point."""
-    cand[n, 0], cand[n, 1], cand[n, 2], cand[n, 3], cand[n, 4] = s, x, y, dx, dy
-    cand_i[n, 0] = col
-    if x == state[i, BEST] and y == state[i, BEST + 1]:
-        cand_i[n, 1] = AT_BEST
-        return u
-    if kind == TRIANGLE:
-        for v in range(3):
-            if x == tri[t, v, 0] and y == tri[t, v, 1] and not math.isnan(corner[t, v, 0]):
-                cand_i[n, 1] = AT_CORNER - v
-                return u
-    if (same_as >= 0 and x == cand[same_as, 1] and y == cand[same_as, 2]
-            and dx == cand[same_as, 3] and dy == cand[same_as, 4]):
-        cand_i[n, 1] = cand_i[same_as, 1]
-        return u
-    cand_i[n, 1] = u
-    points[u, 0], points[u, 1] = x, y
-    return u + 1
-
-
-@njit(cache=True, inline="always", error_model="numpy")
 def _code(kind: int, shape: np.ndarray, t: int, state: np.ndarray, i: int) -> int:
     """What is known of f around start i: its triangle's shape code, except that a
     start no longer on its triangle's plane (another gradient at b: the plane was
     read from the starts alone) descends as on a GENERAL triangle."""
     if kind != TRIANGLE:
         return GENERAL
-    code = int(shape[t, 0])
-    if code == PLANE and (state[i, GRAD] != shape[t, 1] or state[i, GRAD + 1] != shape[t, 2]):
-        return GENERAL
-    return code
+    return _shape_code(shape[t, 0], shape[t, 1], shape[t, 2], state[i, GRAD],
+                       state[i, GRAD + 1])
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _moving(kind: int, tri: np.ndarray, t: int, steep: np.ndarray, sigma: float
-            ) -> tuple[bool, float, float]:
+def _shape_code(code: float, plane_x: float, plane_y: float, gx: float, gy: float) -> int:
+    """``_code`` of a triangle start from its shape row (code, plane gradient) and the
+    gradient at b."""
+    if int(code) == PLANE and (gx != plane_x or gy != plane_y):
+        return GENERAL
+    return int(code)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _moving(kind: int, v: tuple, steep: tuple, sigma: float) -> tuple[bool, float, float]:
     """Whether the steepest path ``steep`` leaves b (a projected gradient that does
     not vanish), and its dq/ds there (read at s = PROBE sigma, past any corner)."""
-    _, _, dqx, dqy = _path(kind, tri, t, steep, PROBE * sigma)
+    _, _, dqx, dqy = _path(kind, v, steep, PROBE * sigma)
     return _norm(dqx, dqy) > STATIONARY, dqx, dqy
 
 
@@ -530,7 +522,6 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
     # Paths of a round (rows: steepest, bundle, the line search's) and the plan of
     # a start's candidates: path (-1: the model's minimiser), step, column,
     # candidate it may repeat (-1: none), and whether it is the steepest path's end.
-    paths = np.empty((3, 8))
     plan_path = np.empty(N_COLUMNS, dtype=np.int64)
     plan_s = np.empty(N_COLUMNS)
     plan_twin = np.empty(N_COLUMNS, dtype=np.int64)
@@ -539,12 +530,15 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
     shared_t = shared_source = -1                     # the last model minimiser evaluated
     for i in running:
         t = owner[i] if kind == TRIANGLE else 0
+        v = _vertices(tri, t)
         code = _code(kind, shape, t, state, i)
         sigma = state[i, SIGMA]
         # The steepest path from b and its slope at the start; a zero projected
-        # gradient is a stationary point (the start stops).
-        _steep_path(kind, state, data, i, paths[0])
-        moving, dqx, dqy = _moving(kind, tri, t, paths[0], sigma)
+        # gradient is a stationary point (the start stops). Paths of a round:
+        # steepest, bundle, the line search's.
+        steep = _steep_path(kind, state, data, i)
+        bundle = search = steep
+        moving, dqx, dqy = _moving(kind, v, steep, sigma)
         if not moving:
             continue
         running[kept] = i
@@ -562,9 +556,9 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             has_alt = code != PLANE and (state[i, ALT] != state[i, BEST]
                                          or state[i, ALT + 1] != state[i, BEST + 1])
             if has_alt:
-                _bundle_path(state, i, paths[1])
+                bundle = _bundle_path(state, i)
                 if kind == TRIANGLE:
-                    has_alt = _bundle_free(tri, t, paths[1], PROBE * sigma)
+                    has_alt = _bundle_free(v, bundle, PROBE * sigma)
 
             # The ladder's scale: sigma, or the Barzilai-Borwein step s.s / s.y from
             # the last accepted step s = b - b_prev and the change y of the path's
@@ -574,7 +568,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             # is meaningless).
             scale = sigma
             if barzilai_borwein:
-                _, _, vx, vy = _path(kind, tri, t, paths[0], sigma)
+                _, _, vx, vy = _path(kind, v, steep, sigma)
                 sx = state[i, BEST] - state[i, PREVIOUS]
                 sy = state[i, BEST + 1] - state[i, PREVIOUS + 1]
                 curvature = sx * (state[i, PREVIOUS + 2] - vx) + sy * (state[i, PREVIOUS + 3] - vy)
@@ -594,13 +588,12 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             # first valley ahead, the model points find it.
             ladders = True
             if flags[i, BRACKETED]:
-                for c in range(8):
-                    paths[2, c] = state[i, PATH + c]
+                search = _stored_path(state, i)
                 if kind == TRIANGLE and not flags[i, FAILS] and not flags[i, SLOW]:
                     at_end, one_piece = False, True
                     ux = uy = 0.0
                     for side in range(2):
-                        x, y, dx, dy = _path(kind, tri, t, paths[2],
+                        x, y, dx, dy = _path(kind, v, search,
                                              state[i, LEFT if side == 0 else RIGHT])
                         at_end = at_end or (x == state[i, BEST] and y == state[i, BEST + 1])
                         if side == 0:
@@ -618,7 +611,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             # stops; with dq/ds just before it, so that a slide that still descends
             # there reads as descending), and two model points in the bracket.
             if kind == TRIANGLE:
-                end, end_dx, end_dy = _ray_end(tri, t, state[i, BEST], state[i, BEST + 1],
+                end, end_dx, end_dy = _ray_end(v, state[i, BEST], state[i, BEST + 1],
                                                -state[i, GRAD], -state[i, GRAD + 1])
                 if end > END_REACH * scale and code != PLANE:
                     end = np.inf
@@ -639,7 +632,9 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 plan_twin[count] = k if k < steep_rungs and plan_s[k] == s else -1
                 count += 1
             if flags[i, BRACKETED]:
-                s_first, s_second = _model_steps(state, i)
+                s_first, s_second = _model_steps(state[i, LEFT], state[i, LEFT + 1],
+                                                 state[i, LEFT + 2], state[i, RIGHT],
+                                                 state[i, RIGHT + 1], state[i, RIGHT + 2])
                 plan_path[count], plan_s[count], plan_twin[count] = 2, s_first, -1
                 plan_path[count + 1], plan_s[count + 1], plan_twin[count + 1] = 2, s_second, count
                 plan_end[count] = plan_end[count + 1] = False
@@ -655,7 +650,8 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 x, y, dx, dy = shape[t, 1], shape[t, 2], 0.0, 0.0
                 col = 0
             else:
-                x, y, dx, dy = _path(kind, tri, t, paths[which], plan_s[j])
+                x, y, dx, dy = _path(kind, v, steep if which == 0 else
+                                     (bundle if which == 1 else search), plan_s[j])
                 if plan_end[j]:
                     dx, dy = end_dx, end_dy
                 if which == 0:
@@ -668,9 +664,29 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 cand[n, 0], cand[n, 1], cand[n, 2], cand[n, 3], cand[n, 4] = 0.0, x, y, 0.0, 0.0
                 cand_i[n, 0], cand_i[n, 1] = 0, shared_source
             else:
+                # Candidate n. One at b, at a vertex of the triangle whose value is
+                # known, or at the same point and derivative as its twin (the same
+                # rung of the other ladder, or the previous rung past the end of a
+                # path) reuses that value instead of adding a point.
                 twin = start + plan_twin[j] if plan_twin[j] >= 0 else -1
-                u = _candidate(kind, tri, t, corner, state, i, x, y, dx, dy, plan_s[j], col,
-                               twin, n, u, cand, cand_i, points)
+                cand[n, 0], cand[n, 1], cand[n, 2], cand[n, 3], cand[n, 4] = \
+                    plan_s[j], x, y, dx, dy
+                cand_i[n, 0] = col
+                source = u
+                if x == state[i, BEST] and y == state[i, BEST + 1]:
+                    source = AT_BEST
+                else:
+                    for k in range(3 if kind == TRIANGLE else 0):
+                        if x == v[2 * k] and y == v[2 * k + 1] and not math.isnan(corner[t, k, 0]):
+                            source = AT_CORNER - k
+                            break
+                    if (source == u and twin >= 0 and x == cand[twin, 1] and y == cand[twin, 2]
+                            and dx == cand[twin, 3] and dy == cand[twin, 4]):
+                        source = cand_i[twin, 1]
+                cand_i[n, 1] = source
+                if source == u:
+                    points[u, 0], points[u, 1] = x, y
+                    u += 1
                 if which < 0:
                     shared_t, shared_source = t, cand_i[n, 1]
             n += 1
@@ -697,7 +713,6 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
     seen = np.empty((N_COLUMNS + 2, 5))                 # planes: point, value, gradient
     samples = np.empty((2, N_RUNGS + 1, 3))             # per ladder: s, value, slope
     rungs = np.empty(2, dtype=np.int64)
-    steep = np.empty(8)
     kept = total = 0
     for i in running:
         count, offset = flags[i, COUNT], flags[i, OFFSET]
@@ -719,15 +734,15 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             if keep and value_m < phi_old - 4.0 * EPS * max(1.0, abs(phi_old)):
                 state[i, BEST], state[i, BEST + 1] = cand[offset, 1], cand[offset, 2]
                 state[i, PHI], state[i, GRAD], state[i, GRAD + 1] = value_m, gx, gy
-                state[i, ALT:ALT + 5] = state[i, BEST:BEST + 5]
+                for c in range(5):
+                    state[i, ALT + c] = state[i, BEST + c]
                 data[i, 0], data[i, 1] = gx, gy
                 size = 1.0 + abs(cand[offset, 1]) + abs(cand[offset, 2]) + abs(value_m)
                 keep = abs(value_m - shape[t, 3]) > shape_tol * size
         else:
-            table[:] = np.inf
-            slope[:] = 0.0
-            where[:] = -1
-            rungs[:] = 0
+            for c in range(N_COLUMNS):
+                table[c], slope[c], where[c] = np.inf, 0.0, -1
+            rungs[0] = rungs[1] = 0
             for j in range(offset, offset + count):
                 c, src = cand_i[j, 0], cand_i[j, 1]
                 where[c] = j
@@ -763,7 +778,11 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                                     and flags[i, ENDED] and slope[c] >= 0.0):
                         table[c] = np.inf
 
-            win = np.argmin(table)
+            win = 0                                     # np.argmin: the first NaN, or
+            for c in range(1, N_COLUMNS):               # the first minimum
+                if not math.isnan(table[win]) and (table[c] < table[win]
+                                                   or math.isnan(table[c])):
+                    win = c
             phi_win = table[win]
             rounding = 4.0 * EPS * max(1.0, abs(phi_old))
             improved = phi_win < phi_old - rounding
@@ -811,11 +830,12 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 lk = k if down else k - 1
                 rk = min(k + 1 if down else k, rungs[ladder])
                 if ladder == 0:
-                    _steep_path(kind, state, data, i, state[i, PATH:PATH + 8])
+                    _store_path(state, i, _steep_path(kind, state, data, i))
                 else:
-                    _bundle_path(state, i, state[i, PATH:PATH + 8])
-                state[i, LEFT:LEFT + 3] = samples[ladder, lk]
-                state[i, RIGHT:RIGHT + 3] = samples[ladder, rk]
+                    _store_path(state, i, _bundle_path(state, i))
+                for c in range(3):
+                    state[i, LEFT + c] = samples[ladder, lk, c]
+                    state[i, RIGHT + c] = samples[ladder, rk, c]
                 open_end = down and k == rungs[ladder]
                 has = not open_end
                 new_sigma = samples[ladder, k, 0] * (LADDER[-1] if open_end else 1.0)
@@ -825,9 +845,10 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 new_sigma = scale / SHRINK
             elif not improved:
                 # (d) No decrease: search finely around b on the steepest path next round.
-                _steep_path(kind, state, data, i, state[i, PATH:PATH + 8])
-                state[i, LEFT:LEFT + 3] = samples[0, 0]
-                state[i, RIGHT:RIGHT + 3] = samples[0, 1]
+                _store_path(state, i, _steep_path(kind, state, data, i))
+                for c in range(3):
+                    state[i, LEFT + c] = samples[0, 0, c]
+                    state[i, RIGHT + c] = samples[0, 1, c]
                 has = d0 < 0.0
                 new_sigma = scale / SHRINK
 
@@ -844,8 +865,9 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 new_phi, new_gx, new_gy = phi_win, seen[win, 3], seen[win, 4]
             else:
                 new_phi, new_gx, new_gy = phi_old, state[i, GRAD], state[i, GRAD + 1]
-            seen[N_COLUMNS, :] = state[i, BEST:BEST + 5]
-            seen[N_COLUMNS + 1, :] = state[i, ALT:ALT + 5]
+            for c in range(5):
+                seen[N_COLUMNS, c] = state[i, BEST + c]
+                seen[N_COLUMNS + 1, c] = state[i, ALT + c]
             ux, uy = _unit(new_gx, new_gy)
             reach2 = max(scale, new_sigma) ** 2
             pick, error = -1, np.inf
@@ -863,7 +885,8 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 if e < error:
                     pick, error = c, e
             if pick >= 0:
-                state[i, ALT:ALT + 5] = seen[pick]
+                for c in range(5):
+                    state[i, ALT + c] = seen[pick, c]
             else:
                 state[i, ALT], state[i, ALT + 1], state[i, ALT + 2] = new_x, new_y, new_phi
                 state[i, ALT + 3], state[i, ALT + 4] = new_gx, new_gy
@@ -874,7 +897,8 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 state[i, GRAD], state[i, GRAD + 1] = new_gx, new_gy
                 src = cand_i[w, 1]
                 if src >= 0:
-                    data[i, :] = cand_data[src]
+                    for c in range(data.shape[1]):
+                        data[i, c] = cand_data[src, c]
                 elif src <= AT_CORNER:
                     data[i, 0], data[i, 1] = new_gx, new_gy
             flags[i, BRACKETED] = has and state[i, RIGHT] > state[i, LEFT]
@@ -883,8 +907,8 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             flags[i, HAS_PREVIOUS] = improved
             keep = flags[i, FAILS] < 2 and not (improved and moved < tol)
         if keep:
-            _steep_path(kind, state, data, i, steep)
-            if _moving(kind, tri, t, steep, state[i, SIGMA])[0]:
+            steep = _steep_path(kind, state, data, i)
+            if _moving(kind, _vertices(tri, t), steep, state[i, SIGMA])[0]:
                 running[kept] = i
                 kept += 1
                 total += _most_candidates(kind, owner, shape, state, flags, i)
@@ -1016,7 +1040,7 @@ def _cuts(tri: np.ndarray, t: int, points: np.ndarray, phi: np.ndarray, grad: np
                     continue
                 eb = planes[q, 0] - planes[j, 0]
                 x, y = (-da * ey - eb * dgy) / det, (dgx * eb + ex * da) / det
-                qx, qy, _, _ = project(tri, t, x, y, 0.0, 0.0)
+                qx, qy, _, _ = project(_vertices(tri, t), x, y, 0.0, 0.0)
                 if qx == x and qy == y:
                     value = _model_value(planes, m, x, y)
                     if value < best:
@@ -1087,7 +1111,7 @@ def triangle_known(tri: np.ndarray, at_vertex: np.ndarray, points: np.ndarray,
                     and abs(phi[i] - d - offset) <= tol * size)
         if cone:
             shape[t, 0] = CONE
-            shape[t, 1], shape[t, 2], _, _ = project(tri, t, cx, cy, 0.0, 0.0)
+            shape[t, 1], shape[t, 2], _, _ = project(_vertices(tri, t), cx, cy, 0.0, 0.0)
             shape[t, 3] = offset + _norm(shape[t, 1] - cx, shape[t, 2] - cy)
             continue
         if convex and _cuts(tri, t, points, phi, grad, o, n_start, tol * size, shape):
@@ -1107,7 +1131,8 @@ def initialize(points: np.ndarray, phi: np.ndarray, grad: np.ndarray, sigma: np.
             flags[i, c] = 0
         state[i, BEST], state[i, BEST + 1], state[i, PHI] = points[i, 0], points[i, 1], phi[i]
         state[i, GRAD], state[i, GRAD + 1] = grad[i, 0], grad[i, 1]
-        state[i, ALT:ALT + 5] = state[i, BEST:BEST + 5]
+        for c in range(5):
+            state[i, ALT + c] = state[i, BEST + c]
         state[i, SIGMA] = sigma[i]
         state[i, PREVIOUS], state[i, PREVIOUS + 1] = points[i, 0], points[i, 1]
         state[i, PREVIOUS + 2] = state[i, PREVIOUS + 3] = 0.0
