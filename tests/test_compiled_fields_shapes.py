@@ -216,6 +216,7 @@ def _points(f) -> np.ndarray:
 
 
 def _check(spec, points=None):
+    """Compiled vs numpy at ``points`` (default ``_points(f)``; they start with POINTS)."""
     f = field(spec)
     assert compiled.compile_field(f) is not None
     p = _points(f) if points is None else points
@@ -229,6 +230,7 @@ def _check(spec, points=None):
         grad_atol = BEZIER_GRAD_ATOL if "quadratic_bezier" in repr(spec) else ATOL
         np.testing.assert_allclose(value, expected_value, rtol=0.0, atol=ATOL)
         off = np.abs(grad - expected_grad).max(axis=1) > grad_atol
+        assert not np.any(off[:len(POINTS)])            # random points: all within grad_atol
         assert np.all(_ill_conditioned(f, p[off])), p[off][~_ill_conditioned(f, p[off])]
         if f.exact:
             np.testing.assert_allclose(np.hypot(grad[:, 0], grad[:, 1]), 1.0, atol=1e-9)
@@ -300,7 +302,7 @@ def test_ellipse_near_its_axes_and_evolute():
         if size[1] > size[0]:
             evolute = evolute[:, ::-1]
         _check({"type": "ellipse", "size": size},
-               np.concatenate([major, evolute, 1.0001 * evolute, 0.9999 * evolute]))
+               np.concatenate([POINTS, major, evolute, 1.0001 * evolute, 0.9999 * evolute]))
 
 
 def test_scenes_fields_now_compile():
