@@ -62,6 +62,13 @@ def _grown(rows: np.ndarray, n: int) -> np.ndarray:
     return np.empty((max(n, 2 * rows.shape[0]), rows.shape[1]), dtype=rows.dtype)
 
 
+#: Points per field evaluation inside ``_evaluate``: the program's work arrays stay in
+#: the cache, and a round's thousands of points need no large fresh arrays (their
+#: page faults cost more than the evaluation). Each point's result does not depend
+#: on the batch it is in.
+_CHUNK = 256
+
+
 @njit(cache=True, error_model="numpy")
 def _evaluate(kind: int, code_a: np.ndarray, consts_a: np.ndarray, depth_a: int,
               nesting_a: int, code_b: np.ndarray, consts_b: np.ndarray, depth_b: int,
@@ -71,38 +78,44 @@ def _evaluate(kind: int, code_a: np.ndarray, consts_a: np.ndarray, depth_a: int,
     """The problem at points[:n] (of pairs pair[:n], PAIR): phi, grad phi, data rows.
 
     The operations are those of ``descent._PairProblem.values`` / ``evaluate``
-    (``_times`` writes v @ M as v_x M_0j + v_y M_1j).
+    (``_times`` writes v @ M as v_x M_0j + v_y M_1j), in chunks of ``_CHUNK`` points.
     """
-    stack, frames, cur = scratch(depth_a, nesting_a, n)
-    fa, ga = np.empty(n), np.empty((n, 2))
-    run(code_a, consts_a, points, n, stack, frames, cur, fa, ga)
-    if kind == TRIANGLE:
-        for j in range(n):
-            phi[j], grad[j, 0], grad[j, 1] = fa[j], ga[j, 0], ga[j, 1]
-            data[j, 0], data[j, 1] = ga[j, 0], ga[j, 1]
-        return
-    q = np.empty((n, 2))
-    for j in range(n):
-        k = pair[j]
-        px, py = points[j, 0] - offset[k, 0], points[j, 1] - offset[k, 1]
-        q[j, 0] = px * rotation[k, 0, 0] + py * rotation[k, 1, 0]
-        q[j, 1] = px * rotation[k, 0, 1] + py * rotation[k, 1, 1]
-    stack, frames, cur = scratch(depth_b, nesting_b, n)
-    fb, gb = np.empty(n), np.empty((n, 2))
-    run(code_b, consts_b, q, n, stack, frames, cur, fb, gb)
-    for j in range(n):
-        k = pair[j]
-        r00, r01, r10, r11 = rotation[k, 0, 0], rotation[k, 0, 1], rotation[k, 1, 0], \
-            rotation[k, 1, 1]
-        gax, gay = ga[j, 0], ga[j, 1]
-        gbx = gb[j, 0] * r00 + gb[j, 1] * r01                       # times the transpose
-        gby = gb[j, 0] * r10 + gb[j, 1] * r11
-        data[j, 0], data[j, 1], data[j, 2], data[j, 3], data[j, 4], data[j, 5] = \
-            fa[j], fb[j], gax, gay, gbx, gby
-        sign = 1.0 if fa[j] >= fb[j] else -1.0
-        phi[j] = 0.5 * (fa[j] + fb[j]) + IMBALANCE * abs(fa[j] - fb[j])
-        grad[j, 0] = 0.5 * (gax + gbx) + (IMBALANCE * sign) * (gax - gbx)
-        grad[j, 1] = 0.5 * (gay + gby) + (IMBALANCE * sign) * (gay - gby)
+    size = min(n, _CHUNK)
+    stack_a, frames_a, cur_a = scratch(depth_a, nesting_a, size)
+    fa, ga = np.empty(size), np.empty((size, 2))
+    if kind != TRIANGLE:
+        stack_b, frames_b, cur_b = scratch(depth_b, nesting_b, size)
+    else:
+        stack_b, frames_b, cur_b = stack_a, frames_a, cur_a
+    q, fb, gb = np.empty((size, 2)), np.empty(size), np.empty((size, 2))
+    for lo in range(0, n, _CHUNK):
+        m = min(n - lo, _CHUNK)
+        run(code_a, consts_a, points[lo:lo + m], m, stack_a, frames_a, cur_a, fa, ga)
+        if kind == TRIANGLE:
+            for j in range(m):
+                phi[lo + j], grad[lo + j, 0], grad[lo + j, 1] = fa[j], ga[j, 0], ga[j, 1]
+                data[lo + j, 0], data[lo + j, 1] = ga[j, 0], ga[j, 1]
+            continue
+        for j in range(m):
+            k = pair[lo + j]
+            px, py = points[lo + j, 0] - offset[k, 0], points[lo + j, 1] - offset[k, 1]
+            q[j, 0] = px * rotation[k, 0, 0] + py * rotation[k, 1, 0]
+            q[j, 1] = px * rotation[k, 0, 1] + py * rotation[k, 1, 1]
+        run(code_b, consts_b, q, m, stack_b, frames_b, cur_b, fb, gb)
+        for j in range(m):
+            i = lo + j
+            k = pair[i]
+            r00, r01, r10, r11 = rotation[k, 0, 0], rotation[k, 0, 1], rotation[k, 1, 0], \
+                rotation[k, 1, 1]
+            gax, gay = ga[j, 0], ga[j, 1]
+            gbx = gb[j, 0] * r00 + gb[j, 1] * r01                   # times the transpose
+            gby = gb[j, 0] * r10 + gb[j, 1] * r11
+            data[i, 0], data[i, 1], data[i, 2], data[i, 3], data[i, 4], data[i, 5] = \
+                fa[j], fb[j], gax, gay, gbx, gby
+            sign = 1.0 if fa[j] >= fb[j] else -1.0
+            phi[i] = 0.5 * (fa[j] + fb[j]) + IMBALANCE * abs(fa[j] - fb[j])
+            grad[i, 0] = 0.5 * (gax + gbx) + (IMBALANCE * sign) * (gax - gbx)
+            grad[i, 1] = 0.5 * (gay + gby) + (IMBALANCE * sign) * (gay - gby)
 
 
 @njit(cache=True, error_model="numpy")

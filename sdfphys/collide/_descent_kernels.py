@@ -136,6 +136,19 @@ AT_CORNER = -2
 # seconds at a cold start.
 
 @njit(cache=True, inline="always", error_model="numpy")
+def _max(a, b):
+    """The builtin max(a, b) (b if b > a else a: the first of a tie or of a NaN),
+    inlined: numba calls its overload of max as a function."""
+    return b if b > a else a  # noqa: FURB136 (max() would be a call)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _min(a, b):
+    """The builtin min(a, b) (b if b < a else a), inlined."""
+    return b if b < a else a  # noqa: FURB136 (min() would be a call)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def _sign(x: float) -> float:
     """np.sign of a float: -1, 0 or +1 (NaN stays NaN)."""
     if x > 0.0:
@@ -160,7 +173,7 @@ def _proximal_step(f1: float, f2: float, g1x: float, g1y: float, g2x: float, g2y
     else:
         lam = ((gap / tau if tau > 0.0 else _sign(gap) * np.inf) - g2w) / ww
         free = lam > 0.0 and lam < 1.0
-        lam = min(max(lam, 0.0), 1.0)
+        lam = _min(_max(lam, 0.0), 1.0)
     dx = lam * g1x + (1.0 - lam) * g2x
     dy = lam * g1y + (1.0 - lam) * g2y
     if free:
@@ -200,7 +213,7 @@ def _project_edges(v: tuple, x: float, y: float, ux: float, uy: float
         px, py = v[2 * k], v[2 * k + 1]
         nx, ny = v[2 * ((k + 1) % 3)], v[2 * ((k + 1) % 3) + 1]
         ex, ey = nx - px, ny - py
-        along = ((x - px) * ex + (y - py) * ey) / max(ex * ex + ey * ey, TINY)
+        along = ((x - px) * ex + (y - py) * ey) / _max(ex * ex + ey * ey, TINY)
         if along <= 0.0:
             fx, fy, fdx, fdy = px, py, 0.0, 0.0
         elif along >= 1.0:
@@ -283,10 +296,10 @@ def _ray_end(v: tuple, bx: float, by: float, ux: float, uy: float
         ue = ux * ex + uy * ey
         if ue < 0.0:
             if be / -ue > end:
-                slide = ue / max(ex * ex + ey * ey, TINY)
+                slide = ue / _max(ex * ex + ey * ey, TINY)
                 end, dx, dy = be / -ue, slide * ex, slide * ey
         else:
-            cross = -((bx - vx) * ux + (by - vy) * uy) / max(ux * ux + uy * uy, TINY)
+            cross = -((bx - vx) * ux + (by - vy) * uy) / _max(ux * ux + uy * uy, TINY)
             if cross > end:
                 end, dx, dy = cross, ux, uy
     return end, dx, dy
@@ -327,7 +340,7 @@ def _bundle_free(v: tuple, p: tuple, probe: float) -> bool:
     """
     g1x, g1y, g2x, g2y = p[4], p[5], p[6], p[7]
     wx, wy = g1x - g2x, g1y - g2y
-    ww = max(wx * wx + wy * wy, TINY)
+    ww = _max(wx * wx + wy * wy, TINY)
     g2w = (g2x * wx + g2y * wy) / ww
     for which in range(2):
         if which == 0:
@@ -359,7 +372,7 @@ def _steep_path(kind: int, state: np.ndarray, data: np.ndarray, i: int) -> tuple
 def _bundle_path(state: np.ndarray, i: int) -> tuple:
     """The bundle path from b (8 floats): b's linearisation and the second plane,
     capped at phi(b)."""
-    cap = min(state[i, ALT + 2] + state[i, ALT + 3] * (state[i, BEST] - state[i, ALT])
+    cap = _min(state[i, ALT + 2] + state[i, ALT + 3] * (state[i, BEST] - state[i, ALT])
               + state[i, ALT + 4] * (state[i, BEST + 1] - state[i, ALT + 1]), state[i, PHI])
     return (state[i, BEST], state[i, BEST + 1], state[i, PHI], cap, state[i, GRAD],
             state[i, GRAD + 1], state[i, ALT + 3], state[i, ALT + 4])
@@ -391,7 +404,7 @@ def _stationarity(kind: int, data: np.ndarray, i: int) -> float:
         return 0.0
     wx, wy = data[i, 2] - data[i, 4], data[i, 3] - data[i, 5]
     mx, my = 0.5 * (data[i, 2] + data[i, 4]), 0.5 * (data[i, 3] + data[i, 5])
-    ww = max(wx * wx + wy * wy, TINY)
+    ww = _max(wx * wx + wy * wy, TINY)
     c = (mx * wx + my * wy) / ww
     return abs(data[i, 0] - data[i, 1]) + _norm(mx - c * wx, my - c * wy)
 
@@ -440,9 +453,9 @@ def _model_steps(sl: float, pl: float, dl: float, sr: float, pr: float, dr: floa
     if not math.isfinite(second):
         second = mid
     lo, hi = sl + GUARD * w, sr - GUARD * w
-    first = min(max(first, lo), hi)
-    second = min(max(second, lo), hi)
-    return min(first, second), max(first, second)
+    first = _min(_max(first, lo), hi)
+    second = _min(_max(second, lo), hi)
+    return _min(first, second), _max(first, second)
 
 
 # --------------------------------------------------------------------------------------
@@ -576,7 +589,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                     bb = (sx * sx + sy * sy) / curvature
                     if not math.isfinite(bb):
                         bb = sigma
-                    scale = min(max(bb, sigma / BB_RANGE), sigma * BB_RANGE)
+                    scale = _min(_max(bb, sigma / BB_RANGE), sigma * BB_RANGE)
                 state[i, PREVIOUS], state[i, PREVIOUS + 1] = state[i, BEST], state[i, BEST + 1]
                 state[i, PREVIOUS + 2], state[i, PREVIOUS + 3] = vx, vy
             state[i, SCALE] = scale
@@ -616,7 +629,7 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 if end > END_REACH * scale and code != PLANE:
                     end = np.inf
             for k in range(N_RUNGS if ladders else 0):
-                s = min(scale * LADDER[k] if k < N_RUNGS - 1 and code != PLANE else end, end)
+                s = _min(scale * LADDER[k] if k < N_RUNGS - 1 and code != PLANE else end, end)
                 if not math.isfinite(s):
                     break
                 plan_path[count], plan_s[count], plan_twin[count] = 0, s, -1
@@ -731,7 +744,7 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 value_m, gx, gy = corner[t, v, 0], corner[t, v, 1], corner[t, v, 2]
             elif src >= 0:
                 value_m, gx, gy = value[src], gradient[src, 0], gradient[src, 1]
-            if keep and value_m < phi_old - 4.0 * EPS * max(1.0, abs(phi_old)):
+            if keep and value_m < phi_old - 4.0 * EPS * _max(1.0, abs(phi_old)):
                 state[i, BEST], state[i, BEST + 1] = cand[offset, 1], cand[offset, 2]
                 state[i, PHI], state[i, GRAD], state[i, GRAD + 1] = value_m, gx, gy
                 for c in range(5):
@@ -784,7 +797,7 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                                                    or math.isnan(table[c])):
                     win = c
             phi_win = table[win]
-            rounding = 4.0 * EPS * max(1.0, abs(phi_old))
+            rounding = 4.0 * EPS * _max(1.0, abs(phi_old))
             improved = phi_win < phi_old - rounding
             if not improved and kind != TRIANGLE:
                 # Near a smooth minimum phi stops changing in double precision long
@@ -814,7 +827,7 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                         end = LEFT if slope[c] < 0.0 and table[c] <= state[i, LEFT + 1] else RIGHT
                         state[i, end], state[i, end + 1], state[i, end + 2] = s, table[c], slope[c]
                 if improved and win >= COLUMN_MODEL:
-                    new_sigma = max(moved, 0.25 * scale)
+                    new_sigma = _max(moved, 0.25 * scale)
             # A continued line search whose models failed to halve the bracket gets
             # ladders again next round (the bracket holds more than one kink or bend).
             flags[i, SLOW] = rungs[0] == 0 and state[i, RIGHT] - state[i, LEFT] > 0.5 * width
@@ -828,7 +841,7 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 k = win - ladder * N_RUNGS + 1
                 down = samples[ladder, k, 2] < 0.0
                 lk = k if down else k - 1
-                rk = min(k + 1 if down else k, rungs[ladder])
+                rk = _min(k + 1 if down else k, rungs[ladder])
                 if ladder == 0:
                     _store_path(state, i, _steep_path(kind, state, data, i))
                 else:
@@ -869,7 +882,7 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 seen[N_COLUMNS, c] = state[i, BEST + c]
                 seen[N_COLUMNS + 1, c] = state[i, ALT + c]
             ux, uy = _unit(new_gx, new_gy)
-            reach2 = max(scale, new_sigma) ** 2
+            reach2 = _max(scale, new_sigma) ** 2
             pick, error = -1, np.inf
             for c in range(N_COLUMNS + 2):
                 if c < N_COLUMNS and not math.isfinite(table[c]):
@@ -902,7 +915,7 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 elif src <= AT_CORNER:
                     data[i, 0], data[i, 1] = new_gx, new_gy
             flags[i, BRACKETED] = has and state[i, RIGHT] > state[i, LEFT]
-            state[i, SIGMA] = max(new_sigma, TINY)
+            state[i, SIGMA] = _max(new_sigma, TINY)
             flags[i, FAILS] = 0 if improved else flags[i, FAILS] + 1
             flags[i, HAS_PREVIOUS] = improved
             keep = flags[i, FAILS] < 2 and not (improved and moved < tol)
@@ -938,10 +951,10 @@ def triangle_starts(tri: np.ndarray, weights: np.ndarray
         longest = 0.0
         for v in range(3):
             w = (v + 1) % 3
-            longest = max(longest, _norm(tri[t, w, 0] - tri[t, v, 0], tri[t, w, 1] - tri[t, v, 1]))
+            longest = _max(longest, _norm(tri[t, w, 0] - tri[t, v, 0], tri[t, w, 1] - tri[t, v, 1]))
         for k in range(n_start):
             i = t * n_start + k
-            owner[i], sigma[i] = t, max(longest, TINY)
+            owner[i], sigma[i] = t, _max(longest, TINY)
             points[i, 0] = points[i, 1] = 0.0
             for v in range(3):
                 corner = (weights[k, v] == 1.0 and weights[k, (v + 1) % 3] == 0.0
@@ -983,7 +996,7 @@ def _model_value(planes: np.ndarray, m: int, x: float, y: float) -> float:
     """max of the planes (m, 3) (value at the origin, gradient) at (x, y)."""
     top = -np.inf
     for j in range(m):
-        top = max(top, planes[j, 0] + planes[j, 1] * x + planes[j, 2] * y)
+        top = _max(top, planes[j, 0] + planes[j, 1] * x + planes[j, 2] * y)
     return top
 
 
@@ -1075,7 +1088,7 @@ def triangle_known(tri: np.ndarray, at_vertex: np.ndarray, points: np.ndarray,
         plane = True
         for k in range(1, n_start):
             i = o + k
-            size = max(size, 1.0 + abs(points[o, 0]) + abs(points[o, 1]) + abs(phi[o])
+            size = _max(size, 1.0 + abs(points[o, 0]) + abs(points[o, 1]) + abs(phi[o])
                        + abs(points[i, 0] - points[o, 0]) + abs(points[i, 1] - points[o, 1]))
             plane = plane and grad[i, 0] == grad[o, 0] and grad[i, 1] == grad[o, 1]
         for k in range(1, n_start):
