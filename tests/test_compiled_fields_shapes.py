@@ -375,3 +375,18 @@ def test_every_registered_primitive_is_tested_here_or_in_test_compiled_fields():
     own_loops = {"circle", "box", "rounded_box", "polygon", "half_plane", "segment", "capsule"}
     here = {spec["type"] for spec in PRIMITIVES.values() if "type" in spec}
     assert set(REGISTERED) == own_loops | here
+
+
+@pytest.mark.parametrize("name", sorted(PRIMITIVES))
+def test_a_point_gets_the_same_answer_alone_or_in_a_batch(name):
+    """Also batches of 0 and 1 points (the ellipse runs its solver over the batch)."""
+    f = field(PRIMITIVES[name])
+    p = np.concatenate([POINTS[:40], degenerate_points(f)[::25]])
+    value, grad = compiled.evaluate(f, p)
+    for i in range(len(p)):
+        v, g = compiled.evaluate(f, p[i])
+        assert v.shape == (1,) and g.shape == (1, 2)
+        np.testing.assert_array_equal(v[0], value[i])
+        np.testing.assert_array_equal(g[0], grad[i])
+    v, g = compiled.evaluate(f, np.zeros((0, 2)))
+    assert v.shape == (0,) and g.shape == (0, 2)

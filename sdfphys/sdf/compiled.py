@@ -27,9 +27,10 @@ Smooth blends and xor fold from the left as in ``operators.py``: operands
 
 What compiles: every registered primitive and operator. The primitives circle,
 box, rounded_box, polygon (mesh shapes' exact fields), half_plane, segment and
-capsule have their own loops in :func:`run`; the others go through ``_shape``, one
-point at a time: ellipse, arc, ring, pie, cut_disk, horseshoe, vesica, moon, egg,
-heart, uneven_capsule, quadratic_bezier (curved.py), star, oriented_box, rhombus,
+capsule have their own loops in :func:`run`, and so has the ellipse (its solver
+steps interleave the points); the others go through ``_shape``, one point at a
+time: arc, ring, pie, cut_disk, horseshoe, vesica, moon, egg, heart,
+uneven_capsule, quadratic_bezier (curved.py), star, oriented_box, rhombus,
 trapezoid, parallelogram and triangle (one CONVEX opcode), equilateral_triangle
 and isosceles_triangle (SYM_TRIANGLE), pentagon, hexagon, octagon and hexagram
 (MIRRORED), cross, rounded_cross (polygonal.py) and baked grids (``bake``,
@@ -88,9 +89,10 @@ XOR = 11            # binary fold
 SMOOTH = 12         # a = 0 union / 1 intersection / 2 difference, b = blend; consts: k
 ROUND = 13          # consts: r
 ONION = 14          # consts: thickness
-# Primitives evaluated point by point by ``_shape`` (every opcode from ELLIPSE on; each
-# pushes one entry). An "edge" below is 7 consts: ax, ay, ex, ey (e = b - a), e.e,
-# then the outward unit normal nx, ny.
+# More primitives (each pushes one entry): ELLIPSE runs its solver over the whole
+# batch (``_ellipse``), the opcodes after it are evaluated point by point by ``_shape``.
+# An "edge" below is 7 consts: ax, ay, ex, ey (e = b - a), e.e, then the outward unit
+# normal nx, ny.
 ELLIPSE = 15        # a = 1: axes swapped (taller than wide); consts: a, b (semi-axes, a >= b)
 ARC = 16            # consts: cx, cy (end direction), radius, half width
 RING = 17           # a = 1: full annulus; consts: cx, cy, radius, half width
@@ -472,49 +474,78 @@ def _sign(x: float) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def _ellipse(a: float, b: float, swap: int, px: float, py: float
-             ) -> tuple[float, float, float]:
-    """curved.Ellipse.evaluate: Eberly's closest point, 12 bisections, 6 Newton steps."""
+def _ellipse_terms(a: float, b: float, swap: int, px: float, py: float
+                   ) -> tuple[float, float]:
+    """Ellipse.evaluate's A = a |x|, B = b |y| (after the swap) of a point."""
     if swap:
         px, py = py, px
-    sx, sy = _sign(px), _sign(py)
-    x, y = abs(px), abs(py)
+    return a * abs(px), b * abs(py)
+
+
+@njit(cache=True, error_model="numpy")
+def _ellipse(a: float, b: float, swap: int, cur: np.ndarray, n: int, out: np.ndarray) -> None:
+    """curved.Ellipse.evaluate at cur[:n] into out: Eberly's closest point, 12
+    bisections, 6 Newton steps. Each step runs over all the points before the next
+    (as numpy does): the points' dependency chains of divisions and square roots
+    then overlap, 3.5x faster than one point at a time. out[:, 0] and out[:, 1]
+    hold lo and hi (then u) until the last pass; the axis rows (B = 0) run the
+    steps on the dummy bracket [1, 1], discarded, as in numpy."""
     e = a * a - b * b
-    big_a, big_b = a * x, b * y
-    if big_b > 0.0:
-        lo = max(big_b, big_a - e)
-        hi = math.hypot(big_a, big_b)
-        for _ in range(12):                             # Ellipse._BISECTIONS
+    for j in range(n):
+        big_a, big_b = _ellipse_terms(a, b, swap, cur[j, 0], cur[j, 1])
+        if big_b > 0.0:
+            out[j, 0] = max(big_b, big_a - e)
+            out[j, 1] = math.hypot(big_a, big_b)
+        else:
+            out[j, 0], out[j, 1] = 1.0, 1.0
+    for _ in range(12):                                 # Ellipse._BISECTIONS
+        for j in range(n):
+            big_a, big_b = _ellipse_terms(a, b, swap, cur[j, 0], cur[j, 1])
+            if not big_b > 0.0:
+                big_b = 1.0
+            lo, hi = out[j, 0], out[j, 1]
             mid = math.sqrt(lo) * math.sqrt(hi)
             fa = big_a / (mid + e)
             fb = big_b / mid
             if fa * fa + fb * fb - 1.0 >= 0.0:
-                lo = mid
+                out[j, 0] = mid
             else:
-                hi = mid
-        u = lo
-        for _ in range(6):                              # Ellipse._NEWTON
+                out[j, 1] = mid
+    for _ in range(6):                                  # Ellipse._NEWTON
+        for j in range(n):
+            big_a, big_b = _ellipse_terms(a, b, swap, cur[j, 0], cur[j, 1])
+            if not big_b > 0.0:
+                big_b = 1.0
+            u = out[j, 0]
             fx, fy = big_a / (u + e), big_b / u
-            n = math.hypot(fx, fy)
+            norm = math.hypot(fx, fy)
             slope = fx * fx / (u + e) + fy * fy / u
-            u = u + n * n * (n - 1.0) / slope
-        xc = a * big_a / (u + e)
-        yc = b * big_b / u
-    elif big_a < e:
-        xc = a * big_a / (e if e > 0.0 else 1.0)
-        r = xc / a
-        yc = b * math.sqrt(max(1.0 - r * r, 0.0))
-    else:
-        xc, yc = a, 0.0
-    dist = math.hypot(x - xc, y - yc)
-    ra, rb = x / a, y / b
-    gx, gy = _unit(xc / (a * a), yc / (b * b), 1.0, 0.0)
-    gx, gy = gx * sx, gy * sy
-    if swap:
-        gx, gy = gy, gx
-    if ra * ra + rb * rb < 1.0:
-        return -dist, gx, gy
-    return dist, gx, gy
+            out[j, 0] = u + norm * norm * (norm - 1.0) / slope
+    for j in range(n):
+        px, py = cur[j, 0], cur[j, 1]
+        if swap:
+            px, py = py, px
+        sx, sy = _sign(px), _sign(py)
+        x, y = abs(px), abs(py)
+        big_a, big_b = a * x, b * y
+        if big_b > 0.0:
+            u = out[j, 0]
+            xc = a * big_a / (u + e)
+            yc = b * big_b / u
+        elif big_a < e:
+            xc = a * big_a / (e if e > 0.0 else 1.0)
+            r = xc / a
+            yc = b * math.sqrt(max(1.0 - r * r, 0.0))
+        else:
+            xc, yc = a, 0.0
+        dist = math.hypot(x - xc, y - yc)
+        ra, rb = x / a, y / b
+        gx, gy = _unit(xc / (a * a), yc / (b * b), 1.0, 0.0)
+        gx, gy = gx * sx, gy * sy
+        if swap:
+            gx, gy = gy, gx
+        out[j, 0] = -dist if ra * ra + rb * rb < 1.0 else dist
+        out[j, 1], out[j, 2] = gx, gy
 
 
 @njit(cache=True, error_model="numpy")
@@ -753,8 +784,6 @@ def _grid(consts: np.ndarray, o: int, nx: int, ny: int, px: float, py: float
 def _shape(op: int, consts: np.ndarray, o: int, a: int, b: int, px: float, py: float
            ) -> tuple[float, float, float]:
     """Value and gradient at one point of the primitive instruction (op, o, a, b)."""
-    if op == ELLIPSE:
-        return _ellipse(consts[o], consts[o + 1], a, px, py)
     if op == ARC:
         cx, cy, r = consts[o], consts[o + 1], consts[o + 2]
         sx = _sign(px)
@@ -1089,7 +1118,10 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
             for j in range(n):
                 out[j, 0], out[j, 1], out[j, 2] = _segment(consts, o, cur[j, 0], cur[j, 1])
             sp += 1
-        elif op >= ELLIPSE:
+        elif op == ELLIPSE:
+            _ellipse(consts[o], consts[o + 1], a, cur, n, stack[sp])
+            sp += 1
+        elif op > ELLIPSE:
             out = stack[sp]
             for j in range(n):
                 out[j, 0], out[j, 1], out[j, 2] = _shape(op, consts, o, a, b, cur[j, 0],
