@@ -105,6 +105,9 @@ SWEEPS: dict[str, tuple[Any, ...]] = {
     "gradient": ("analytic", "central", "three_point", "angle_bisection"),
     "grid_cell": (0.05, 0.02, 0.01),
     "time_of_impact": (False, True),
+    "load_stiffening": (False, True),
+    "stiff_iterations": (1, 8, 64),
+    "stiff_island_limit": (0, 64),
 }
 
 #: Reduced sweeps of the quick bench.
@@ -492,6 +495,9 @@ def relevant_knobs(counts: dict[str, int], knobs: Sequence[str]) -> list[str]:
         "restitution_passes": "restitution" in ran,
         "time_of_impact": "time_of_impact" in ran,
     }
+    # Loaded islands (solver.row_softness): these knobs act only where extra passes ran.
+    rules.update(dict.fromkeys(("load_stiffening", "stiff_iterations", "stiff_island_limit"),
+                               "converge" in ran))
     rules.update(dict.fromkeys(_CONTACT_KNOBS, "solve" in ran))
     return [k for k in knobs if rules.get(k, True)]
 

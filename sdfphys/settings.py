@@ -68,6 +68,18 @@ class Settings:
     max_push_out: float = _knob(
         3.0, "m/s", "Cap on the speed at which overlap is removed (no popping).",
         low=0.0, low_open=True)
+    load_stiffening: bool = _knob(
+        True, "", "Stiffen the contacts of a body that carries more than its own weight "
+        "in proportion to that load, in islands of at most stiff_island_limit bodies: "
+        "a heavy box does not sink into a light one, tall stacks do not buckle.")
+    stiff_iterations: int = _knob(
+        64, "", "Solver passes per substep, at most, over islands with a mass ratio >= 4 "
+        "or a loaded body (they stop once converged); 1: one pass, as elsewhere.",
+        low=1, high=1024)
+    stiff_island_limit: int = _knob(
+        64, "", "Largest island (dynamic bodies in contact) that load stiffening and "
+        "the extra passes treat; larger ones keep one pass per substep.", low=0,
+        high=1_000_000_000)
     linear_slop: float = _knob(
         0.005, "m", "Length tolerance: contact reduction's merge distance; time of "
         "impact stops a fast body between 1 and 2 slop short of the obstacle.",

@@ -54,8 +54,9 @@ PAIR_STAGES = tuple(f"{a}_{b}" for a, b in PAIR_FUNCTIONS)
 
 #: The stages of ``World.step``, as counted in ``World.stage_counts``.
 STAGES = ("collide",) + PAIR_STAGES + (
-    "prepare", "integrate_velocities", "warm_start", "solve", "integrate_positions",
-    "relax", "friction", "restitution", "time_of_impact", "store_impulses")
+    "prepare", "integrate_velocities", "warm_start", "solve", "converge",
+    "integrate_positions", "relax", "friction", "restitution", "time_of_impact",
+    "store_impulses")
 
 # Per-body arrays: name -> (trailing shape, dtype). Capacity grows by doubling.
 _ARRAYS: dict[str, tuple[tuple[int, ...], Any]] = {
@@ -309,11 +310,14 @@ class World:
         return constraints
 
     def _substeps(self, constraints: ContactConstraints, bodies: BodyState) -> None:
-        """Stage 3: per substep integrate v, warm start, solve, integrate x, relax."""
+        """Stage 3: per substep integrate v, warm start, solve, integrate x, relax; loaded
+        islands (mass ratios, heavy loads: ``solver.row_softness``) get extra passes until
+        converged, counted one by one as ``converge``."""
         s = self.settings
         use_friction = bool(np.any(constraints.friction > 0.0))
-        solve_substeps(bodies, constraints, self.gravity, s, use_friction)
+        extra = solve_substeps(bodies, constraints, self.gravity, s, use_friction)
         counts = self.stage_counts
+        counts["converge"] += extra
         counts["integrate_velocities"] += s.substeps
         counts["integrate_positions"] += s.substeps
         if len(constraints):

@@ -343,7 +343,7 @@ def test_a_box_resting_on_a_box_keeps_its_warm_start_every_step(monkeypatch):
     def spy(bodies, constraints, *args):
         touching = constraints.separation < 0.0
         warm.append(constraints.normal_impulse[touching].copy())
-        real(bodies, constraints, *args)
+        return real(bodies, constraints, *args)
 
     monkeypatch.setattr(world_module, "solve_substeps", spy)
     world = World(gravity=(0.0, -9.81))

@@ -47,7 +47,9 @@ RATIO_SECONDS = 5.0
 
 
 def soft_sink(light: float, heavy: float, gravity: float = G) -> float:
-    """Predicted resting sink (m) of a unit box of ``heavy`` kg on one of ``light`` kg.
+    """Predicted resting sink (m) of a unit box of ``heavy`` kg on one of ``light`` kg
+    under the plain soft step (without load stiffening, which divides it by the light
+    box's load ratio, (heavy + light) / light: solver.row_softness).
 
     The soft step (solver.contact_softness, SOLVER.md) makes each contact point a
     spring of stiffness m_eff w^2, m_eff the point's effective mass along the normal and

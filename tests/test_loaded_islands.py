@@ -1,0 +1,183 @@
+"""Loaded islands (``solver.row_softness``): load stiffening and converged passes.
+
+The coefficients are checked against ``soft_coefficients`` of the scaled stiffness and
+damping (w sqrt(r), z sqrt(r)) on hand-made rows whose impulses carry known weights;
+the island rules (size limit, mass ratio, static bodies not joining islands) on small
+graphs; the behaviour on a heavy box resting on a light one, against the sag the
+stiffened springs predict; and "elsewhere bit for bit" on a scene with no loaded island.
+"""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import sdfphys.world as world_module
+from sdfphys.settings import Settings
+from sdfphys.solver import MASS_RATIO, contact_softness, row_softness, soft_coefficients
+from sdfphys.world import World
+
+G = np.array([0.0, -9.81])
+SETTINGS = Settings()
+H = SETTINGS.dt / SETTINGS.substeps
+HERTZ = min(SETTINGS.contact_hertz, 0.25 / H)
+ZETA = SETTINGS.contact_damping_ratio
+
+
+def rows(pairs, inv_mass, weights, normals=None):
+    """Hand-made constraints: one row per (a, b) pair, normal a -> b straight up unless
+    given, normal impulse = ``weights`` kg carried (per substep: w |g| h)."""
+    a = np.array([p[0] for p in pairs], np.int64)
+    b = np.array([p[1] for p in pairs], np.int64)
+    inv_mass = np.asarray(inv_mass, np.float64)
+    normal = np.tile([0.0, 1.0], (len(pairs), 1)) if normals is None else np.array(normals)
+    return inv_mass, SimpleNamespace(
+        body_a=a, body_b=b, feature=np.zeros(len(pairs), np.int64),
+        pair_start=np.arange(len(pairs) + 1, dtype=np.int64), normal=normal,
+        normal_impulse=np.asarray(weights, np.float64) * 9.81 * H,
+        stiff=((inv_mass[a] == 0.0) | (inv_mass[b] == 0.0)).astype(np.int64))
+
+
+def expected(r, static):
+    """soft_coefficients of a row whose spring and damper carry r times its mass."""
+    s = soft_coefficients((2.0 if static else 1.0) * HERTZ * math.sqrt(r), ZETA * math.sqrt(r), H)
+    return s.bias_rate, s.mass_scale, s.impulse_scale
+
+
+def test_a_stack_stiffens_each_row_by_the_weights_its_bodies_carry():
+    """Ground (static) under boxes of 1, 2 and 3 kg: the rows carry 6, 5 and 3 kg, so the
+    boxes carry 6, 2.5 and 1 times their weight (the 1 kg box is pushed down by 5 kg, the
+    2 kg one by 3 kg); each row takes its bodies' larger ratio."""
+    inv_mass, c = rows([(0, 1), (1, 2), (2, 3)], [0.0, 1.0, 0.5, 1.0 / 3.0], [6.0, 5.0, 3.0])
+    bias_rate, mass_scale, impulse_scale, loaded = row_softness(inv_mass, c, G, SETTINGS)
+    for k, (r, static) in enumerate([(6.0, True), (6.0, False), (2.5, False)]):
+        np.testing.assert_allclose([bias_rate[k], mass_scale[k], impulse_scale[k]],
+                                   expected(r, static), rtol=1e-12)
+    np.testing.assert_array_equal(loaded, [0, 1, 2])
+
+
+def test_unloaded_rows_keep_contact_softness_bit_for_bit():
+    """Boxes side by side on the ground, each carrying its own weight: no loaded island."""
+    inv_mass, c = rows([(0, 1), (0, 2), (1, 2)], [0.0, 1.0, 1.0], [1.0, 1.0, 0.0],
+                       normals=[[0.0, 1.0], [0.0, 1.0], [1.0, 0.0]])
+    bias_rate, mass_scale, impulse_scale, loaded = row_softness(inv_mass, c, G, SETTINGS)
+    soft, stiff = contact_softness(SETTINGS)
+    assert list(bias_rate) == [stiff.bias_rate, stiff.bias_rate, soft.bias_rate]
+    assert list(mass_scale) == [stiff.mass_scale, stiff.mass_scale, soft.mass_scale]
+    assert list(impulse_scale) == [stiff.impulse_scale, stiff.impulse_scale, soft.impulse_scale]
+    assert len(loaded) == 0
+
+
+def test_islands_larger_than_the_limit_are_left_alone():
+    inv_mass, c = rows([(0, 1), (1, 2), (2, 3)], [0.0, 1.0, 1.0, 1.0], [3.0, 2.0, 1.0])
+    small = row_softness(inv_mass, c, G, SETTINGS.with_values(stiff_island_limit=3))
+    large = row_softness(inv_mass, c, G, SETTINGS.with_values(stiff_island_limit=2))
+    assert len(small[3]) == 3 and small[2][0] < contact_softness(SETTINGS)[1].impulse_scale
+    assert len(large[3]) == 0 and large[2][0] == contact_softness(SETTINGS)[1].impulse_scale
+
+
+def test_static_bodies_do_not_join_islands():
+    """Two 3-box stacks on one ground: two islands of 3 (limit 3 treats both), not one of 6."""
+    inv_mass, c = rows([(0, 1), (0, 4), (1, 2), (2, 3), (4, 5), (5, 6)],
+                       [0.0] + [1.0] * 6, [3.0, 3.0, 2.0, 1.0, 2.0, 1.0])
+    loaded = row_softness(inv_mass, c, G, SETTINGS.with_values(stiff_island_limit=3))[3]
+    np.testing.assert_array_equal(loaded, np.arange(6))
+
+
+def test_a_mass_ratio_loads_its_island_even_without_gravity():
+    """No gravity, no load: the coefficients stay contact_softness's, but an island with
+    touching masses MASS_RATIO apart gets the extra passes; one below it does not."""
+    for ratio, is_loaded in [(MASS_RATIO, True), (0.99 * MASS_RATIO, False)]:
+        inv_mass, c = rows([(0, 1), (1, 2)], [1.0, 1.0, 1.0 / ratio], [0.0, 0.0],
+                           normals=[[1.0, 0.0], [1.0, 0.0]])
+        bias_rate, _, _, loaded = row_softness(inv_mass, c, np.zeros(2), SETTINGS)
+        assert list(bias_rate) == [contact_softness(SETTINGS)[0].bias_rate] * 2
+        assert len(loaded) == (2 if is_loaded else 0)
+
+
+def test_load_stiffening_off_keeps_the_plain_coefficients():
+    inv_mass, c = rows([(0, 1), (1, 2), (2, 3)], [0.0, 1.0, 0.5, 1.0 / 3.0], [6.0, 5.0, 3.0])
+    off = SETTINGS.with_values(load_stiffening=False)
+    bias_rate, _, _, loaded = row_softness(inv_mass, c, G, off)
+    soft, stiff = contact_softness(off)
+    assert list(bias_rate) == [stiff.bias_rate, soft.bias_rate, soft.bias_rate]
+    assert len(loaded) == 0         # masses 1, 2, 3: no neighbours MASS_RATIO apart
+
+
+def heavy_on_light(ratio: float, settings: Settings, seconds: float = 2.0) -> tuple[float, World]:
+    """The heavy box's sink (m) after ``seconds`` s: a unit box of ``ratio`` kg on a
+    1 kg unit box on the ground, both starting at rest, touching."""
+    world = World(gravity=tuple(G), settings=settings)
+    world.add_body({"type": "box", "size": [20.0, 2.0]}, position=(0.0, -1.0), kind="static")
+    world.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 0.5), mass=1.0,
+                   friction=0.6)
+    heavy = world.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 1.5),
+                           mass=float(ratio), friction=0.6)
+    for _ in range(round(seconds / settings.dt)):
+        world.step()
+    return 1.5 - float(world.position[heavy, 1]), world
+
+
+def soft_sag(ratio: float) -> float:
+    """The plain soft step's resting sag of the heavy box (tests/stability's soft_sink):
+    two corners per interface, a unit box corner's effective mass 1 / (2.5 / m), the
+    ground's springs at twice the hertz."""
+    w = 2.0 * math.pi * HERTZ
+    upper = 2.0 / (2.5 / 1.0 + 2.5 / ratio) * w * w
+    lower = 2.0 / 2.5 * (2.0 * w) ** 2
+    return ratio * 9.81 / upper + (ratio + 1.0) * 9.81 / lower
+
+
+def test_a_heavy_box_on_a_light_one_sags_as_under_its_own_weight():
+    """100:1: the light box carries 101 times its weight, so both interfaces' springs are
+    101 times stiffer and the sag is the plain soft sag / 101 (0.43 mm instead of 43.6),
+    within 2 % (the prediction takes the undeformed stack's lever arms)."""
+    sink, world = heavy_on_light(100.0, SETTINGS)
+    assert sink == pytest.approx(soft_sag(100.0) / 101.0, rel=0.02)
+    assert world.stage_counts["converge"] > 0
+
+
+def test_the_plain_soft_step_sags_under_the_load():
+    """The same stack with load_stiffening off and one pass per substep (the plain soft
+    step): the springs keep m w^2 and the heavy box sinks the plain soft sag (30 Hz:
+    43.6 mm), within 2 %."""
+    plain = SETTINGS.with_values(load_stiffening=False, stiff_iterations=1)
+    sink, _ = heavy_on_light(100.0, plain, seconds=5.0)
+    assert sink == pytest.approx(soft_sag(100.0), rel=0.02)
+
+
+def test_a_scene_without_loaded_islands_runs_bit_for_bit_as_the_plain_soft_step():
+    """Balls bouncing apart on the ground and boxes side by side: nothing carries more
+    than its weight, no masses MASS_RATIO apart touch, so turning the feature off changes
+    no bit of the trajectory and no extra pass runs."""
+    def run(settings):
+        world = World(gravity=tuple(G), settings=settings)
+        world.add_body({"type": "box", "size": [40.0, 2.0]}, position=(0.0, -1.0), kind="static")
+        for i in range(6):
+            world.add_body({"type": "circle", "radius": 0.4}, position=(-20.0 + 3.0 * i, 2.0 + i),
+                           restitution=0.5, friction=0.4)
+            world.add_body({"type": "box", "size": [1.0, 1.0]}, position=(2.0 + 1.5 * i, 0.6),
+                           mass=1.0 + 0.5 * i, friction=0.6)
+        for _ in range(180):
+            world.step()
+        return world
+
+    on = run(SETTINGS)
+    off = run(SETTINGS.with_values(load_stiffening=False, stiff_iterations=1))
+    np.testing.assert_array_equal(on.position, off.position)
+    np.testing.assert_array_equal(on.angle, off.angle)
+    assert on.stage_counts["converge"] == 0
+
+
+def test_stiff_iterations_one_runs_no_extra_pass(monkeypatch):
+    calls = []
+    real = world_module.solve_substeps
+
+    def spy(*args):
+        calls.append(real(*args))
+        return calls[-1]
+
+    monkeypatch.setattr(world_module, "solve_substeps", spy)
+    _, world = heavy_on_light(100.0, SETTINGS.with_values(stiff_iterations=1), seconds=0.5)
+    assert world.stage_counts["converge"] == 0 and set(calls) == {0}
