@@ -10,7 +10,9 @@ starts' evaluation, ``initialize``, ``triangle_known``, ``bound``, then rounds o
 programs evaluated per point in the same compiled code: a query costs one Python
 call whatever the number of rounds. The kernels and their arguments are those of
 the Python-driven loop, in the same order, so the results are the same (to the
-last bit where the programs round as numpy does, see ``sdf.compiled``).
+last bit where the programs round as numpy does, see ``sdf.compiled``). The
+field-field contacts' merges and patch search after the descent
+(``field_contacts``, ``patch_ends``) and two triangle helpers are compiled here too.
 
 Both problems of ``descent``:
 

@@ -22,9 +22,10 @@ placed, the same point on another rung) is not evaluated again. When the
 fields compile to stack-machine programs (``sdfphys.sdf.compiled``: the
 primitives and operators that mesh and scene shapes use), the whole loop runs
 inside ONE compiled call instead (``_compiled_descent``: the same kernels in
-the same order, the programs evaluated in between), as do the patch search of
-field-field contacts, ``merge_minima`` and the enclosing circles of
-``triangle_cull``; ``USE_COMPILED = False`` keeps the Python-driven loop, the
+the same order, the programs evaluated in between), as do everything of
+field-field contacts after their descent (merges and patch search:
+``_compiled_descent.field_contacts``), ``merge_minima`` and the enclosing circles
+of ``triangle_cull``; ``USE_COMPILED = False`` keeps the Python-driven loop, the
 reference the tests compare with (same results, to the bit where the programs
 round as numpy does).
 

@@ -26,8 +26,15 @@ Stages (derivations in each function's docstring):
    face near the end of a thin overlap strip: SAT's non-minimal axis). Mesh
    vertices are measured against the accepted planes.
 
-Field evaluations go through ``sdf.compiled`` (one numba call instead of a numpy
-pass per node of the field's tree) when the field compiles.
+When the other field compiles (``sdf.compiled``), the stages run in two compiled
+kernels around the descent, with the field's program evaluated inside them:
+``_place`` (the mesh in other's frame and ``descent.triangle_cull``) and
+``_finish`` (stages 1 after the descent to 4, the first row per key and the world
+frame), each stage's points still evaluated in one batch; a call then costs a
+fixed handful of Python calls, nothing per pair or candidate. Otherwise the
+numpy stages run (``_mesh_in_field_numpy``: the functions above, the reference
+the compiled kernels are tested against, bit for bit; ``USE_COMPILED = False``
+forces them).
 
 Keys (see ``narrowphase`` for the layout): descent minima keep (triangle, start
 id); a minimum at a mesh vertex, a vertex sample and a vertex measured against a

@@ -47,8 +47,11 @@ points when an sdf corner presses into a mesh face.
 Cost: one ``field_field_contacts`` call (each of its rounds one evaluation of each
 field for all pairs), then ``1 + REFINE_ROUNDS`` evaluations of the mesh field and
 ``SDF_CALLS`` of the sdf field for all contacts of all pairs; nothing is per pair or
-per contact in Python. The evaluations go through ``sdf.compiled`` (one numba call
-instead of one numpy call per node of the field's tree) when the field compiles.
+per contact in Python. When both fields compile (``sdf.compiled``), stages 2 and 3
+run in one compiled kernel (``_support``: the same batches, the programs evaluated
+inside it); otherwise in numpy (``_support_numpy``, with ``_deepest_on_sdf``,
+``_far_ends`` and ``_nearest_edges``: the reference the kernel is tested against,
+bit for bit; ``USE_COMPILED = False`` forces it).
 """
 
 from __future__ import annotations
