@@ -100,6 +100,16 @@ def _arc_box(radius: float, half_angle: float) -> np.ndarray:
     return np.array([-x, radius * math.cos(half_angle), x, radius])
 
 
+def _rows_dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot product of (N, 2) arrays (either may be a broadcast (2,)).
+
+    Written out rather than ``a @ b`` (as ``polygonal._rows_dot``): BLAS rounds a
+    row differently depending on its position in the batch, and a field must give
+    a point the same answer alone or among others.
+    """
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
+
+
 def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray]:
     """Unsigned distance (N,) from ``p`` to the segment ab and its gradient (N, 2).
@@ -112,7 +122,7 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray
     ba = b - a
     pa = p - a
     length2 = float(ba @ ba)
-    h = np.clip(pa @ ba / length2, 0.0, 1.0) if length2 > 0.0 else np.zeros(len(p))
+    h = np.clip(_rows_dot(pa, ba) / length2, 0.0, 1.0) if length2 > 0.0 else np.zeros(len(p))
     rel = pa - h[:, None] * ba
     left = safe_normalize(np.array([[-ba[1], ba[0]]]))[0]
     side = ba[0] * pa[:, 1] - ba[1] * pa[:, 0]
@@ -275,9 +285,9 @@ class Pie(Field):
         # -min(r - |p|, m) is minus the distance to the nearer of arc and edge.
         c = self.c
         normal = np.array([c[1], -c[0]])
-        beyond = q @ normal > 0.0
+        beyond = _rows_dot(q, normal) > 0.0
         s = np.where(beyond, 1.0, -1.0)
-        h = np.clip(q @ c, 0.0, r)
+        h = np.clip(_rows_dot(q, c), 0.0, r)
         rel = q - h[:, None] * c
         d_edge = s * _norm(rel)
         interior = (h > 0.0) & (h < r)
@@ -421,7 +431,7 @@ class Ring(Field):
         # As for the pie, max() is exact: the face lies in the annulus, and inside
         # the wedge the radial projections onto both circles are on the sector.
         normal = np.array([c[1], -c[0]])
-        u, v = q @ normal, q @ c
+        u, v = _rows_dot(q, normal), _rows_dot(q, c)
         s = np.where(u > 0.0, 1.0, -1.0)
         rel = np.column_stack([u, v - np.clip(v, r - w, r + w)])
         d_face = s * _norm(rel)
@@ -486,7 +496,7 @@ class Horseshoe(Field):
     def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q, sx = _fold_x(as_points(points))
         r, w, L, n, d = self.radius, self.half_width, self.length, self.n, self.d
-        u, v = q @ d, q @ n
+        u, v = _rows_dot(q, d), _rows_dot(q, n)
         sv = np.where(v >= r, 1.0, -1.0)
         # Leg: box distance (Quilez's sdBox) in the (u, |v - r|) frame.
         bx, by = u - L, np.abs(v - r) - w
@@ -879,8 +889,8 @@ class QuadraticBezier(Field):
         ap = self.a - p
         k3 = np.full(n, B @ B)
         k2 = np.full(n, 3.0 * (A @ B))
-        k1 = 2.0 * (A @ A) + ap @ B
-        k0 = ap @ A
+        k1 = 2.0 * (A @ A) + _rows_dot(ap, B)
+        k0 = _rows_dot(ap, A)
         lin = np.where(k1 != 0.0, -k0 / np.where(k1 != 0.0, k1, 1.0), 0.0)[:, None]
         if self.cubic:
             with np.errstate(over="ignore", invalid="ignore"):
@@ -911,7 +921,7 @@ class QuadraticBezier(Field):
         tangent = A + t[:, None] * B
         left = np.column_stack([-tangent[:, 1], tangent[:, 0]])
         normal = _unit(left, _unit(rel, _RIGHT))
-        side = np.where(np.einsum("ij,ij->i", rel, left) < 0.0, -1.0, 1.0)
+        side = np.where(_rows_dot(rel, left) < 0.0, -1.0, 1.0)
         near = dist * self.cross < 2.0 * _norm(tangent) ** 3
         interior = (t > 0.0) & (t < 1.0) & near
         g = _pick(interior, side[:, None] * normal, _unit(rel, normal))
