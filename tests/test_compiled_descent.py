@@ -121,6 +121,29 @@ def test_compiled_field_field_descent_equals_the_python_loop(name, monkeypatch):
             np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-12)
 
 
+def test_compiled_field_field_descent_in_blocks_equals_the_python_loop(monkeypatch):
+    """More starts than one block of ``_compiled_descent.descend`` (``_BLOCK``), with
+    per-start tolerances: the blocks give the one batch's results."""
+    from sdfphys.collide import _compiled_descent
+
+    a, b = (field(spec) for spec in PAIRS["smooth_union_box"])
+    rng = np.random.default_rng(11)
+    count = _compiled_descent._BLOCK // 5 + 300
+    poses = np.column_stack([rng.uniform(-1.5, 1.5, (count, 2)), rng.uniform(0.0, 6.0, count)])
+    pair_of = np.repeat(np.arange(count), 5)
+    problem = descent._PairProblem(a, b, descent._rotations(poses[:, 2]), poses[:, :2], pair_of)
+    starts = np.repeat(poses[:, :2], 5, axis=0) + rng.uniform(-0.8, 0.8, (5 * count, 2))
+    sigma = rng.uniform(0.1, 1.0, 5 * count)
+    tol = 1e-12 * np.repeat(rng.uniform(0.5, 3.0, count), 5)
+    tol[-5:] = 1e-13                                      # the smallest in the last block
+    monkeypatch.setattr(descent, "USE_COMPILED", True)
+    fast = descent._descend(problem, starts, 16, sigma, tol)
+    monkeypatch.setattr(descent, "USE_COMPILED", False)
+    slow = descent._descend(problem, starts, 16, sigma, tol)
+    for x, y in zip(fast, slow):
+        np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-12)
+
+
 def test_compiled_triangle_helpers_equal_the_numpy_ones(monkeypatch):
     rng = np.random.default_rng(9)
     tri = rng.uniform(-1.0, 1.0, (3000, 3, 2))
