@@ -8,10 +8,11 @@ Frames and units:
 - Bodies are drawn from their shapes (``sdfphys.shapes``): circles and
   triangulated polygons with ``pygame.draw``; SDF bodies as their true filled
   region ``f <= 0``, rasterized by evaluating the field at the pixel centres of
-  the body's screen bounding box in one numpy batch, with a one-pixel
-  antialiased edge taken from the distance value (coverage ``0.5 - f * scale``
-  clipped to ``[0, 1]``). Unbounded fields (a half-plane ground) are evaluated
-  over the visible screen, bounded ones with a narrow band (see
+  the body's screen bounding box in one batch (``sdf.compiled.distance``: the
+  compiled program, or ``field.distance`` for fields that do not compile), with
+  a one-pixel antialiased edge taken from the distance value (coverage
+  ``0.5 - f * scale`` clipped to ``[0, 1]``). Unbounded fields (a half-plane
+  ground) are evaluated over the visible screen, bounded ones with a narrow band (see
   ``Renderer._field_pixels``). Sprites of bodies that moved less than
   ``SPRITE_TOLERANCE`` px since the last frame (static bodies, bodies at rest) are
   reused.
@@ -33,6 +34,7 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import pygame
 
 from .collide.broadphase import world_bounds
+from .sdf import compiled
 
 __all__ = ["DYNAMIC", "KINEMATIC", "SPRITE_TOLERANCE", "STATIC", "BodyFrames", "Camera", "Overlays", "Palette",
            "Renderer", "body_frames"]
@@ -458,7 +460,7 @@ class Renderer:
         gap = np.concatenate(points) - com[owner]
         c, s = np.cos(angle)[owner], np.sin(angle)[owner]
         local = np.stack([c * gap[:, 0] + s * gap[:, 1], -s * gap[:, 0] + c * gap[:, 1]], 1)
-        d = field.distance(local) * self.camera.scale
+        d = compiled.distance(field, local) * self.camera.scale
         return np.split(d, np.cumsum(counts)[:-1])
 
     # ----------------------------------------------------------------------------------
@@ -555,7 +557,8 @@ def distance_map(frames: BodyFrames, xs: np.ndarray, ys: np.ndarray,
             d = np.hypot(dx[ii], dy[jj]) - r
         else:
             points = np.stack([xs[i0 + ii], y_up[j0 + jj]], axis=1)
-            d = shape.field.distance(_to_body(points, frames.com[b], frames.angle[b]))
+            d = compiled.distance(shape.field,
+                                  _to_body(points, frames.com[b], frames.angle[b]))
         block[ii, jj] = np.minimum(block[ii, jj], d)
     return best[:, ::-1] if flip else best
 

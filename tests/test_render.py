@@ -368,6 +368,48 @@ def test_distance_map_union_is_the_minimum_over_bodies(rng):
                                            [np.sin(frames.angle[2]), np.cos(frames.angle[2])]])))
 
 
+def test_compiled_fields_rasterize_as_the_numpy_fields(monkeypatch):
+    """Sprites and the distance map evaluate fields through ``sdf.compiled.distance``:
+    for kinds that round alike the pixels' distances are the numpy fields' bit for bit."""
+    import sdfphys.render as render_module
+
+    specs = [{"op": "smooth_union", "k": 0.8, "of": [
+                 {"type": "box", "size": [6.0, 1.0], "offset": [0.0, -0.5]},
+                 {"type": "circle", "radius": 1.0, "offset": [-2.0, -1.0]},
+                 {"type": "ellipse", "size": [2.5, 0.8], "offset": [2.0, 0.0]}]},
+             {"type": "ring", "half_angle": 2.0, "radius": 0.6, "thickness": 0.2},
+             {"type": "capsule", "a": [-0.5, 0.0], "b": [0.6, 0.3], "radius": 0.2},
+             {"type": "heart", "scale": 1.0, "offset": [0.1, -0.4], "angle": 0.3}]
+    bodies = []
+    for k, spec in enumerate(specs):
+        f = sdf.field(spec)
+        radius = float(np.max(np.abs(f.bounds()))) * 1.5
+        bodies.append((sdf_shape(f, radius), (-3.0 + 2.0 * k, 1.0 + 0.5 * k), 0.4 * k,
+                       "dynamic"))
+    frames = body_frames(make_world(bodies))
+    cam = Camera((0.0, 1.5), 40.0, (400, 240))
+    xs, ys = np.linspace(-6, 6, 97), np.linspace(4, -1, 51)
+
+    def pixels():
+        r = Renderer(cam)
+        out = []
+        for b in range(len(bodies)):
+            shape = frames.shapes[b]
+            rect = r._screen_rect(shape, frames.com[b], float(frames.angle[b]))
+            out += r._field_pixels(shape.field, frames.com[[b]], frames.angle[[b]], [rect])
+        return out, distance_map(frames, xs, ys)
+
+    got, got_map = pixels()
+    assert all(d is not None and d.size for d in got)
+    assert all(sdf.compiled.compile_field(shape.field) for shape, *_ in bodies)
+    monkeypatch.setattr(render_module, "compiled",
+                        SimpleNamespace(distance=lambda f, p: f.distance(p)))
+    expected, expected_map = pixels()
+    for a, b in zip(got, expected):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(got_map, expected_map)
+
+
 def test_import_sdfphys_does_not_import_pygame():
     code = "import sys, sdfphys; assert 'pygame' not in sys.modules, 'pygame imported'"
     subprocess.run([sys.executable, "-c", code], check=True)
