@@ -158,3 +158,34 @@ def test_bullets_never_pass_a_thin_wall_over_200_phases():
     same balls tunnel through (which shows the sweep exercises the failure)."""
     assert bullets(True) <= -0.05 + 1e-9
     assert bullets(False) > 10.0
+
+
+def test_distances_are_the_numpy_fields_bit_for_bit_and_fall_back():
+    """_distance runs the compiled programs: the numpy fields' values exactly (kinds
+    that round alike), and the numpy path for fields that do not compile."""
+    from sdfphys.sdf import field
+    from sdfphys.sdf.gradient import NumericGradientField
+    from sdfphys.toi import _distance
+
+    specs = [{"type": "box", "size": [1.0, 0.5]}, {"type": "circle", "radius": 0.3},
+             {"type": "capsule", "a": [-0.5, 0.0], "b": [0.5, 0.2], "radius": 0.1},
+             {"type": "ring", "half_angle": 1.0, "radius": 1.0, "thickness": 0.3},
+             {"op": "smooth_union", "k": 0.8, "of": [
+                 {"type": "box", "size": [26.0, 1.0], "offset": [0.0, -0.5]},
+                 {"type": "ellipse", "size": [5.0, 1.6], "offset": [5.0, 0.0]}]}]
+    fields = [field(s) for s in specs]
+    fields.append(NumericGradientField(field({"type": "heart", "scale": 1.0})))
+    rng = np.random.default_rng(4)
+    n_bodies = 9
+    shape_id = np.arange(n_bodies) % len(fields)
+    com = rng.uniform(-2.0, 2.0, (n_bodies, 2))
+    angle = rng.uniform(-3.0, 3.0, n_bodies)
+    target = rng.integers(0, n_bodies, 4000)
+    points = rng.uniform(-4.0, 4.0, (4000, 2))
+    d = _distance(fields, shape_id, com, angle, target, points)
+    rel = points - com[target]
+    c, s = np.cos(angle[target]), np.sin(angle[target])
+    local = np.column_stack([c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1]])
+    for k in range(n_bodies):
+        rows = target == k
+        np.testing.assert_array_equal(d[rows], fields[shape_id[k]].distance(local[rows]))
