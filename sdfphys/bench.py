@@ -108,6 +108,7 @@ SWEEPS: dict[str, tuple[Any, ...]] = {
     "load_stiffening": (False, True),
     "stiff_iterations": (1, 8, 64),
     "stiff_island_limit": (0, 64),
+    "large_island_load_cap": (1.0, 2.0, 4.0),
 }
 
 #: Reduced sweeps of the quick bench.
@@ -129,7 +130,7 @@ COLUMNS = ("scene", "answer", "setting", "group", "knob", "value", "error", "pos
            "ms_per_sim_s", "steps", "runs")
 
 _CONTACT_KNOBS = ("relax_passes", "contact_hertz", "contact_damping_ratio", "warm_starting",
-                  "speculative_distance", "contacts_per_pair")
+                  "speculative_distance", "contacts_per_pair", "large_island_load_cap")
 _SDF_PAIRS = ("circle_sdf", "mesh_sdf", "sdf_sdf")
 
 

@@ -80,6 +80,10 @@ class Settings:
         64, "", "Largest island (dynamic bodies in contact) that load stiffening and "
         "the extra passes treat; larger ones keep one pass per substep.", low=0,
         high=1_000_000_000)
+    large_island_load_cap: float = _knob(
+        2.0, "", "Islands larger than stiff_island_limit (one pass per substep): load "
+        "stiffening counts at most this many weights (1: none); stiffer rows there "
+        "would need the converged passes.", low=1.0, high=1e6)
     linear_slop: float = _knob(
         0.005, "m", "Length tolerance: contact reduction's merge distance; time of "
         "impact stops a fast body between 1 and 2 slop short of the obstacle.",

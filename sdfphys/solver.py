@@ -175,9 +175,16 @@ def contact_softness(settings: Settings) -> tuple[Softness, Softness]:
 # (static and kinematic bodies do not join islands). It is loaded if it has at most
 # ``Settings.stiff_island_limit`` dynamic bodies and two touching bodies whose masses
 # differ by MASS_RATIO or more, or (with load stiffening) a body carrying more than
-# LOADED times its weight. Larger islands (piles of thousands of circles) keep the plain
-# soft step: their cost stays one pass per substep. Elsewhere the rows' coefficients are
-# contact_softness's, bit for bit, and no extra pass runs.
+# LOADED times its weight. Larger islands (piles of thousands of circles) keep one pass
+# per substep, so their cost does not grow, and load stiffening counts at most
+# ``Settings.large_island_load_cap`` weights there: rows stiffer than that need the
+# converged passes. Measured on a base-20 pyramid of 210 unit boxes with exact box
+# contacts (tests/test_solver.py), top box moved in 20 s: 3.3 cm unstiffened, 1.8 cm
+# with a cap of 2, 1.2 cm with 3, 8.3 cm and drifting with 4; with sdfphys' own
+# contacts 41 cm uncapped. The cap is 2, half the unstable value. The 5,000-circle pile
+# of tools/bench_vs_pymunk.py: deepest overlap 0.114 -> 0.050 m with it. Bodies
+# carrying only their own weight keep contact_softness's coefficients, bit for bit,
+# and no extra pass runs.
 #
 # Measured (tests/stability, 30 Hz, 4 substeps, 60 Hz steps): heavy box sink 100:1
 # 62 -> 2 mm, 1000:1 crushed -> 9 mm, 400 kg dropped on two 1 kg boxes 218 -> 2 mm,
@@ -204,13 +211,15 @@ def _root(parent, i):
 @njit(cache=True)
 def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_impulse, stiff,
                          up, weight_impulse, omega, zeta, h, base_bias_rate, base_mass_scale,
-                         base_impulse_scale, stiffen, limit, bias_rate, mass_scale,
+                         base_impulse_scale, stiffen, limit, large_cap, bias_rate, mass_scale,
                          impulse_scale, loaded_pairs):
     """Fill the per-row coefficients (K,) and the loaded pairs; returns their count.
 
     weight_impulse: |g| h, the impulse per substep that carries 1 kg (0: no gravity, no
     load stiffening). omega: rad/s, the capped base stiffness (doubled for stiff rows).
     base_*: (2,) contact_softness's coefficients, [movable, static], used where r = 1.
+    limit: largest loaded island (dynamic bodies); large_cap: the most weights counted
+    in larger islands, which get no extra pass.
     """
     nb = inv_mass.shape[0]
     n_pairs = pair_start.shape[0] - 1
@@ -259,10 +268,10 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
         hot_a = inv_mass[a] > 0.0 and hot[root[a]] and size[root[a]] <= limit
         hot_b = inv_mass[b] > 0.0 and hot[root[b]] and size[root[b]] <= limit
         r = 1.0
-        if hot_a:
-            r = ratio[a]
-        if hot_b:
-            r = max(r, ratio[b])
+        if inv_mass[a] > 0.0:
+            r = ratio[a] if hot_a else min(ratio[a], large_cap)
+        if inv_mass[b] > 0.0:
+            r = max(r, ratio[b] if hot_b else min(ratio[b], large_cap))
         if hot_a or hot_b:
             loaded_pairs[count] = p
             count += 1
@@ -305,7 +314,8 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
         settings.contact_damping_ratio, h,
         np.array([soft.bias_rate, stiff.bias_rate]), np.array([soft.mass_scale, stiff.mass_scale]),
         np.array([soft.impulse_scale, stiff.impulse_scale]), settings.load_stiffening,
-        settings.stiff_island_limit, bias_rate, mass_scale, impulse_scale, loaded_pairs)
+        settings.stiff_island_limit, settings.large_island_load_cap, bias_rate, mass_scale,
+        impulse_scale, loaded_pairs)
     return bias_rate, mass_scale, impulse_scale, loaded_pairs[:count]
 
 

@@ -69,12 +69,26 @@ def test_unloaded_rows_keep_contact_softness_bit_for_bit():
     assert len(loaded) == 0
 
 
-def test_islands_larger_than_the_limit_are_left_alone():
+def test_islands_larger_than_the_limit_get_no_extra_pass_and_capped_stiffening():
+    """A 3-box stack (the bottom box carries 3 weights): within the limit its pairs are
+    loaded; above it none is, and its rows count at most large_island_load_cap weights."""
     inv_mass, c = rows([(0, 1), (1, 2), (2, 3)], [0.0, 1.0, 1.0, 1.0], [3.0, 2.0, 1.0])
-    small = row_softness(inv_mass, c, G, SETTINGS.with_values(stiff_island_limit=3))
-    large = row_softness(inv_mass, c, G, SETTINGS.with_values(stiff_island_limit=2))
-    assert len(small[3]) == 3 and small[2][0] < contact_softness(SETTINGS)[1].impulse_scale
-    assert len(large[3]) == 0 and large[2][0] == contact_softness(SETTINGS)[1].impulse_scale
+
+    def ground_row(**knobs):
+        bias_rate, mass_scale, impulse_scale, loaded = row_softness(
+            inv_mass, c, G, SETTINGS.with_values(**knobs))
+        return [bias_rate[0], mass_scale[0], impulse_scale[0]], len(loaded)
+
+    small, n_small = ground_row(stiff_island_limit=3)
+    large, n_large = ground_row(stiff_island_limit=2)
+    above_cap, _ = ground_row(stiff_island_limit=2, large_island_load_cap=4.0)
+    plain, _ = ground_row(stiff_island_limit=2, large_island_load_cap=1.0)
+    assert n_small == 3 and n_large == 0
+    np.testing.assert_allclose(small, expected(3.0, True), rtol=1e-12)
+    np.testing.assert_allclose(large, expected(2.0, True), rtol=1e-12)     # default cap 2
+    np.testing.assert_allclose(above_cap, expected(3.0, True), rtol=1e-12)  # 3 < cap 4
+    stiff = contact_softness(SETTINGS)[1]
+    assert plain == [stiff.bias_rate, stiff.mass_scale, stiff.impulse_scale]
 
 
 def test_static_bodies_do_not_join_islands():
