@@ -115,8 +115,8 @@ PRIMITIVES = {
                      "of": {"type": "box", "size": [2.0, 1.0], "angle": 0.3}},
 }
 
-#: The kinds whose numpy code calls BLAS or numpy's SIMD transcendental functions.
-ROUNDS_DIFFERENTLY = ("pie", "ring", "horseshoe", "star", "quadratic_bezier")
+#: The kinds whose numpy code calls numpy's SIMD transcendental functions (arctan2, cbrt).
+ROUNDS_DIFFERENTLY = ("star", "quadratic_bezier")
 
 TERRAIN = {"op": "smooth_union", "k": 0.8, "of": [
     {"type": "box", "size": [26.0, 1.0], "offset": [0.0, -0.5]},
