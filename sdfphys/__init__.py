@@ -4,13 +4,17 @@
 window live in ``sdfphys.render``, ``sdfphys.video`` and ``sdfphys.play``.
 """
 
-from . import sdf
-from .collide import Contacts, collide
-from .errors import SpecError
-from .scene import load_scene, read_scene
-from .settings import Settings, preset
-from .shapes import shape_from_spec
-from .world import World
+from . import _numba_cache
+
+_numba_cache.install()      # before any kernel is defined: caches follow the whole package
+
+from . import sdf  # noqa: E402
+from .collide import Contacts, collide  # noqa: E402
+from .errors import SpecError  # noqa: E402
+from .scene import load_scene, read_scene  # noqa: E402
+from .settings import Settings, preset  # noqa: E402
+from .shapes import shape_from_spec  # noqa: E402
+from .world import World  # noqa: E402
 
 __version__ = "0.1.0"
 
