@@ -100,6 +100,7 @@ SWEEPS: dict[str, tuple[Any, ...]] = {
     "contacts_per_pair": (1, 2, 4, 8),
     "descent_iterations": (2, 4, 8, 16, 32),
     "descent_starts": (1, 2, 4, 7),
+    "descent_lattice": (0, 3, 4, 5),
     "field_descent_iterations": (4, 8, 16, 32),
     "field_descent_starts": (1, 3, 7, 16),
     "gradient": ("analytic", "central", "three_point", "angle_bisection"),
@@ -490,7 +491,7 @@ def relevant_knobs(counts: dict[str, int], knobs: Sequence[str]) -> list[str]:
     mesh = bool(ran & {"mesh_mesh", "mesh_sdf"})
     fields = bool(ran & {"mesh_sdf", "sdf_sdf"})     # mesh-sdf runs a field-field descent too
     rules = {
-        "descent_iterations": mesh, "descent_starts": mesh,
+        "descent_iterations": mesh, "descent_starts": mesh, "descent_lattice": mesh,
         "field_descent_iterations": fields, "field_descent_starts": fields,
         "gradient": bool(ran & set(_SDF_PAIRS)), "grid_cell": bool(ran & set(_SDF_PAIRS)),
         "restitution_passes": "restitution" in ran,

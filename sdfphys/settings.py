@@ -105,6 +105,13 @@ class Settings:
         7, "", "Triangle-field queries: starts per triangle, taken in the order "
         "centroid, 3 edge midpoints, 3 vertices. Fewer: cheaper, may miss a second "
         "local minimum.", low=1, high=7)
+    descent_lattice: int = _knob(
+        0, "", "Triangle-field queries: 0 takes the descent_starts fixed starts; a "
+        "degree d >= 1 samples f at the (d+1)(d+2)/2 points of each triangle's "
+        "barycentric lattice (3: 10, 4: 15, 5: 21 points, vertices included) and "
+        "descends from the descent_starts lowest samples not within one lattice "
+        "spacing of each other (keys by rank). Costs one field evaluation per "
+        "sample; finds separate dips better than as many fixed starts.", low=0, high=16)
     field_descent_iterations: int = _knob(
         16, "", "Field-field queries (sdf-sdf): maximum descent iterations per start.",
         low=1, high=1024)

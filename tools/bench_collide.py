@@ -9,7 +9,12 @@ One query is one triangle: the local minima of f over it from every start.
 For batches of 1,000 and 10,000 triangles, each number of starts (1: the
 centroid; 3: the vertices; 4: vertices and centroid; 7: vertices, edge midpoints
 and centroid, the default) and each iteration budget (4, 8, 16, 32), the table
-gives:
+gives the following (samples 0). Rows with samples N > 0 (``--lattice`` degrees
+d, N = (d + 1)(d + 2) / 2: 3 -> 10, 4 -> 15, 5 -> 21, 6 -> 28, 8 -> 45) choose
+their starts by sampling (``descent.triangle_deepest_sampled``,
+settings.descent_lattice): f at the N lattice points of each triangle, then a
+descent from ``--sampled-starts`` of them (the lowest discrete local minima
+first, none within one lattice spacing of another), ``--sampled-iterations``.
 
 - us/query: CPU time of this process per triangle, median of ``--runs`` runs (less
   sensitive than wall time to other load on the machine; the descent runs on one
@@ -21,7 +26,8 @@ gives:
   compiles; ``--python`` forces the Python-driven loop). The compilation
   itself (an empty cache, in a fresh process) is timed once at the end.
 - evals/query: points evaluated per triangle (counted through a wrapper field,
-  which does not compile, so on the Python-driven loop: the same points).
+  which does not compile, so on the Python-driven loop: the same points; for
+  sampled rows the loop evaluates the starts again, K more than compiled).
 - depth error: the largest amount by which the deepest point over the starts is
   shallower than an independent reference, and how many triangles exceed 1e-6 m.
   Reference (as in the tests): the minimum over a dense barycentric grid
@@ -31,6 +37,8 @@ gives:
   reaches; that is the accuracy the starts buy.
 
 Usage: python tools/bench_collide.py [--runs 5] [--grid 48] [--batches 1000 10000] [--python]
+    [--iterations 4 8 16 32] [--lattice 0 3 4 5 6 8] [--sampled-starts 1 2 3]
+    [--sampled-iterations 16] [--fields box circle smooth_union]
 """
 
 from __future__ import annotations
@@ -169,6 +177,13 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--grid", type=int, default=48)
     parser.add_argument("--batches", type=int, nargs="+", default=[1000, 10000])
+    parser.add_argument("--iterations", type=int, nargs="+", default=list(ITERATIONS),
+                        help="iteration budgets of the fixed-start rows")
+    parser.add_argument("--lattice", type=int, nargs="+", default=[0, 3, 4, 5, 6, 8],
+                        help="lattice degrees of the sampled rows (0: the fixed-start rows)")
+    parser.add_argument("--sampled-starts", type=int, nargs="+", default=[1, 2, 3])
+    parser.add_argument("--sampled-iterations", type=int, nargs="+", default=[16])
+    parser.add_argument("--fields", nargs="+", default=list(FIELDS))
     parser.add_argument("--python", action="store_true",
                         help="the Python-driven descent loop even for fields that compile")
     args = parser.parse_args()
@@ -177,6 +192,8 @@ def main() -> None:
     rows = []
     notes = []
     for name, spec in FIELDS.items():
+        if name not in args.fields:
+            continue
         f = field(spec)
         tri = random_triangles(f, largest, np.random.default_rng(sorted(FIELDS).index(name)))
         start = time.perf_counter()
@@ -192,30 +209,39 @@ def main() -> None:
         notes.append(f"{name}: cold first call {cold:.2f} s; field.evaluate "
                      f"{per_point * 1e9:.0f} ns/point, compiled "
                      f"{per_point_compiled * 1e9:.0f} ns/point (CPU, batch of {len(probe)})")
-        for n_starts, which in STARTS.items():
-            starts = descent.START_BARYCENTRIC[which]
-            for iterations in ITERATIONS:
-                row = [name, str(n_starts), str(iterations)]
-                for batch in args.batches:
-                    part = tri[:batch]
-                    descent.triangle_deepest(f, part, iterations, starts)     # warm-up
-                    query = partial(descent.triangle_deepest, f, part, iterations, starts)
-                    cpu = _median_time(query, args.runs, time.process_time)
-                    row.append(f"{cpu / batch * 1e6:.2f}")
-                counting = _Counting(f)
-                part = tri[:largest]
-                _, value = descent.triangle_deepest(counting, part, iterations, starts)
-                error = value.min(axis=1) - reference[:largest]
-                row.append(f"{counting.points / largest:.1f}")
-                row.append(f"{max(error.max(), 0.0):.1e}")
-                row.append(str(int(np.sum(error > 1e-6))))
-                if n_starts == 7 and iterations == 16:
-                    wall = _median_time(partial(descent.triangle_deepest, f, part),
-                                        args.runs, time.perf_counter)
-                    notes.append(f"{name}: default (7 starts, 16 iterations), batch "
-                                 f"{largest}: {wall / largest * 1e6:.2f} us/query wall time")
-                rows.append(row)
-    head = (["field", "starts", "iterations"]
+        configs = []
+        if 0 in args.lattice:
+            configs += [(0, n, it) for n in STARTS for it in args.iterations]
+        configs += [(d, n, it) for d in args.lattice if d > 0 for n in args.sampled_starts
+                    for it in args.sampled_iterations]
+        for degree, n_starts, iterations in configs:
+            if degree == 0:
+                query_of = partial(descent.triangle_deepest, iterations=iterations,
+                                   starts=descent.START_BARYCENTRIC[STARTS[n_starts]])
+            else:
+                query_of = partial(descent.triangle_deepest_sampled, degree=degree,
+                                   n_starts=n_starts, iterations=iterations)
+            row = [name, str(descent.lattice_size(degree) if degree else 0), str(n_starts),
+                   str(iterations)]
+            for batch in args.batches:
+                part = tri[:batch]
+                query_of(f, part)                                            # warm-up
+                cpu = _median_time(partial(query_of, f, part), args.runs, time.process_time)
+                row.append(f"{cpu / batch * 1e6:.2f}")
+            counting = _Counting(f)
+            part = tri[:largest]
+            _, value = query_of(counting, part)
+            error = value.min(axis=1) - reference[:largest]
+            row.append(f"{counting.points / largest:.1f}")
+            row.append(f"{max(error.max(), 0.0):.1e}")
+            row.append(str(int(np.sum(error > 1e-6))))
+            if degree == 0 and n_starts == 7 and iterations == 16:
+                wall = _median_time(partial(descent.triangle_deepest, f, part),
+                                    args.runs, time.perf_counter)
+                notes.append(f"{name}: default (7 starts, 16 iterations), batch "
+                             f"{largest}: {wall / largest * 1e6:.2f} us/query wall time")
+            rows.append(row)
+    head = (["field", "samples", "starts", "iterations"]
             + [f"us/query @{b}" for b in args.batches]
             + [f"evals/query @{largest}", "max depth error (m)", f"> 1e-6 (of {largest})"])
     print("| " + " | ".join(head) + " |")

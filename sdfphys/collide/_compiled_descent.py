@@ -47,13 +47,17 @@ from ._descent_kernels import (
     _stationarity,
     accept,
     bound,
+    gather_starts,
     initialize,
+    pick_starts,
     propose,
     results,
     triangle_known,
+    triangle_starts,
 )
 
-__all__ = ["descend", "enclosing_circles", "field_contacts", "merge_minima", "patch_ends"]
+__all__ = ["descend", "descend_sampled", "enclosing_circles", "field_contacts", "merge_minima",
+           "patch_ends"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -74,6 +78,8 @@ _CHUNK = 256
 #: running several rounds) take 12 % less time in blocks of 8192 to 32768 starts
 #: than all at once (blocks of 512: no gain, the rounds' fixed costs add up).
 _BLOCK = 8192
+#: Triangles per block of ``descend_sampled``'s sampling (a few hundred kB of samples).
+_SAMPLE_BLOCK = 512
 
 
 @njit(cache=True, error_model="numpy")
@@ -163,6 +169,32 @@ def descend(kind: int, barzilai_borwein: bool, kd: int,
     data = np.empty((n_points, kd))                      # updated in place by accept
     _evaluate(kind, code_a, consts_a, depth_a, nesting_a, code_b, consts_b, depth_b, nesting_b,
               rotation, offset, points, pair_of, n_points, phi, grad, data)
+    if kind == TRIANGLE:
+        corner, shape = triangle_known(tri, at_vertex, points, phi, grad, n_start, spanning,
+                                       convex, shape_tol)
+    else:
+        corner, shape = np.full((1, 3, 3), np.nan), np.zeros((1, 4))
+    return _rounds(kind, barzilai_borwein, kd, code_a, consts_a, depth_a, nesting_a, code_b,
+                   consts_b, depth_b, nesting_b, rotation, offset, pair_of, tri, owner, n_start,
+                   points, phi, grad, data, corner, shape, sigma, iterations, tol, shape_tol,
+                   state, flags, running, cand, cand_i, candidates)
+
+
+@njit(cache=True, error_model="numpy")
+def _rounds(kind: int, barzilai_borwein: bool, kd: int,
+            code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
+            code_b: np.ndarray, consts_b: np.ndarray, depth_b: int, nesting_b: int,
+            rotation: np.ndarray, offset: np.ndarray, pair_of: np.ndarray,
+            tri: np.ndarray, owner: np.ndarray, n_start: int, points: np.ndarray,
+            phi: np.ndarray, grad: np.ndarray, data: np.ndarray, corner: np.ndarray,
+            shape: np.ndarray, sigma: np.ndarray, iterations: int, tol: np.ndarray,
+            shape_tol: float, state: np.ndarray, flags: np.ndarray, running: np.ndarray,
+            cand: np.ndarray, cand_i: np.ndarray, candidates: np.ndarray):
+    """``descend`` once the starts are evaluated (phi, grad, data at points) and what
+    they tell of the triangles is known (corner, shape; dummies for PAIR): the
+    rounds. Same arguments (n_start: the starts per triangle, in blocks of whole
+    triangles) and results."""
+    n_points = points.shape[0]
     least = np.inf
     most = -np.inf
     for i in range(n_points):
@@ -170,11 +202,6 @@ def descend(kind: int, barzilai_borwein: bool, kd: int,
         most = max(most, tol[i])
     uneven = n_points > 0 and most > least
     initialize(points, phi, grad, sigma, state, flags)
-    if kind == TRIANGLE:
-        corner, shape = triangle_known(tri, at_vertex, points, phi, grad, n_start, spanning,
-                                       convex, shape_tol)
-    else:
-        corner, shape = np.full((1, 3, 3), np.nan), np.zeros((1, 4))
     evaluated = n_points
     value = np.empty(0)
     gradient = np.empty((0, 2))
@@ -243,6 +270,61 @@ def descend(kind: int, barzilai_borwein: bool, kd: int,
                     size = bound(kind, owner, shape, state, flags, running[:n_running])
     best, phi, rounds = results(state, flags)
     return best, phi, data, rounds, evaluated, cand, cand_i, candidates
+
+
+@njit(cache=True, error_model="numpy")
+def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
+                    tri: np.ndarray, weights: np.ndarray, neighbours: np.ndarray,
+                    spacing: float, k: int, iterations: int, tol: float, shape_tol: float,
+                    state: np.ndarray, flags: np.ndarray, running: np.ndarray,
+                    cand: np.ndarray, cand_i: np.ndarray, candidates: np.ndarray):
+    """``descent.triangle_deepest_sampled`` of a field given by its program.
+
+    The field is evaluated at the lattice samples (weights (N, 3), neighbours
+    (N, 6), spacing 1 / degree, ``descent._lattice``) of each triangle tri
+    (T, 3, 2); what they tell of each triangle (``triangle_known``, all N as
+    starts that span it: vertex values, plane, cone; not the cuts, whose model
+    costs O(N^3)) is kept; the k samples ``pick_starts`` chooses descend
+    (``_rounds``), tol (m) for all. Work arrays as ``descend``.
+
+    Returns best (T k, 2), phi (T k,), rounds (T k,), the number of points
+    evaluated and the round buffers (possibly grown).
+    """
+    n_sample = weights.shape[0]
+    n_tri = tri.shape[0]
+    no_pair = np.empty(0, dtype=np.int64)
+    no_rotation, no_offset = np.zeros((1, 2, 2)), np.zeros((1, 2))
+    corner = np.empty((n_tri, 3, 3))
+    shape = np.empty((n_tri, 4))
+    points, phi = np.empty((n_tri * k, 2)), np.empty(n_tri * k)
+    grad, sigma = np.empty((n_tri * k, 2)), np.empty(n_tri * k)
+    owner = np.empty(n_tri * k, dtype=np.int64)
+    # The samples block by block: their arrays stay in the cache (fresh arrays of
+    # all samples at once cost their page faults, more than the evaluation).
+    n = min(n_tri, _SAMPLE_BLOCK) * n_sample
+    sphi, sgrad, sdata = np.empty(n), np.empty((n, 2)), np.empty((n, 2))
+    for lo in range(0, n_tri, _SAMPLE_BLOCK):
+        hi = min(n_tri, lo + _SAMPLE_BLOCK)
+        part = tri[lo:hi]
+        spoints, _, ssigma, sat = triangle_starts(part, weights)
+        n = spoints.shape[0]
+        _evaluate(TRIANGLE, code_a, consts_a, depth_a, nesting_a, code_a, consts_a, depth_a,
+                  nesting_a, no_rotation, no_offset, spoints, no_pair, n, sphi, sgrad, sdata)
+        c, sh = triangle_known(part, sat, spoints, sphi, sgrad, n_sample, True, False,
+                               shape_tol)
+        corner[lo:hi], shape[lo:hi] = c, sh
+        chosen = pick_starts(sphi[:n], spoints, ssigma, n_sample, neighbours, spacing, k)
+        p, f, g, sg, ow = gather_starts(n_sample, chosen, spoints, sphi, sgrad, ssigma)
+        points[lo * k:hi * k], phi[lo * k:hi * k], grad[lo * k:hi * k] = p, f, g
+        sigma[lo * k:hi * k], owner[lo * k:hi * k] = sg, ow + lo
+    data = grad.copy()
+    tols = np.full(points.shape[0], tol)
+    best, phi, data, rounds, evaluated, cand, cand_i, candidates = _rounds(
+        TRIANGLE, False, 2, code_a, consts_a, depth_a, nesting_a, code_a, consts_a, depth_a,
+        nesting_a, no_rotation, no_offset, owner, tri, owner, k, points, phi, grad, data,
+        corner, shape, sigma, iterations, tols, shape_tol, state, flags, running, cand, cand_i,
+        candidates)
+    return best, phi, rounds, evaluated + n_tri * (n_sample - k), cand, cand_i, candidates
 
 
 # --------------------------------------------------------------------------------------

@@ -1160,3 +1160,86 @@ def results(state: np.ndarray, flags: np.ndarray) -> tuple[np.ndarray, np.ndarra
         best[i, 0], best[i, 1], phi[i] = state[i, BEST], state[i, BEST + 1], state[i, PHI]
         rounds[i] = flags[i, ROUNDS]
     return best, phi, rounds
+
+
+# --------------------------------------------------------------------------------------
+# Starts chosen by sampling (``descent.triangle_deepest_sampled``)
+# --------------------------------------------------------------------------------------
+
+@njit(cache=True, error_model="numpy")
+def pick_starts(phi: np.ndarray, points: np.ndarray, sigma: np.ndarray, n_sample: int,
+                neighbours: np.ndarray, spacing: float, k: int) -> np.ndarray:
+    """(T, k) the samples to descend from, per triangle, in rank order.
+
+    phi (T n_sample,), points (T n_sample, 2), sigma (T n_sample,): f at each
+    triangle's lattice samples (triangle by triangle), the samples, and their
+    triangle's longest edge; neighbours (n_sample, 6): each sample's lattice
+    neighbours, -1 padded. Taken by increasing value (the first on ties; NaN
+    last), skipping samples within spacing x sigma (spacing = 1 / degree: one
+    lattice step; on a sliver also the samples of other rows that fall next to a
+    taken one) of one already taken: first the discrete local minima (no lattice
+    neighbour lower), one per separate dip, then the other samples, then (when
+    fewer than k are left so) the lowest of the rest (k <= n_sample).
+    """
+    n_tri = phi.shape[0] // n_sample
+    chosen = np.empty((n_tri, k), dtype=np.int64)
+    taken = np.empty(n_sample, dtype=np.bool_)
+    for t in range(n_tri):
+        o = t * n_sample
+        for s in range(n_sample):
+            taken[s] = False
+        reach = spacing * sigma[o] * (1.0 + 1e-6)          # a neighbour, with rounding
+        reach2 = reach * reach
+        m = 0
+        stage = 0
+        while m < k:
+            # The lowest sample eligible at this stage (the first of equals; NaN last).
+            pick = -1
+            for c in range(n_sample):
+                if taken[c]:
+                    continue
+                if pick >= 0 and not (phi[o + c] < phi[o + pick] or (
+                        math.isnan(phi[o + pick]) and not math.isnan(phi[o + c]))):
+                    continue
+                if stage == 0:                             # a discrete local minimum?
+                    lowest = True
+                    for q in range(neighbours.shape[1]):
+                        n = neighbours[c, q]
+                        lowest = lowest and (n < 0 or not phi[o + n] < phi[o + c])
+                    if not lowest:
+                        continue
+                near = False
+                for r in range(m if stage < 2 else 0):
+                    dx = points[o + c, 0] - points[o + chosen[t, r], 0]
+                    dy = points[o + c, 1] - points[o + chosen[t, r], 1]
+                    near = near or dx * dx + dy * dy <= reach2
+                if not near:
+                    pick = c
+            if pick < 0:
+                stage += 1
+                continue
+            chosen[t, m] = pick
+            taken[pick] = True
+            m += 1
+    return chosen
+
+
+@njit(cache=True, error_model="numpy")
+def gather_starts(n_sample: int, chosen: np.ndarray, points: np.ndarray, phi: np.ndarray,
+                  grad: np.ndarray, sigma: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The chosen samples (T, k) of per-triangle samples (T n_sample rows of points,
+    phi, grad, sigma) as starts: points (T k, 2), phi, grad, sigma, owner (T k,)."""
+    n_tri, k = chosen.shape[0], chosen.shape[1]
+    p = np.empty((n_tri * k, 2))
+    f = np.empty(n_tri * k)
+    g = np.empty((n_tri * k, 2))
+    s = np.empty(n_tri * k)
+    owner = np.empty(n_tri * k, dtype=np.int64)
+    for t in range(n_tri):
+        for r in range(k):
+            i, j = t * k + r, t * n_sample + chosen[t, r]
+            p[i, 0], p[i, 1], f[i], g[i, 0], g[i, 1] = points[j, 0], points[j, 1], phi[j], \
+                grad[j, 0], grad[j, 1]
+            s[i], owner[i] = sigma[j], t
+    return p, f, g, s, owner

@@ -138,7 +138,13 @@ from ..sdf import Field, safe_normalize
 from ..sdf.compiled import Program, compile_field
 from ..sdf.compiled import distance as compiled_distance
 from . import _descent_kernels as kernels
-from ._compiled_descent import descend, enclosing_circles, field_contacts, patch_ends
+from ._compiled_descent import (
+    descend,
+    descend_sampled,
+    enclosing_circles,
+    field_contacts,
+    patch_ends,
+)
 from ._compiled_descent import merge_minima as compiled_merge_minima
 
 __all__ = [
@@ -148,6 +154,7 @@ __all__ = [
     "merge_minima",
     "triangle_cull",
     "triangle_deepest",
+    "triangle_deepest_sampled",
 ]
 
 
@@ -530,6 +537,101 @@ def triangle_deepest(field: Field, triangles: np.ndarray, iterations: int = 16,
     """
     point, value, _ = _triangle_minima(field, triangles, iterations, starts, tol)
     return point, value
+
+
+_LATTICES: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _lattice(degree: int) -> tuple[np.ndarray, np.ndarray]:
+    """The barycentric lattice of a degree: weights (N, 3) = (a, b, c) / degree over
+    a + b + c = degree, a descending then b descending (N = (degree + 1)(degree + 2) / 2;
+    weight 1 exactly at the vertices), and each point's lattice neighbours (N, 6),
+    -1 padded: one unit moved between two of a, b, c (cached)."""
+    if degree not in _LATTICES:
+        index = [(a, b, degree - a - b) for a in range(degree, -1, -1)
+                 for b in range(degree - a, -1, -1)]
+        where = {abc: n for n, abc in enumerate(index)}
+        neighbours = np.full((len(index), 6), -1, dtype=np.int64)
+        moves = ((1, -1, 0), (-1, 1, 0), (1, 0, -1), (-1, 0, 1), (0, 1, -1), (0, -1, 1))
+        for n, (a, b, c) in enumerate(index):
+            near = [where[m] for m in ((a + x, b + y, c + z) for x, y, z in moves) if m in where]
+            neighbours[n, :len(near)] = near
+        _LATTICES[degree] = (np.ascontiguousarray(np.array(index, dtype=np.float64) / degree),
+                             neighbours)
+    return _LATTICES[degree]
+
+
+def lattice_size(degree: int) -> int:
+    """Samples per triangle of the lattice of ``degree``: (degree + 1)(degree + 2) / 2."""
+    return (degree + 1) * (degree + 2) // 2
+
+
+def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n_starts: int,
+                             iterations: int = 16, tol: float = 1e-12
+                             ) -> tuple[np.ndarray, np.ndarray]:
+    """``triangle_deepest`` from starts chosen by sampling: (point (T, K, 2), value (T, K)).
+
+    f is evaluated at the (degree + 1)(degree + 2) / 2 points of each triangle's
+    barycentric lattice of ``degree`` (>= 1; its vertices included). The starts
+    are K = min(n_starts, N) samples taken by increasing value, skipping samples
+    within one lattice spacing (longest edge / degree) of one already taken: first
+    the discrete local minima (no lattice neighbour lower: one per separate dip),
+    then the other samples, then, when too few are left, the lowest of the rest
+    (``_descent_kernels.pick_starts``). Start rank k = column k
+    (rank 0: the lowest sample of all; ``merge_minima`` keeps the lowest rank of a
+    cluster). What the samples tell of f over the triangle (vertex values, a
+    plane, a cone, see ``_descent_kernels.triangle_known``) is read from all N
+    samples; not a convex field's cutting-plane model (O(N^3) over N samples:
+    costlier than the descents it saves). Each start
+    then descends as in ``triangle_deepest`` (iterations, tol the same). Costs N
+    evaluations per triangle plus K descents: with fields that compile, one
+    compiled call (``_compiled_descent.descend_sampled``); otherwise the Python
+    loop (one ``field.evaluate`` for the samples, one for the starts, then one
+    per round), with the same results.
+    """
+    if degree < 1 or n_starts < 1:
+        raise ValueError(f"degree and n_starts must be >= 1, got {degree}, {n_starts}")
+    tri = np.asarray(triangles, dtype=np.float64).reshape(-1, 3, 2)
+    weights, neighbours = _lattice(int(degree))
+    n_sample = len(weights)
+    k = min(int(n_starts), n_sample)
+    n_tri = len(tri)
+    if n_tri == 0:
+        return np.zeros((0, k, 2)), np.zeros((0, k))
+    tri = np.ascontiguousarray(tri)
+    program = compile_field(field) if USE_COMPILED else None
+    if program is not None:
+        n_points = n_tri * k
+        best, value, _, _, cand, cand_i, candidates = descend_sampled(
+            program.code, program.consts, program.depth, program.nesting, tri, weights,
+            neighbours, 1.0 / degree, k, iterations, float(tol), _SHAPE_TOL,
+            _WORK.rows("state", n_points, kernels.N_STATE),
+            _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64),
+            _WORK.rows("running", n_points, 1, np.int64)[:, 0],
+            _WORK.whole("cand", 5), _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2))
+        _WORK.keep("cand", cand)
+        _WORK.keep("cand_i", cand_i)
+        _WORK.keep("points", candidates)
+        return best.reshape(n_tri, k, 2), value.reshape(n_tri, k)
+    spoints, _, ssigma, sat = kernels.triangle_starts(tri, weights)
+    sphi, sgrad = field.evaluate(spoints)
+    sphi = np.ascontiguousarray(sphi, dtype=np.float64)
+    sgrad = np.ascontiguousarray(sgrad, dtype=np.float64)
+    known = kernels.triangle_known(tri, sat, spoints, sphi, sgrad, n_sample, True, False,
+                                   _SHAPE_TOL)
+    chosen = kernels.pick_starts(sphi, spoints, ssigma, n_sample, neighbours, 1.0 / degree, k)
+    points, _, _, sigma, owner = kernels.gather_starts(n_sample, chosen, spoints, sphi, sgrad,
+                                                       ssigma)
+    problem = _TriangleProblem(field, tri, owner, _no_vertex_starts(n_tri), k, False)
+    problem.known = lambda *_: known                          # read from the samples
+    problem.programs = lambda: None                           # the Python loop
+    best, value, _, _ = _descend(problem, points, iterations, sigma, tol)
+    return best.reshape(n_tri, k, 2), value.reshape(n_tri, k)
+
+
+def _no_vertex_starts(n_tri: int) -> np.ndarray:
+    """at_vertex (T, 3) with no start at a vertex (-1)."""
+    return np.full((n_tri, 3), -1, dtype=np.int64)
 
 
 def merge_minima(point: np.ndarray, radius: float) -> np.ndarray:

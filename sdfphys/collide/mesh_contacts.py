@@ -37,8 +37,9 @@ the compiled kernels are tested against, bit for bit; ``USE_COMPILED = False``
 forces them).
 
 Keys (see ``narrowphase`` for the layout): descent minima keep (triangle, start
-id); a minimum at a mesh vertex, a vertex sample and a vertex measured against a
-face all get the vertex key (element = vertex index, start ``VERTEX_START``), edge
+id; with starts chosen by sampling, ``settings.descent_lattice`` > 0,
+``SAMPLED_START`` + the start's rank); a minimum at a mesh vertex, a vertex
+sample and a vertex measured against a face all get the vertex key (element = vertex index, start ``VERTEX_START``), edge
 midpoints the edge key (element = outline edge index, start ``EDGE_START``); one
 candidate per key and pair survives, in the order: face measures (deepest face
 first), then descent minima and samples.
@@ -59,7 +60,7 @@ from ..shapes import Shape
 from . import descent
 from ._compiled_descent import enclosing_circles
 
-__all__ = ["EDGE_START", "VERTEX_START", "mesh_in_field"]
+__all__ = ["EDGE_START", "SAMPLED_START", "VERTEX_START", "mesh_in_field"]
 
 #: Start id of vertex keys: the key's element is then a mesh vertex index.
 VERTEX_START = 255
@@ -78,6 +79,9 @@ _AXES = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
 #: Descent start ids in the order ``settings.descent_starts`` takes them: centroid, edge
 #: midpoints, then vertices (the vertices are sampled anyway, see ``_samples``).
 _START_PRIORITY = np.array([6, 3, 4, 5, 0, 1, 2])
+#: Start id of rank 0 of starts chosen by sampling (``settings.descent_lattice`` > 0):
+#: rank k (by sample value) has id SAMPLED_START + k, apart from the fixed starts' ids.
+SAMPLED_START = 16
 #: Descent starts of one triangle ending closer than this (m) are one minimum (the
 #: lowest start id is kept, a stable key); far below any physical length.
 _MERGE_RADIUS = 1e-6
@@ -100,6 +104,16 @@ class _Candidates:
     @classmethod
     def concatenate(cls, parts: list[_Candidates]) -> _Candidates:
         return cls(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(cls)))
+
+
+def _sampled_minima(field: Field, tri: np.ndarray, settings: Settings
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``descent.triangle_deepest_sampled`` with the settings' lattice, starts and
+    iterations: point (T, K, 2), value (T, K) and the start ids (K,) of the ranks."""
+    point, value = descent.triangle_deepest_sampled(
+        field, tri, settings.descent_lattice, settings.descent_starts,
+        iterations=settings.descent_iterations)
+    return point, value, SAMPLED_START + np.arange(point.shape[1], dtype=np.int64)
 
 
 def _barycentric(triangle: np.ndarray, point: np.ndarray) -> np.ndarray:
@@ -139,9 +153,12 @@ def _descent_minima(mesh: Shape, field: Field, local: np.ndarray, margin: float,
     n_tri = len(mesh.triangles)
     start_ids = _START_PRIORITY[:max(1, min(settings.descent_starts, len(_START_PRIORITY)))]
     kept = np.nonzero(descent.triangle_cull(field, local, margin))[0]
-    point, value = descent.triangle_deepest(field, local[kept],
-                                            iterations=settings.descent_iterations,
-                                            starts=descent.START_BARYCENTRIC[start_ids])
+    if settings.descent_lattice > 0:
+        point, value, start_ids = _sampled_minima(field, local[kept], settings)
+    else:
+        point, value = descent.triangle_deepest(field, local[kept],
+                                                iterations=settings.descent_iterations,
+                                                starts=descent.START_BARYCENTRIC[start_ids])
     distinct = descent.merge_minima(point, _MERGE_RADIUS)
     hit, column = np.nonzero(distinct & (value < margin))
     start = start_ids[column]
@@ -619,11 +636,15 @@ def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: 
     vertices, _, kept, tri = _place(mesh.vertices, mesh.triangles, cos, sin, co, so, pose_mesh,
                                     pose_other, code, consts, depth, nesting, margin)
     n_starts = max(1, min(settings.descent_starts, len(_START_PRIORITY)))
-    point, value = descent.triangle_deepest(other.field, tri,
-                                            iterations=settings.descent_iterations,
-                                            starts=_STARTS[n_starts])
+    if settings.descent_lattice > 0:
+        point, value, start_ids = _sampled_minima(other.field, tri, settings)
+    else:
+        point, value = descent.triangle_deepest(other.field, tri,
+                                                iterations=settings.descent_iterations,
+                                                starts=_STARTS[n_starts])
+        start_ids = _START_PRIORITY[:n_starts]
     distinct = descent.merge_minima(point, _MERGE_RADIUS)
     return _finish(mesh.triangles, mesh.outline_edges, vertices, kept,
                    np.ascontiguousarray(point), np.ascontiguousarray(value), distinct,
-                   _START_PRIORITY[:n_starts], code, consts, depth, nesting, margin,
+                   start_ids, code, consts, depth, nesting, margin,
                    bool(polygon_pair), float(settings.linear_slop), co, so, pose_other)
