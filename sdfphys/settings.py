@@ -70,8 +70,9 @@ class Settings:
         low=0.0, low_open=True)
     load_stiffening: bool = _knob(
         True, "", "Stiffen the contacts of a body that carries more than its own weight "
-        "in proportion to that load, in islands of at most stiff_island_limit bodies: "
-        "a heavy box does not sink into a light one, tall stacks do not buckle.")
+        "in proportion to that load (in islands over stiff_island_limit bodies, up to "
+        "large_island_load_cap weights): a heavy box does not sink into a light one, "
+        "tall stacks do not buckle.")
     stiff_iterations: int = _knob(
         64, "", "Solver passes per substep, at most, over islands with a mass ratio >= 4 "
         "or a loaded body (they stop once converged); 1: one pass, as elsewhere.",
@@ -103,8 +104,9 @@ class Settings:
         "evaluations.", low=1, high=1024)
     descent_starts: int = _knob(
         7, "", "Triangle-field queries: starts per triangle, taken in the order "
-        "centroid, 3 edge midpoints, 3 vertices. Fewer: cheaper, may miss a second "
-        "local minimum.", low=1, high=7)
+        "centroid, 3 edge midpoints, 3 vertices (or the lowest lattice samples, with "
+        "descent_lattice). Fewer: cheaper, may miss a second local minimum.",
+        low=1, high=7)
     descent_lattice: int = _knob(
         0, "", "Triangle-field queries: 0 takes the descent_starts fixed starts; a "
         "degree d >= 1 samples f at the (d+1)(d+2)/2 points of each triangle's "
