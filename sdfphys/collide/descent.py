@@ -361,6 +361,22 @@ class _Workspace(threading.local):
 _WORK = _Workspace()
 
 
+def _scratch(n_points: int) -> tuple:
+    """The compiled descents' work arrays for ``n_points`` starts (this thread's, reused
+    between calls): state, flags, running, and the candidate buffers cand, cand_i, points."""
+    return (_WORK.rows("state", n_points, kernels.N_STATE),
+            _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64),
+            _WORK.rows("running", n_points, 1, np.int64)[:, 0],
+            _WORK.whole("cand", 5), _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2))
+
+
+def _keep(cand: np.ndarray, cand_i: np.ndarray, points: np.ndarray) -> None:
+    """Keep the candidate buffers a compiled descent returned (it may have grown them)."""
+    _WORK.keep("cand", cand)
+    _WORK.keep("cand_i", cand_i)
+    _WORK.keep("points", points)
+
+
 def _point_starts(cand_i: np.ndarray, flags: np.ndarray, proposing: np.ndarray, n: int,
                   n_eval: int) -> np.ndarray:
     """(U,) the start each evaluated point of a round belongs to.
@@ -468,13 +484,8 @@ def _descend_compiled(problem: _TriangleProblem | _PairProblem,
         not pair and problem.spanning, not pair and problem.convex, points,
         np.ascontiguousarray(sigma, dtype=np.float64), iterations,
         np.array(tol, dtype=np.float64), _SHAPE_TOL,          # a copy: writable, as compiled for
-        _WORK.rows("state", n_points, kernels.N_STATE),
-        _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64),
-        _WORK.rows("running", n_points, 1, np.int64)[:, 0],
-        _WORK.whole("cand", 5), _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2))
-    _WORK.keep("cand", cand)
-    _WORK.keep("cand_i", cand_i)
-    _WORK.keep("points", candidates)
+        *_scratch(n_points))
+    _keep(cand, cand_i, candidates)
     return best, phi, data, rounds
 
 
@@ -605,13 +616,8 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
         best, value, _, _, cand, cand_i, candidates = descend_sampled(
             program.code, program.consts, program.depth, program.nesting, tri, weights,
             neighbours, 1.0 / degree, k, iterations, float(tol), _SHAPE_TOL,
-            _WORK.rows("state", n_points, kernels.N_STATE),
-            _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64),
-            _WORK.rows("running", n_points, 1, np.int64)[:, 0],
-            _WORK.whole("cand", 5), _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2))
-        _WORK.keep("cand", cand)
-        _WORK.keep("cand_i", cand_i)
-        _WORK.keep("points", candidates)
+            *_scratch(n_points))
+        _keep(cand, cand_i, candidates)
         return best.reshape(n_tri, k, 2), value.reshape(n_tri, k)
     spoints, _, ssigma, sat = kernels.triangle_starts(tri, weights)
     sphi, sgrad = field.evaluate(spoints)
