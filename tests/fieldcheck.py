@@ -77,3 +77,33 @@ def check_field(field: Field, rng: np.random.Generator, n: int = 2000,
         spacing_tol = 0.02 * max(x1 - x0, y1 - y0)
     assert np.all(nearest - dp < spacing_tol), \
         f"|f| underestimates the distance by {np.max(nearest - dp):.3g}"
+
+
+#: Far, tiny, signed-zero and subnormal points: where a field's branches overflow,
+#: underflow or divide by zero.
+FAR_POINTS = np.array([[1e3, 1e3], [-1e3, 2e3], [1e6, -1e6], [0.0, -1e6], [1e-300, 0.0],
+                       [0.0, 1e-300], [-1e-300, -1e-300], [-0.0, 1.0], [-0.0, -0.0],
+                       [5e-324, 5e-324]])
+
+
+def bounds_and_axes(bounds) -> tuple[np.ndarray, np.ndarray]:
+    """(box, lines): the corners, edge midpoints and centre of ``bounds`` (x0, y0, x1, y1)
+    crossed with the axis (16 points), and 61 points on each axis and diagonal in
+    [-3, 3] (244 points), where branches of a field typically meet."""
+    x0, y0, x1, y1 = bounds
+    xs = np.array([x0, 0.5 * (x0 + x1), x1, 0.0])
+    ys = np.array([y0, 0.5 * (y0 + y1), y1, 0.0])
+    box = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+    s = np.linspace(-3.0, 3.0, 61)
+    zero = np.zeros_like(s)
+    lines = np.concatenate([np.stack([s, zero], 1), np.stack([zero, s], 1),
+                            np.stack([s, s], 1), np.stack([s, -s], 1)])
+    return box, lines
+
+
+def boundary_and_sides(field: Field, p: np.ndarray) -> tuple[np.ndarray, ...]:
+    """(on, outer, inner): the points ``p`` projected onto the boundary along -f grad f,
+    and those moved 1e-9 along +grad f and -grad f."""
+    d, g = field.evaluate(p)
+    on = p - d[:, None] * g
+    return on, on + 1e-9 * g, on - 1e-9 * g

@@ -25,6 +25,8 @@ import math
 import numpy as np
 import pytest
 
+from fieldcheck import FAR_POINTS, boundary_and_sides, bounds_and_axes
+
 from sdfphys.sdf import compiled, field
 from sdfphys.sdf.gradient import NumericGradientField
 
@@ -179,17 +181,9 @@ def degenerate_points(f) -> np.ndarray:
     side of them, the vertices of polygonal kinds, far and tiny points."""
     rng = np.random.default_rng(11)
     x0, y0, x1, y1 = np.clip(f.bounds(), -30.0, 30.0)
-    xs = np.array([x0, 0.5 * (x0 + x1), x1, 0.0])
-    ys = np.array([y0, 0.5 * (y0 + y1), y1, 0.0])
-    box = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-    s = np.linspace(-3.0, 3.0, 61)
-    zero = np.zeros_like(s)
-    lines = np.concatenate([np.stack([s, zero], 1), np.stack([zero, s], 1),
-                            np.stack([s, s], 1), np.stack([s, -s], 1)])
+    box, lines = bounds_and_axes((x0, y0, x1, y1))
     p = rng.uniform([x0 - 0.5, y0 - 0.5], [x1 + 0.5, y1 + 0.5], (400, 2))
-    d, g = f.evaluate(p)
-    on = p - d[:, None] * g
-    near = np.concatenate([on, on + 1e-9 * g, on - 1e-9 * g])
+    near = np.concatenate(boundary_and_sides(f, p))
     vertices = [np.zeros((0, 2))]
     for name in ("vertices", "_edge", "_edges", "_side"):
         item = getattr(f, name, None)
@@ -201,10 +195,7 @@ def degenerate_points(f) -> np.ndarray:
             for seg in (item if isinstance(item, list) else [item]):
                 vertices.append(np.array([seg.a, seg.b, -seg.a, -seg.b,
                                           0.5 * (seg.a + seg.b)]))
-    far = np.array([[1e3, 1e3], [-1e3, 2e3], [1e6, -1e6], [0.0, -1e6], [1e-300, 0.0],
-                    [0.0, 1e-300], [-1e-300, -1e-300], [-0.0, 1.0], [-0.0, -0.0],
-                    [5e-324, 5e-324]])
-    return np.concatenate([box, lines, near, *vertices, far])
+    return np.concatenate([box, lines, near, *vertices, FAR_POINTS])
 
 
 POINTS = np.concatenate([np.random.default_rng(5).uniform(-3.0, 3.0, (4000, 2)),

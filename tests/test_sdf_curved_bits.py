@@ -17,6 +17,8 @@ import math
 import numpy as np
 import pytest
 
+from fieldcheck import FAR_POINTS, boundary_and_sides, bounds_and_axes
+
 from sdfphys.sdf import compiled, field
 
 #: Kinds that must match the compiled program exactly; variants change branches
@@ -64,13 +66,7 @@ def _special_points(f) -> np.ndarray:
     points moved along -f grad f) and points 1e-9 either side, far and tiny points."""
     rng = np.random.default_rng(3)
     x0, y0, x1, y1 = f.bounds()
-    xs = np.array([x0, 0.5 * (x0 + x1), x1, 0.0])
-    ys = np.array([y0, 0.5 * (y0 + y1), y1, 0.0])
-    box = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-    s = np.linspace(-3.0, 3.0, 61)
-    zero = np.zeros_like(s)
-    lines = np.concatenate([np.stack([s, zero], 1), np.stack([zero, s], 1),
-                            np.stack([s, s], 1), np.stack([s, -s], 1)])
+    box, lines = bounds_and_axes((x0, y0, x1, y1))
     own = [np.zeros((0, 2))]
     for name in ("a", "b", "c", "n", "d"):
         v = getattr(f, name, None)
@@ -78,12 +74,7 @@ def _special_points(f) -> np.ndarray:
             for scale in (1.0, -1.0, getattr(f, "radius", 1.0)):
                 own.append(np.array([scale * v, scale * v[::-1] * [-1.0, 1.0]]))
     p = rng.uniform([x0 - 0.5, y0 - 0.5], [x1 + 0.5, y1 + 0.5], (500, 2))
-    d, g = f.evaluate(p)
-    on = p - d[:, None] * g
-    far = np.array([[1e3, 1e3], [-1e3, 2e3], [1e6, -1e6], [0.0, -1e6], [1e-300, 0.0],
-                    [0.0, 1e-300], [-1e-300, -1e-300], [-0.0, 1.0], [-0.0, -0.0],
-                    [5e-324, 5e-324]])
-    return np.concatenate([box, lines, *own, on, on + 1e-9 * g, on - 1e-9 * g, far])
+    return np.concatenate([box, lines, *own, *boundary_and_sides(f, p), FAR_POINTS])
 
 
 def _points(f, n: int = 3000) -> np.ndarray:

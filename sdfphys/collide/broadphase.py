@@ -259,9 +259,8 @@ def _grid_pairs(box: np.ndarray, movable: np.ndarray) -> np.ndarray:
                     entry_box[p] = i
                     entry_cell[p] = ((cx + _CELL_OFFSET) << 32) | (cy + _CELL_OFFSET)
                     entry_home[p] = (cx == cx0[i]) | ((cy == cy0[i]) << 1)
-    capacity = 4 * n + 16
-    first = np.empty(capacity, np.int64)
-    second = np.empty(capacity, np.int64)
+    first = np.empty(4 * n + 16, np.int64)
+    second = np.empty(4 * n + 16, np.int64)
     count = 0
     for b in range(table):
         for p in range(start[b], start[b + 1]):
@@ -277,13 +276,7 @@ def _grid_pairs(box: np.ndarray, movable: np.ndarray) -> np.ndarray:
                 j = entry_box[q]
                 if not (movable[i] or movable[j]) or not _overlap(box, i, j):
                     continue
-                if count == capacity:
-                    capacity *= 2
-                    first = _grown(first, capacity)
-                    second = _grown(second, capacity)
-                first[count] = i
-                second[count] = j
-                count += 1
+                first, second, count = _append(first, second, count, i, j)
     for g in range(n):
         if not big[g]:
             continue
@@ -292,14 +285,20 @@ def _grid_pairs(box: np.ndarray, movable: np.ndarray) -> np.ndarray:
                 continue
             if not (movable[g] or movable[k]) or not _overlap(box, g, k):
                 continue
-            if count == capacity:
-                capacity *= 2
-                first = _grown(first, capacity)
-                second = _grown(second, capacity)
-            first[count] = min(g, k)
-            second[count] = max(g, k)
-            count += 1
+            first, second, count = _append(first, second, count, min(g, k), max(g, k))
     return _sorted_pairs(first, second, count, n)
+
+
+@njit(cache=True)
+def _append(first: np.ndarray, second: np.ndarray, count: int, i: int, j: int):
+    """The pair lists with (i, j) at row ``count``, doubled first when full; returns
+    (first, second, count + 1)."""
+    if count == first.shape[0]:
+        first = _grown(first, 2 * count)
+        second = _grown(second, 2 * count)
+    first[count] = i
+    second[count] = j
+    return first, second, count + 1
 
 
 @njit(cache=True)
