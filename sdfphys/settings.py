@@ -68,6 +68,12 @@ class Settings:
     max_push_out: float = _knob(
         3.0, "m/s", "Cap on the speed at which overlap is removed (no popping).",
         low=0.0, low_open=True)
+    soft_depth: float = _knob(
+        0.005, "m", "Overlap a contact takes as a soft spring. A contact deeper than this "
+        "at the start of a step is rigid and its overlap is pushed out without entering "
+        "the velocities (split push-out): packed or jammed bodies separate at most at "
+        "max_push_out and are not ejected. 0: every overlap split; a large value: "
+        "every contact soft (Box2D v3).", low=0.0)
     load_stiffening: bool = _knob(
         True, "", "Stiffen the contacts of a body that carries more than its own weight "
         "in proportion to that load (in islands over stiff_island_limit bodies, up to "

@@ -54,7 +54,7 @@ PAIR_STAGES = tuple(f"{a}_{b}" for a, b in PAIR_FUNCTIONS)
 
 #: The stages of ``World.step``, as counted in ``World.stage_counts``.
 STAGES = ("collide",) + PAIR_STAGES + (
-    "prepare", "integrate_velocities", "warm_start", "solve", "converge",
+    "prepare", "integrate_velocities", "warm_start", "solve", "converge", "push_out",
     "integrate_positions", "relax", "friction", "restitution", "time_of_impact",
     "store_impulses")
 
@@ -312,12 +312,15 @@ class World:
     def _substeps(self, constraints: ContactConstraints, bodies: BodyState) -> None:
         """Stage 3: per substep integrate v, warm start, solve, integrate x, relax; loaded
         islands (mass ratios, heavy loads: ``solver.row_softness``) get extra passes until
-        converged, counted one by one as ``converge``."""
+        converged, counted one by one as ``converge``; ``push_out`` counts the substeps
+        with a row deeper than ``soft_depth`` (its overlap pushed out through
+        pseudo-velocities, solver "Split push-out")."""
         s = self.settings
         use_friction = bool(np.any(constraints.friction > 0.0))
-        extra = solve_substeps(bodies, constraints, self.gravity, s, use_friction)
+        extra, push_outs = solve_substeps(bodies, constraints, self.gravity, s, use_friction)
         counts = self.stage_counts
         counts["converge"] += extra
+        counts["push_out"] += push_outs
         counts["integrate_velocities"] += s.substeps
         counts["integrate_positions"] += s.substeps
         if len(constraints):

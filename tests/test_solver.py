@@ -246,9 +246,11 @@ def test_two_body_collision_closed_form(e):
 
 
 def test_impulses_conserve_linear_and_angular_momentum():
-    """Two free bodies hit off-centre with friction while sliding: every impulse pair
-    acts at one common point, so momentum and angular momentum about the origin are
-    unchanged to round-off even though the bodies move and spin during the step."""
+    """Two free bodies hit off-centre with friction while sliding, both rows soft
+    (soft_depth above their overlap): every impulse pair acts at one common point, so
+    momentum and angular momentum about the origin are unchanged to round-off even
+    though the bodies move and spin during the step. (Deeper rows are split and move
+    positions without velocity: tests/test_split_push_out.py.)"""
     state = bodies([[0.0, 0.0], [0.3, 0.9]], velocity=[[1.0, 0.5], [-2.0, -3.0]],
                    inv_mass=[1.0, 0.5], inv_inertia=[3.0, 1.0],
                    angular_velocity=[2.0, -1.0])
@@ -264,7 +266,8 @@ def test_impulses_conserve_linear_and_angular_momentum():
     c = Contacts(np.array([0, 0]), np.array([1, 1]), np.array([[0.1, 0.5], [0.3, 0.4]]),
                  np.array([n, n]), np.array([0.01, 0.004]), np.array([0, 1]))
     v_before = state.velocity.copy()
-    step(state, c, Settings(), gravity=[0.0, 0.0], friction=[0.8, 0.8], restitution=[0.5, 0.5])
+    step(state, c, Settings(soft_depth=0.02), gravity=[0.0, 0.0], friction=[0.8, 0.8],
+         restitution=[0.5, 0.5])
     dv = state.velocity - v_before
     assert dv[1] @ n > 1.0 and abs(dv[1] @ [-n[1], n[0]]) > 0.1   # a hit, with friction
     p1, l1 = momenta()

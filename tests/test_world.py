@@ -348,12 +348,11 @@ def test_head_on_circles_final_velocities(e):
     np.testing.assert_array_equal(world.velocity[:, 1], 0.0)
 
 
-def test_momentum_and_angular_momentum_conserved_without_gravity():
-    """Circles and boxes thrown together with friction and restitution, no gravity:
-    sum m v and sum (m x cross v + I w) about the origin stay constant to round-off
-    over 2 s of collisions."""
+def _thrown_bodies(settings: Settings) -> World:
+    """Circles and boxes placed at random (start overlaps up to 0.57 m deep) and thrown
+    together with friction and restitution, no gravity."""
     rng = np.random.default_rng(7)
-    world = World(gravity=(0.0, 0.0))
+    world = World(gravity=(0.0, 0.0), settings=settings)
     for i in range(12):
         shape = BALL if i % 3 else UNIT_BOX
         world.add_body(shape, position=rng.uniform(-2.0, 2.0, 2) + [2.2 * (i % 4), 2.2 * (i // 4)],
@@ -361,22 +360,54 @@ def test_momentum_and_angular_momentum_conserved_without_gravity():
                                                                                   i // 4 - 1],
                        angular_velocity=rng.uniform(-2, 2), density=rng.uniform(0.5, 2.0),
                        friction=0.6, restitution=0.3)
+    return world
 
-    def momenta():
-        m, v, x = world.mass, world.velocity, world.center_of_mass
-        p = m @ v
-        return p, float(m @ (x[:, 0] * v[:, 1] - x[:, 1] * v[:, 0])
+
+def _momenta(world: World) -> tuple[np.ndarray, float]:
+    """(sum m v, sum m x cross v + I w about the origin)."""
+    m, v, x = world.mass, world.velocity, world.center_of_mass
+    return m @ v, float(m @ (x[:, 0] * v[:, 1] - x[:, 1] * v[:, 0])
                         + world.inertia @ world.angular_velocity)
 
-    p0, l0 = momenta()
+
+def test_momentum_and_angular_momentum_conserved_without_gravity():
+    """The thrown bodies with every contact soft (soft_depth above their deepest start
+    overlap): sum m v and sum (m x cross v + I w) about the origin stay constant to
+    round-off over 2 s of collisions."""
+    world = _thrown_bodies(Settings(soft_depth=1.0))
+    p0, l0 = _momenta(world)
     contacts = 0
     for _ in range(120):
         world.step()
         contacts += len(world.contacts)
     assert contacts > 50 and world.stage_counts["time_of_impact"] == 0
-    p1, l1 = momenta()
+    p1, l1 = _momenta(world)
     np.testing.assert_allclose(p1, p0, rtol=0, atol=1e-12)
     assert l1 == pytest.approx(l0, abs=1e-11)
+
+
+def test_split_push_out_keeps_momentum_and_the_centre_of_mass():
+    """The thrown bodies at the default soft_depth: their deep start overlaps are pushed
+    out through pseudo-velocities (solver, "Split push-out"), equal and opposite per
+    pair, so sum m v stays constant and the centre of mass moves at p / M exactly. A
+    position moved without velocity changes m x cross v: the angular momentum changes
+    while rows are split, and is constant again from the first step that has none."""
+    world = _thrown_bodies(Settings())
+    total = float(world.mass.sum())
+    p0, l0 = _momenta(world)
+    centre0 = world.mass @ world.center_of_mass / total
+    since_split = []
+    for _ in range(120):
+        world.step()                 # world.contacts: those found at the start of this step
+        split = bool(np.any(world.contacts.depth > world.settings.soft_depth))
+        since_split = [] if split else since_split + [_momenta(world)[1]]
+        np.testing.assert_allclose(world.mass @ world.center_of_mass / total,
+                                   centre0 + world.time * p0 / total, rtol=0, atol=1e-12)
+    p1, l1 = _momenta(world)
+    np.testing.assert_allclose(p1, p0, rtol=0, atol=1e-12)
+    assert abs(l1 - l0) > 1e-3                   # the split moved bodies while they slid
+    assert len(since_split) > 60                 # the overlaps were gone within a second
+    np.testing.assert_allclose(since_split, since_split[0], rtol=0, atol=1e-11)
 
 
 # ---------------------------------------------------------------------------------------
