@@ -170,6 +170,14 @@ def pm_ground(space: pymunk.Space, width: float = 200.0, friction: float = MU,
                   pymunk.Body.STATIC, friction=friction, elasticity=elasticity)
 
 
+def pm_deepest(bodies: list[pymunk.Body]) -> float:
+    """The deepest overlap (m) of any contact point of ``bodies``' arbiters, 0 if none."""
+    arbiters: list[pymunk.Arbiter] = []
+    for body in bodies:
+        body.each_arbiter(arbiters.append)
+    return max([0.0] + [-p.distance for a in arbiters for p in a.contact_point_set.points])
+
+
 def pm_state(bodies: list[pymunk.Body]) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                                                  np.ndarray]:
     """(positions (B, 2), angles (B,), velocities (B, 2), angular velocities (B,))."""
