@@ -87,6 +87,90 @@ def test_random_triangles_of_the_smooth_union_against_brute_force():
             assert f.distance(point[t, k][None])[0] == value[t, k]
 
 
+#: The one triangle of tools/bench_collide.py's 10,000 smooth-union queries that degree 4
+#: with 2 starts missed before the hidden dips: its vertex v2 is a local minimum
+#: (-0.088647) and a deeper dip (-0.088726) lies 9.75 % along the edge v2 -> v1.
+HIDDEN_DIP_TRIANGLE = [[0.01876468951029625, -0.242669976122392],
+                       [-0.3097743519474419, -0.6152099243753948],
+                       [-0.035791552354054956, -0.22997224406541877]]
+
+
+def test_a_dip_beside_a_vertex_that_is_a_local_minimum(monkeypatch):
+    """Degree 4, 2 starts: the dip no lattice sample shows (between samples w = (0,
+    0.25, 0.75) and v2) is found, on both paths, to the brute-force minimum."""
+    f = field(FIELDS["smooth_union"])
+    tri = np.array([HIDDEN_DIP_TRIANGLE])
+    exact = brute_minimum(f, tri[0])
+    assert exact == pytest.approx(-0.0887264, abs=1e-7)
+    for degree in (4, 5):
+        for point, value in _both(monkeypatch, descent.triangle_deepest_sampled, f, tri,
+                                  degree, 2):
+            assert value[0].min() == pytest.approx(exact, abs=1e-9)
+            assert f.distance(point[0, 0][None])[0] == value[0, 0]
+
+
+def _cubic_samples(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two samples at x = 0 and x = 1 on the x axis of f(x, y) = c0 + c1 x + c2 x^2 +
+    c3 x^3: points (2, 2), f (2,), grad f (2, 2)."""
+    x = np.array([0.0, 1.0])
+    phi = c[0] + c[1] * x + c[2] * x ** 2 + c[3] * x ** 3
+    slope = c[1] + 2.0 * c[2] * x + 3.0 * c[3] * x ** 2
+    return np.column_stack([x, 0 * x]), phi, np.column_stack([slope, 0 * x])
+
+
+@pytest.mark.parametrize("coefficients", [
+    [0.0, 1.0, -9.0, 9.0],        # rising at both ends: a crest at x = 0.061, a dip at 0.606
+    [0.0, -1.0, 6.0, -6.0],       # falling at both ends: a dip at x = 0.098, a crest at 0.569
+    [0.5, 0.2, -2.4, 2.0],        # rising at both ends: a crest at x = 0.044, a dip at 0.756
+])
+def test_hidden_dips_find_the_minimum_of_a_cubic_exactly(coefficients):
+    """The Hermite cubic through two samples' values and slopes is f itself when f is a
+    cubic along the edge: the dip is its local minimum, x = (-c2 + sqrt(c2^2 - 3 c1 c3))
+    / (3 c3), to round-off."""
+    c = np.array(coefficients)
+    points, phi, grad = _cubic_samples(c)
+    dips = kernels.hidden_dips(points, phi, grad, 2, np.array([[0, 1]]), 1)
+    x = (-c[2] + np.sqrt(c[2] ** 2 - 3.0 * c[1] * c[3])) / (3.0 * c[3])
+    assert 0.0 < x < 1.0 and 2.0 * c[2] + 6.0 * c[3] * x > 0.0     # a minimum inside
+    np.testing.assert_allclose(dips[0, 0], [x, 0.0], rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("coefficients", [
+    [0.0, 1.0, 0.0, 0.0],         # a line
+    [0.0, 1.0, -1.0, 1.0],        # rising all along (f' = 1 - 2 x + 3 x^2 > 0)
+    [0.0, -1.0, 3.0, 0.0],        # a visible dip: falling, then rising (the samples show it)
+    [0.0, 1.0, -3.0, 0.0],        # a crest only
+])
+def test_no_hidden_dip_where_the_samples_show_everything(coefficients):
+    points, phi, grad = _cubic_samples(np.array(coefficients))
+    dips = kernels.hidden_dips(points, phi, grad, 2, np.array([[0, 1]]), 1)
+    assert np.all(np.isnan(dips))
+
+
+def test_hidden_dips_keep_the_lowest_predictions_in_order():
+    """Three edges of one triangle's samples, each a cubic with a dip of its own depth:
+    h = 2 keeps the two lowest dips, lowest first; h = 4 leaves the fourth slot empty."""
+    cubics = np.array([[0.5, 0.2, -2.4, 2.0], [0.0, 1.0, -9.0, 9.0], [0.0, -1.0, 6.0, -6.0]])
+    points, phi, grad, dips, depths = [], [], [], [], []
+    for row, c in enumerate(cubics):
+        p, f, g = _cubic_samples(c)
+        x = (-c[2] + np.sqrt(c[2] ** 2 - 3.0 * c[1] * c[3])) / (3.0 * c[3])
+        points.append(p + [0.0, 2.0 * row])                     # the edges on three rows
+        phi.append(f)
+        grad.append(g)
+        dips.append([x, 2.0 * row])
+        depths.append(c[0] + c[1] * x + c[2] * x ** 2 + c[3] * x ** 3)
+    points, phi, grad = np.vstack(points), np.concatenate(phi), np.vstack(grad)
+    order = np.argsort(depths)
+    assert len(set(order.tolist())) == 3 and np.ptp(depths) > 0.1
+    edges = np.array([[0, 1], [2, 3], [4, 5]])
+    two = kernels.hidden_dips(points, phi, grad, 6, edges, 2)[0]
+    np.testing.assert_allclose(two, np.array(dips)[order[:2]], rtol=0, atol=1e-14)
+    four = kernels.hidden_dips(points, phi, grad, 6, edges, 4)[0]
+    np.testing.assert_allclose(four[:3], np.array(dips)[order], rtol=0, atol=1e-14)
+    assert np.all(np.isnan(four[3]))
+
+
 @pytest.mark.parametrize("name", sorted(FIELDS))
 def test_compiled_equals_the_python_loop(monkeypatch, name):
     f = field(FIELDS[name])
@@ -106,7 +190,7 @@ def test_ranks_follow_the_samples():
 
     def pick(phi, k):
         return kernels.pick_starts(np.array(phi, dtype=np.float64), points, sigma, 6,
-                                   neighbours, 0.5, k)[0].tolist()
+                                   neighbours, 0.5, k, 6)[0].tolist()
 
     phi = [0.0, 1.0, 2.0, -1.0, 3.0, 0.5]                # local minima v1, v0, v2
     assert pick(phi, 2) == [3, 0]

@@ -48,12 +48,15 @@ from ._descent_kernels import (
     accept,
     bound,
     gather_starts,
+    hidden_dips,
     initialize,
     pick_starts,
+    present_dips,
     propose,
     results,
     triangle_known,
     triangle_starts,
+    with_dips,
 )
 
 __all__ = ["descend", "descend_sampled", "enclosing_circles", "field_contacts", "merge_minima",
@@ -275,23 +278,28 @@ def _rounds(kind: int, barzilai_borwein: bool, kd: int,
 @njit(cache=True, error_model="numpy")
 def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
                     tri: np.ndarray, weights: np.ndarray, neighbours: np.ndarray,
-                    spacing: float, k: int, iterations: int, tol: float, shape_tol: float,
-                    state: np.ndarray, flags: np.ndarray, running: np.ndarray,
-                    cand: np.ndarray, cand_i: np.ndarray, candidates: np.ndarray):
+                    edges: np.ndarray, spacing: float, k: int, iterations: int, tol: float,
+                    shape_tol: float, state: np.ndarray, flags: np.ndarray,
+                    running: np.ndarray, cand: np.ndarray, cand_i: np.ndarray,
+                    candidates: np.ndarray):
     """``descent.triangle_deepest_sampled`` of a field given by its program.
 
-    The field is evaluated at the lattice samples (weights (N, 3), neighbours
-    (N, 6), spacing 1 / degree, ``descent._lattice``) of each triangle tri
-    (T, 3, 2); what they tell of each triangle (``triangle_known``, all N as
-    starts that span it: vertex values, plane, cone; not the cuts, whose model
-    costs O(N^3)) is kept; the k samples ``pick_starts`` chooses descend
+    The field is evaluated at the lattice samples (weights (N, 3), spacing
+    1 / degree, edges (E, 2): ``descent._lattice``, ``descent._lattice_edges``) of
+    each triangle tri (T, 3, 2) and then at its hidden dips (``hidden_dips``,
+    ``descent.HIDDEN_DIPS`` slots: neighbours has N + HIDDEN_DIPS rows, -1 for the
+    slots); what the lattice samples tell of each triangle (``triangle_known``, all
+    N as starts that span it: vertex values, plane, cone; not the cuts, whose model
+    costs O(N^3)) is kept; the k samples or dips ``pick_starts`` chooses descend
     (``_rounds``), tol (m) for all. Work arrays as ``descend``.
 
     Returns best (T k, 2), phi (T k,), rounds (T k,), the number of points
     evaluated and the round buffers (possibly grown).
     """
     n_sample = weights.shape[0]
+    n_dip = neighbours.shape[0] - n_sample
     n_tri = tri.shape[0]
+    n_dips = 0
     no_pair = np.empty(0, dtype=np.int64)
     no_rotation, no_offset = np.zeros((1, 2, 2)), np.zeros((1, 2))
     corner = np.empty((n_tri, 3, 3))
@@ -313,8 +321,20 @@ def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nest
         c, sh = triangle_known(part, sat, spoints, sphi, sgrad, n_sample, True, False,
                                shape_tol)
         corner[lo:hi], shape[lo:hi] = c, sh
-        chosen = pick_starts(sphi[:n], spoints, ssigma, n_sample, neighbours, spacing, k)
-        p, f, g, sg, ow = gather_starts(n_sample, chosen, spoints, sphi, sgrad, ssigma)
+        dip_points, dip_place = present_dips(hidden_dips(spoints, sphi[:n], sgrad, n_sample,
+                                                         edges, n_dip))
+        m = dip_points.shape[0]
+        dip_phi, dip_grad, dip_data = np.empty(m), np.empty((m, 2)), np.empty((m, 2))
+        _evaluate(TRIANGLE, code_a, consts_a, depth_a, nesting_a, code_a, consts_a, depth_a,
+                  nesting_a, no_rotation, no_offset, dip_points, no_pair, m, dip_phi, dip_grad,
+                  dip_data)
+        n_dips += m
+        xpoints, xphi, xgrad, xsigma = with_dips(spoints, sphi[:n], sgrad, ssigma, n_sample,
+                                                 n_dip, dip_points, dip_place, dip_phi,
+                                                 dip_grad)
+        chosen = pick_starts(xphi, xpoints, xsigma, n_sample + n_dip, neighbours, spacing, k,
+                             n_sample)
+        p, f, g, sg, ow = gather_starts(n_sample + n_dip, chosen, xpoints, xphi, xgrad, xsigma)
         points[lo * k:hi * k], phi[lo * k:hi * k], grad[lo * k:hi * k] = p, f, g
         sigma[lo * k:hi * k], owner[lo * k:hi * k] = sg, ow + lo
     data = grad.copy()
@@ -324,7 +344,8 @@ def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nest
         nesting_a, no_rotation, no_offset, owner, tri, owner, k, points, phi, grad, data,
         corner, shape, sigma, iterations, tols, shape_tol, state, flags, running, cand, cand_i,
         candidates)
-    return best, phi, rounds, evaluated + n_tri * (n_sample - k), cand, cand_i, candidates
+    return (best, phi, rounds, evaluated + n_tri * (n_sample - k) + n_dips, cand, cand_i,
+            candidates)
 
 
 # --------------------------------------------------------------------------------------

@@ -1167,19 +1167,133 @@ def results(state: np.ndarray, flags: np.ndarray) -> tuple[np.ndarray, np.ndarra
 # --------------------------------------------------------------------------------------
 
 @njit(cache=True, error_model="numpy")
+def hidden_dips(points: np.ndarray, phi: np.ndarray, grad: np.ndarray, n_sample: int,
+                edges: np.ndarray, h: int) -> np.ndarray:
+    """Dips between lattice samples that no sample shows: (T, h, 2) points, NaN where none.
+
+    points (T n_sample, 2), phi, grad (T n_sample, 2): each triangle's lattice samples
+    and f, grad f there; edges (E, 2): the lattice's neighbour pairs (c, n), c < n.
+    Along an edge, with e = x_n - x_c, f(x_c + t e) is fitted by the cubic Hermite
+    polynomial H through the two values and slopes p = grad_c . e, q = grad_n . e (m).
+    In Bernstein form H'(t) = p (1 - t)^2 + 2 m t (1 - t) + q t^2 with
+    m = 3 (f_n - f_c) - p - q (the mean of H' over [0, 1] is f_n - f_c). When p and q
+    have one sign, H' changes sign inside [0, 1] iff m < -sqrt(p q) (p, q > 0) or
+    m > sqrt(p q) (p, q < 0): the segment then holds a local minimum that neither end
+    shows (as a vertex that is itself a local minimum with a deeper dip 10 % along an
+    edge: the smooth union of tools/bench_collide.py, 8e-5 m deeper). The dip is the
+    root of H' = C + B t + A t^2 (C = p, B = 2 (m - p), A = p - 2 m + q) where
+    H'' = B + 2 A t > 0, predicted at H(t) = f_c + C t + B t^2 / 2 + A t^3 / 3. Of a
+    triangle's edges, the h with the lowest predicted values give the points (by
+    increasing prediction); the rest of the h rows are NaN.
+    """
+    n_tri = phi.shape[0] // n_sample
+    out = np.full((n_tri, h, 2), np.nan)
+    best = np.empty(h)
+    for t in range(n_tri):
+        o = t * n_sample
+        found = 0
+        for j in range(edges.shape[0]):
+            c, n = o + edges[j, 0], o + edges[j, 1]
+            ex, ey = points[n, 0] - points[c, 0], points[n, 1] - points[c, 1]
+            p = grad[c, 0] * ex + grad[c, 1] * ey
+            q = grad[n, 0] * ex + grad[n, 1] * ey
+            if not p * q > 0.0:                    # slopes of one sign (and not NaN)
+                continue
+            m = 3.0 * (phi[n] - phi[c]) - p - q
+            if not (m * p < 0.0 and m * m > p * q):     # m beyond -+sqrt(p q), against p
+                continue
+            a, b = p - 2.0 * m + q, 2.0 * (m - p)
+            if a == 0.0:
+                at = -p / b
+            else:
+                disc = math.sqrt(b * b - 4.0 * a * p)
+                at = (-b + disc) / (2.0 * a)
+                if not b + 2.0 * a * at > 0.0:
+                    at = (-b - disc) / (2.0 * a)
+            if not 0.0 < at < 1.0:
+                continue
+            value = phi[c] + at * (p + at * (0.5 * b + at * a / 3.0))
+            # Insert by predicted value into the h kept so far.
+            r = min(found, h)
+            while r > 0 and value < best[r - 1]:
+                if r < h:
+                    best[r] = best[r - 1]
+                    out[t, r, 0], out[t, r, 1] = out[t, r - 1, 0], out[t, r - 1, 1]
+                r -= 1
+            if r < h:
+                best[r] = value
+                out[t, r, 0], out[t, r, 1] = points[c, 0] + at * ex, points[c, 1] + at * ey
+            found += 1
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def present_dips(dips: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The dips (T, h, 2) that are there (not NaN): their points (M, 2) and their
+    places t h + r (M,), in that order."""
+    n_tri, h = dips.shape[0], dips.shape[1]
+    count = 0
+    for t in range(n_tri):
+        for r in range(h):
+            count += not math.isnan(dips[t, r, 0])
+    points = np.empty((count, 2))
+    place = np.empty(count, dtype=np.int64)
+    i = 0
+    for t in range(n_tri):
+        for r in range(h):
+            if not math.isnan(dips[t, r, 0]):
+                points[i, 0], points[i, 1], place[i] = dips[t, r, 0], dips[t, r, 1], t * h + r
+                i += 1
+    return points, place
+
+
+@njit(cache=True, error_model="numpy")
+def with_dips(points: np.ndarray, phi: np.ndarray, grad: np.ndarray, sigma: np.ndarray,
+              n_sample: int, h: int, dip_points: np.ndarray, dip_place: np.ndarray,
+              dip_phi: np.ndarray, dip_grad: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Each triangle's n_sample samples followed by its h dip slots: points, phi, grad,
+    sigma of T (n_sample + h) rows. The dips (``present_dips``: points (M, 2), places
+    t h + r, and f, grad f there) fill their slots; empty slots have NaN phi."""
+    n_tri = phi.shape[0] // n_sample
+    width = n_sample + h
+    p = np.empty((n_tri * width, 2))
+    f = np.full(n_tri * width, np.nan)
+    g = np.zeros((n_tri * width, 2))
+    s = np.empty(n_tri * width)
+    for t in range(n_tri):
+        for r in range(width):
+            i = t * width + r
+            j = t * n_sample + min(r, n_sample - 1)
+            s[i] = sigma[j]
+            if r < n_sample:
+                p[i, 0], p[i, 1], f[i] = points[j, 0], points[j, 1], phi[j]
+                g[i, 0], g[i, 1] = grad[j, 0], grad[j, 1]
+            else:
+                p[i, 0], p[i, 1] = points[j, 0], points[j, 1]
+    for d in range(dip_place.shape[0]):
+        i = (dip_place[d] // h) * width + n_sample + dip_place[d] % h
+        p[i, 0], p[i, 1], f[i] = dip_points[d, 0], dip_points[d, 1], dip_phi[d]
+        g[i, 0], g[i, 1] = dip_grad[d, 0], dip_grad[d, 1]
+    return p, f, g, s
+
+
+@njit(cache=True, error_model="numpy")
 def pick_starts(phi: np.ndarray, points: np.ndarray, sigma: np.ndarray, n_sample: int,
-                neighbours: np.ndarray, spacing: float, k: int) -> np.ndarray:
+                neighbours: np.ndarray, spacing: float, k: int, n_lattice: int) -> np.ndarray:
     """(T, k) the samples to descend from, per triangle, in rank order.
 
     phi (T n_sample,), points (T n_sample, 2), sigma (T n_sample,): f at each
-    triangle's lattice samples (triangle by triangle), the samples, and their
-    triangle's longest edge; neighbours (n_sample, 6): each sample's lattice
-    neighbours, -1 padded. Taken by increasing value (the first on ties; NaN
-    last), skipping samples within spacing x sigma (spacing = 1 / degree: one
-    lattice step; on a sliver also the samples of other rows that fall next to a
-    taken one) of one already taken: first the discrete local minima (no lattice
-    neighbour lower), one per separate dip, then the other samples, then (when
-    fewer than k are left so) the lowest of the rest (k <= n_sample).
+    triangle's samples (triangle by triangle), the samples, and their triangle's
+    longest edge; the first n_lattice of each triangle are its lattice samples,
+    the rest its dip slots (``with_dips``; an empty one, NaN, is never taken);
+    neighbours (n_sample, 6): each sample's lattice neighbours, -1 padded (none
+    for a dip). Taken by increasing value (the first on ties; NaN last),
+    skipping samples within spacing x sigma (spacing = 1 / degree: one lattice
+    step; on a sliver also the samples of other rows that fall next to a taken
+    one) of one already taken: first the discrete local minima (no lattice
+    neighbour lower; every dip), one per separate dip, then the other samples,
+    then (when fewer than k are left so) the lowest of the rest (k <= n_lattice).
     """
     n_tri = phi.shape[0] // n_sample
     chosen = np.empty((n_tri, k), dtype=np.int64)
@@ -1187,7 +1301,7 @@ def pick_starts(phi: np.ndarray, points: np.ndarray, sigma: np.ndarray, n_sample
     for t in range(n_tri):
         o = t * n_sample
         for s in range(n_sample):
-            taken[s] = False
+            taken[s] = s >= n_lattice and math.isnan(phi[o + s])
         reach = spacing * sigma[o] * (1.0 + 1e-6)          # a neighbour, with rounding
         reach2 = reach * reach
         m = 0

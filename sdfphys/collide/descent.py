@@ -572,6 +572,23 @@ def _lattice(degree: int) -> tuple[np.ndarray, np.ndarray]:
     return _LATTICES[degree]
 
 
+#: Hidden dips (``_descent_kernels.hidden_dips``: a local minimum between two lattice
+#: samples that neither shows) evaluated per triangle as extra start candidates.
+HIDDEN_DIPS = 2
+
+_EDGES: dict[int, np.ndarray] = {}
+
+
+def _lattice_edges(degree: int) -> np.ndarray:
+    """(E, 2) int64: the lattice's neighbour pairs (c, n), c < n, in order (cached)."""
+    if degree not in _EDGES:
+        _, neighbours = _lattice(degree)
+        pairs = sorted({(c, int(n)) for c in range(len(neighbours)) for n in neighbours[c]
+                        if n > c})
+        _EDGES[degree] = np.array(pairs, dtype=np.int64).reshape(-1, 2)
+    return _EDGES[degree]
+
+
 def lattice_size(degree: int) -> int:
     """Samples per triangle of the lattice of ``degree``: (degree + 1)(degree + 2) / 2."""
     return (degree + 1) * (degree + 2) // 2
@@ -583,11 +600,15 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
     """``triangle_deepest`` from starts chosen by sampling: (point (T, K, 2), value (T, K)).
 
     f is evaluated at the (degree + 1)(degree + 2) / 2 points of each triangle's
-    barycentric lattice of ``degree`` (>= 1; its vertices included). The starts
-    are K = min(n_starts, N) samples taken by increasing value, skipping samples
-    within one lattice spacing (longest edge / degree) of one already taken: first
-    the discrete local minima (no lattice neighbour lower: one per separate dip),
-    then the other samples, then, when too few are left, the lowest of the rest
+    barycentric lattice of ``degree`` (>= 1; its vertices included), then at up
+    to HIDDEN_DIPS hidden dips: places between two neighbouring samples where the
+    cubic through their values and slopes has a local minimum that neither sample
+    shows (``_descent_kernels.hidden_dips``; a vertex that is a local minimum with
+    a deeper dip 10 % along an edge). The starts are K = min(n_starts, N) samples
+    or dips taken by increasing value, skipping those within one lattice spacing
+    (longest edge / degree) of one already taken: first the discrete local minima
+    (no lattice neighbour lower: one per separate dip) and the hidden dips, then
+    the other samples, then, when too few are left, the lowest of the rest
     (``_descent_kernels.pick_starts``). Start rank k = column k
     (rank 0: the lowest sample of all; ``merge_minima`` keeps the lowest rank of a
     cluster). What the samples tell of f over the triangle (vertex values, a
@@ -604,7 +625,9 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
         raise ValueError(f"degree and n_starts must be >= 1, got {degree}, {n_starts}")
     tri = np.asarray(triangles, dtype=np.float64).reshape(-1, 3, 2)
     weights, neighbours = _lattice(int(degree))
+    edges = _lattice_edges(int(degree))
     n_sample = len(weights)
+    with_slots = np.vstack([neighbours, np.full((HIDDEN_DIPS, neighbours.shape[1]), -1)])
     k = min(int(n_starts), n_sample)
     n_tri = len(tri)
     if n_tri == 0:
@@ -615,7 +638,7 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
         n_points = n_tri * k
         best, value, _, _, cand, cand_i, candidates = descend_sampled(
             program.code, program.consts, program.depth, program.nesting, tri, weights,
-            neighbours, 1.0 / degree, k, iterations, float(tol), _SHAPE_TOL,
+            with_slots, edges, 1.0 / degree, k, iterations, float(tol), _SHAPE_TOL,
             *_scratch(n_points))
         _keep(cand, cand_i, candidates)
         return best.reshape(n_tri, k, 2), value.reshape(n_tri, k)
@@ -625,9 +648,17 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
     sgrad = np.ascontiguousarray(sgrad, dtype=np.float64)
     known = kernels.triangle_known(tri, sat, spoints, sphi, sgrad, n_sample, True, False,
                                    _SHAPE_TOL)
-    chosen = kernels.pick_starts(sphi, spoints, ssigma, n_sample, neighbours, 1.0 / degree, k)
-    points, _, _, sigma, owner = kernels.gather_starts(n_sample, chosen, spoints, sphi, sgrad,
-                                                       ssigma)
+    dip_points, dip_place = kernels.present_dips(kernels.hidden_dips(
+        spoints, sphi, sgrad, n_sample, edges, HIDDEN_DIPS))
+    dip_phi, dip_grad = field.evaluate(dip_points)
+    spoints, sphi, sgrad, ssigma = kernels.with_dips(
+        spoints, sphi, sgrad, ssigma, n_sample, HIDDEN_DIPS, dip_points, dip_place,
+        np.ascontiguousarray(dip_phi, dtype=np.float64),
+        np.ascontiguousarray(dip_grad, dtype=np.float64))
+    chosen = kernels.pick_starts(sphi, spoints, ssigma, n_sample + HIDDEN_DIPS, with_slots,
+                                 1.0 / degree, k, n_sample)
+    points, _, _, sigma, owner = kernels.gather_starts(n_sample + HIDDEN_DIPS, chosen, spoints,
+                                                       sphi, sgrad, ssigma)
     problem = _TriangleProblem(field, tri, owner, _no_vertex_starts(n_tri), k, False)
     problem.known = lambda *_: known                          # read from the samples
     problem.programs = lambda: None                           # the Python loop
