@@ -116,10 +116,14 @@ class Settings:
     descent_lattice: int = _knob(
         0, "", "Triangle-field queries: 0 takes the descent_starts fixed starts; a "
         "degree d >= 1 samples f at the (d+1)(d+2)/2 points of each triangle's "
-        "barycentric lattice (3: 10, 4: 15, 5: 21 points, vertices included) and "
-        "descends from the descent_starts lowest samples not within one lattice "
-        "spacing of each other (keys by rank). Costs one field evaluation per "
-        "sample; finds separate dips better than as many fixed starts.", low=0, high=16)
+        "barycentric lattice (3: 10, 4: 15, 5: 21 points, vertices included), "
+        "evaluates up to 2 hidden dips (a minimum between two neighbouring samples that "
+        "their values and slopes reveal) and descends from the descent_starts lowest "
+        "samples or dips not within one lattice spacing of each other (keys by rank: "
+        "less stable under motion than the fixed starts' ids). Costs one field "
+        "evaluation per sample; finds separate dips better than as many fixed starts "
+        "(4 with 2 starts: every smooth-union query of tools/bench_collide.py under "
+        "2 us).", low=0, high=16)
     field_descent_iterations: int = _knob(
         16, "", "Field-field queries (sdf-sdf): maximum descent iterations per start.",
         low=1, high=1024)
