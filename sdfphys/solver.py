@@ -855,8 +855,8 @@ def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_
 # - a column: each contact of a column of N overlapping bodies separates at up to
 #   max_push_out, so the top body is pushed at N times that; one relax pass undoes it
 #   only near the bottom of the column (Gauss-Seidel spreads a correction one contact
-#   per pass). 25 circles r 0.5 overlapping by 0.2 m in a 1 m wide shaft: the top one
-#   left at 20 m/s.
+#   per pass). 25 circles r 0.5 overlapping by 0.2 m in a 1.02 m wide shaft: they left
+#   at up to 22 m/s (tests/test_split_push_out.py).
 # - a jam: bodies that overlap and cannot move apart (25 circles side by side in a
 #   20 m box) keep vn = 0, so the soft row's impulse grows to m_n bias / impulse_scale
 #   (the spring's force at its capped bias: 4.9 kN between two 0.79 kg circles at
@@ -884,7 +884,7 @@ def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_
 # Measured (tests/stability, tools/stability_report.py), 625 circles packed 0.2 m deep
 # in a 20 m box: separation 23 -> 1.62 m/s, fastest body 41 -> 0.54 m/s, kinetic
 # energy over the last second / peak 0.21 -> 0.00035 (pymunk: 1.17, 0.87, 0.00082).
-# soft_depth from 1 to 10 mm gives decay 0.0004-0.005 there; 20 mm lets the jammed
+# soft_depth from 1 to 10 mm gives decay 0.00015-0.0054 there; 20 mm lets the jammed
 # springs store enough to keep the pile churning (decay 0.26); 0 (every overlap split,
 # as pymunk) lets a 20-box stack lean 12.8 cm in 30 s (1.3 cm at 5 mm).
 # --------------------------------------------------------------------------------------

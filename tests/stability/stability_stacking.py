@@ -4,7 +4,8 @@ Cases (figures in metres unless said): ``*_mass_ratio`` and ``*_big_box_drop`` (
 the heavy box), ``*_tall_stack``, ``*_pyramid`` and ``*_heavy_top_pyramid`` (top box
 displacement; the big pyramids also their deepest contact), ``*_scaled_pyramid``
 (displacement over side), ``*_far_pyramid`` (difference from the same pyramid at the
-origin), ``*_resting_stacks`` (fastest box point, m/s). See ``stability_common`` for the conventions.
+origin), ``*_resting_stacks`` (fastest box point, m/s). See ``stability_common`` for
+the conventions.
 """
 
 from __future__ import annotations
