@@ -176,15 +176,23 @@ def contact_softness(settings: Settings) -> tuple[Softness, Softness]:
 #
 # An island is the set of dynamic bodies connected by contacts between dynamic bodies
 # (static and kinematic bodies do not join islands). It is loaded if it has at most
-# ``Settings.stiff_island_limit`` dynamic bodies and two touching bodies whose masses
+# ``Settings.stiff_island_limit`` dynamic bodies, or at most ``Settings.rest_island_limit``
+# if none of its rows is deeper than ``Settings.soft_depth`` at the start of the step
+# (it is not pushing out overlap: "Split push-out"), and two touching bodies whose masses
 # differ by MASS_RATIO or more, or (with load stiffening) a body carrying more than
-# LOADED times its weight. Larger islands (piles of thousands of circles) keep one pass
-# per substep, so their cost does not grow, and load stiffening counts at most
-# ``Settings.large_island_load_cap`` weights there: rows stiffer than that need the
-# converged passes. Measured on a base-20 pyramid of 210 unit boxes with exact box
-# contacts (tests/test_solver.py), top box moved in 20 s: 3.3 cm unstiffened, 1.8 cm
-# with a cap of 2, 1.2 cm with 3, 8.3 cm and drifting with 4; with sdfphys' own
-# contacts 41 cm uncapped. The cap is 2, half the unstable value. The 5,000-circle pile
+# LOADED times its weight. Larger islands (piles of thousands of circles) and large
+# islands pushing out overlap keep one pass per substep, so their cost does not grow,
+# and load stiffening counts at most ``Settings.large_island_load_cap`` weights there:
+# rows stiffer than that need the converged passes. Why two limits (measured, default
+# settings): a base-40 pyramid (820 boxes) with one pass sags under its 40 layers, the
+# top 6.3 cm in 2 s; converged it moves 8.7 mm, at the same step time (58 ms, most of it
+# collision). 625 circles packed 0.2 m deep (one island of split rows) converged are
+# pushed out at 6.6 m/s instead of 1.6, at 12 times the cost: stiffened, converged rows
+# in a jam store what the split push-out keeps out of the velocities. The cap, measured
+# (before rest_island_limit) on a base-20 pyramid of 210 unit boxes with exact box
+# contacts and one pass per substep (tests/test_solver.py), top box moved in 20 s:
+# 3.3 cm unstiffened, 1.8 cm with a cap of 2, 1.2 cm with 3, 8.3 cm and drifting with
+# 4; with sdfphys' own contacts 41 cm uncapped. The cap is 2, half the unstable value. The 5,000-circle pile
 # of tools/bench_vs_pymunk.py: deepest overlap 0.114 -> 0.050 m with it. Bodies
 # carrying only their own weight keep contact_softness's coefficients, bit for bit,
 # and no extra pass runs.
@@ -216,14 +224,15 @@ def _root(parent, i):
 def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_impulse, stiff,
                          up, weight_impulse, omega, zeta, h, base_bias_rate, base_mass_scale,
                          base_impulse_scale, stiffen, limit, large_cap, bias_rate, mass_scale,
-                         impulse_scale, loaded_pairs):
+                         impulse_scale, loaded_pairs, separation, soft_depth, rest_limit):
     """Fill the per-row coefficients (K,) and the loaded pairs; returns their count.
 
     weight_impulse: |g| h, the impulse per substep that carries 1 kg (0: no gravity, no
     load stiffening). omega: rad/s, the capped base stiffness (doubled for stiff rows).
     base_*: (2,) contact_softness's coefficients, [movable, static], used where r = 1.
-    limit: largest loaded island (dynamic bodies); large_cap: the most weights counted
-    in larger islands, which get no extra pass.
+    limit: largest loaded island (dynamic bodies); rest_limit: the same for islands with
+    no row deeper than soft_depth (m; separation (K,) at the start of the step);
+    large_cap: the most weights counted in larger islands, which get no extra pass.
     """
     nb = inv_mass.shape[0]
     n_pairs = pair_start.shape[0] - 1
@@ -257,6 +266,13 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
             size[root[i]] += 1
             if ratio[i] > LOADED:
                 hot[root[i]] = True
+    # An island pushing out overlap deeper than soft_depth (split rows) is not at rest.
+    largest = np.full(nb, max(limit, rest_limit), np.int64)
+    for k in range(body_a.shape[0]):
+        if separation[k] < -soft_depth:
+            for i in (body_a[k], body_b[k]):
+                if inv_mass[i] > 0.0:
+                    largest[root[i]] = limit
     for p in range(n_pairs):
         a = body_a[pair_start[p]]
         b = body_b[pair_start[p]]
@@ -269,8 +285,8 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
         first = pair_start[p]
         a = body_a[first]
         b = body_b[first]
-        hot_a = inv_mass[a] > 0.0 and hot[root[a]] and size[root[a]] <= limit
-        hot_b = inv_mass[b] > 0.0 and hot[root[b]] and size[root[b]] <= limit
+        hot_a = inv_mass[a] > 0.0 and hot[root[a]] and size[root[a]] <= largest[root[a]]
+        hot_b = inv_mass[b] > 0.0 and hot[root[b]] and size[root[b]] <= largest[root[b]]
         r = 1.0
         if inv_mass[a] > 0.0:
             r = ratio[a] if hot_a else min(ratio[a], large_cap)
@@ -319,7 +335,8 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
         np.array([soft.bias_rate, stiff.bias_rate]), np.array([soft.mass_scale, stiff.mass_scale]),
         np.array([soft.impulse_scale, stiff.impulse_scale]), settings.load_stiffening,
         settings.stiff_island_limit, settings.large_island_load_cap, bias_rate, mass_scale,
-        impulse_scale, loaded_pairs)
+        impulse_scale, loaded_pairs, c.separation, settings.soft_depth,
+        settings.rest_island_limit)
     return bias_rate, mass_scale, impulse_scale, loaded_pairs[:count]
 
 

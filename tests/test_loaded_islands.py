@@ -25,9 +25,10 @@ HERTZ = min(SETTINGS.contact_hertz, 0.25 / H)
 ZETA = SETTINGS.contact_damping_ratio
 
 
-def rows(pairs, inv_mass, weights, normals=None):
+def rows(pairs, inv_mass, weights, normals=None, separation=None):
     """Hand-made constraints: one row per (a, b) pair, normal a -> b straight up unless
-    given, normal impulse = ``weights`` kg carried (per substep: w |g| h)."""
+    given, normal impulse = ``weights`` kg carried (per substep: w |g| h), separation 0
+    (touching) unless given."""
     a = np.array([p[0] for p in pairs], np.int64)
     b = np.array([p[1] for p in pairs], np.int64)
     inv_mass = np.asarray(inv_mass, np.float64)
@@ -36,6 +37,7 @@ def rows(pairs, inv_mass, weights, normals=None):
         body_a=a, body_b=b, feature=np.zeros(len(pairs), np.int64),
         pair_start=np.arange(len(pairs) + 1, dtype=np.int64), normal=normal,
         normal_impulse=np.asarray(weights, np.float64) * 9.81 * H,
+        separation=np.zeros(len(pairs)) if separation is None else np.asarray(separation),
         stiff=((inv_mass[a] == 0.0) | (inv_mass[b] == 0.0)).astype(np.int64))
 
 
@@ -79,16 +81,38 @@ def test_islands_larger_than_the_limit_get_no_extra_pass_and_capped_stiffening()
             inv_mass, c, G, SETTINGS.with_values(**knobs))
         return [bias_rate[0], mass_scale[0], impulse_scale[0]], len(loaded)
 
-    small, n_small = ground_row(stiff_island_limit=3)
-    large, n_large = ground_row(stiff_island_limit=2)
-    above_cap, _ = ground_row(stiff_island_limit=2, large_island_load_cap=4.0)
-    plain, _ = ground_row(stiff_island_limit=2, large_island_load_cap=1.0)
+    small, n_small = ground_row(stiff_island_limit=3, rest_island_limit=0)
+    large, n_large = ground_row(stiff_island_limit=2, rest_island_limit=0)
+    above_cap, _ = ground_row(stiff_island_limit=2, rest_island_limit=0,
+                              large_island_load_cap=4.0)
+    plain, _ = ground_row(stiff_island_limit=2, rest_island_limit=0, large_island_load_cap=1.0)
     assert n_small == 3 and n_large == 0
     np.testing.assert_allclose(small, expected(3.0, True), rtol=1e-12)
     np.testing.assert_allclose(large, expected(2.0, True), rtol=1e-12)     # default cap 2
     np.testing.assert_allclose(above_cap, expected(3.0, True), rtol=1e-12)  # 3 < cap 4
     stiff = contact_softness(SETTINGS)[1]
     assert plain == [stiff.bias_rate, stiff.mass_scale, stiff.impulse_scale]
+
+
+def test_islands_at_rest_are_treated_up_to_the_rest_limit():
+    """The 3-box stack over stiff_island_limit (2): at rest (no row deeper than
+    soft_depth) it is loaded while rest_island_limit >= 3; with one row 1 cm deep (it is
+    pushing out overlap, solver "Split push-out") it is not, and its rows are capped."""
+    def ground_row(separation, **knobs):
+        inv_mass, c = rows([(0, 1), (1, 2), (2, 3)], [0.0, 1.0, 1.0, 1.0], [3.0, 2.0, 1.0],
+                           separation=separation)
+        bias_rate, mass_scale, impulse_scale, loaded = row_softness(
+            inv_mass, c, G, SETTINGS.with_values(stiff_island_limit=2, **knobs))
+        return [bias_rate[0], mass_scale[0], impulse_scale[0]], len(loaded)
+
+    rest, n_rest = ground_row([0.0, -0.004, 0.0])                  # 4 mm: still soft
+    too_large, n_too_large = ground_row([0.0, -0.004, 0.0], rest_island_limit=2)
+    deep, n_deep = ground_row([0.0, -0.01, 0.0])
+    assert SETTINGS.rest_island_limit >= 3 and SETTINGS.soft_depth == 0.005
+    assert (n_rest, n_too_large, n_deep) == (3, 0, 0)
+    np.testing.assert_allclose(rest, expected(3.0, True), rtol=1e-12)
+    np.testing.assert_allclose(too_large, expected(2.0, True), rtol=1e-12)
+    np.testing.assert_allclose(deep, expected(2.0, True), rtol=1e-12)
 
 
 def test_static_bodies_do_not_join_islands():
