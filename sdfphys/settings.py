@@ -70,8 +70,8 @@ class Settings:
         low=0.0, low_open=True)
     soft_depth: float = _knob(
         0.005, "m", "Overlap a contact takes as a soft spring. A contact deeper than this "
-        "at the start of a step is rigid and its overlap is pushed out without entering "
-        "the velocities (split push-out): packed or jammed bodies separate at most at "
+        "(re-measured every substep) is rigid and its overlap is pushed out without "
+        "entering the velocities (split push-out): packed or jammed bodies separate at most at "
         "max_push_out and are not ejected. 0: every overlap split; a large value: "
         "every contact soft (Box2D v3).", low=0.0)
     load_stiffening: bool = _knob(

@@ -744,6 +744,15 @@ def _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h):
 
 
 @njit(cache=True)
+def _any_below(values, limit):
+    """Whether some value is below limit (no temporary array)."""
+    for v in values:
+        if v < limit:
+            return True
+    return False
+
+
+@njit(cache=True)
 def _integrate_pseudo(com, angle, pseudo_velocity, pseudo_angular, pseudo_impulse, h):
     """x <- x + h v', angle <- angle + h w' (v', w': the pseudo-velocities the split rows
     gave this substep); then v', w' and the pseudo-impulses are reset to 0."""
@@ -926,13 +935,14 @@ def _pseudo_push(pseudo_velocity, pseudo_angular, pseudo_impulse, k, a, b, ma, i
 
 
 @njit(cache=True)
-def _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pair_start,
-           pairs, normal, anchor_a, anchor_b, separation, normal_mass, tangent_mass, friction,
-           bias_rate, mass_scale, impulse_scale, normal_impulse, tangent_impulse,
-           total_normal_impulse, inv_h, max_push_out, use_bias, use_friction, soft_depth,
-           pseudo_velocity, pseudo_angular, pseudo_impulse):
+def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, use_bias,
+           use_friction):
     """One Gauss-Seidel pass over the pairs ``pairs`` (indices into pair_start, in order):
     normal rows of the pair, then its friction rows.
+
+    bodies: (velocity, angular_velocity, inv_mass, inv_inertia); rows: the contact rows
+    (``_substeps_kernel``'s tuple, ContactConstraints' arrays plus the row coefficients of
+    ``row_softness``); pseudo: (pseudo_velocity, pseudo_angular, pseudo_impulse).
 
     Normal row k: s > 0 (speculative): bias = s / h, rigid (the gap may close, no more);
     else with ``use_bias`` soft, with row k's coefficients (``row_softness``):
@@ -946,8 +956,13 @@ def _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pa
     (``pseudo_impulse``, reset every substep).
 
     Returns (largest |d_l_n|, largest accumulated l_n) over the pass, N s: how far the
-    pass was from converged (``_substeps_kernel``'s extra passes stop on their ratio).
+    pass was from converged (``_sweeps``' extra passes stop on their ratio).
     """
+    velocity, angular_velocity, inv_mass, inv_inertia = bodies
+    (body_a, body_b, pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
+     tangent_mass, friction, bias_rate, mass_scale, impulse_scale, normal_impulse,
+     tangent_impulse, total_normal_impulse) = rows
+    pseudo_velocity, pseudo_angular, pseudo_impulse = pseudo
     largest_change = 0.0
     largest_impulse = 0.0
     for p in pairs:
@@ -1020,25 +1035,23 @@ def _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pa
 
 
 @njit(cache=True)
-def _converge(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pair_start,
-              pairs, normal, anchor_a, anchor_b, separation, normal_mass, tangent_mass,
-              friction, bias_rate, mass_scale, impulse_scale, normal_impulse, tangent_impulse,
-              total_normal_impulse, inv_h, max_push_out, use_bias, use_friction, soft_depth,
-              pseudo_velocity, pseudo_angular, pseudo_impulse, passes):
-    """Up to ``passes`` more ``_solve`` passes over ``pairs`` (the loaded islands' pairs),
+def _sweeps(bodies, rows, pseudo, all_pairs, loaded_pairs, inv_h, max_push_out, soft_depth,
+            use_bias, use_friction, passes, extra_passes):
+    """One phase of a substep: ``passes`` ``_solve`` passes over every pair, then, if any
+    ran, up to ``extra_passes`` more over the loaded islands' pairs (``loaded_pairs``),
     stopping after a pass whose largest normal impulse change is at most CONVERGED times
-    the largest accumulated normal impulse. Returns the number of passes run."""
-    for n in range(passes):
-        change, impulse = _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a,
-                                 body_b, pair_start, pairs, normal, anchor_a, anchor_b,
-                                 separation, normal_mass, tangent_mass, friction, bias_rate,
-                                 mass_scale, impulse_scale, normal_impulse, tangent_impulse,
-                                 total_normal_impulse, inv_h, max_push_out, use_bias,
-                                 use_friction, soft_depth, pseudo_velocity, pseudo_angular,
-                                 pseudo_impulse)
+    the largest accumulated normal impulse. Returns the number of extra passes run."""
+    for _ in range(passes):
+        _solve(bodies, rows, pseudo, all_pairs, inv_h, max_push_out, soft_depth, use_bias,
+               use_friction)
+    if passes == 0 or loaded_pairs.shape[0] == 0:
+        return 0
+    for n in range(extra_passes):
+        change, impulse = _solve(bodies, rows, pseudo, loaded_pairs, inv_h, max_push_out,
+                                 soft_depth, use_bias, use_friction)
         if change <= CONVERGED * impulse:
             return n + 1
-    return passes
+    return extra_passes
 
 
 @njit(cache=True)
@@ -1052,7 +1065,7 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
     """All substeps of one step: integrate v, warm start, solve, integrate x, relax.
 
     After the solve and after the relax passes, the pairs of loaded islands
-    (``loaded_pairs``) get up to ``extra_passes`` more passes each (``_converge``).
+    (``loaded_pairs``) get up to ``extra_passes`` more passes each (``_sweeps``).
     Rows deeper than ``soft_depth`` (m) are split: their overlap moves the positions
     through pseudo-velocities, integrated after the velocities and then discarded
     (``_integrate_pseudo``; see "Split push-out").
@@ -1068,14 +1081,18 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
     inv_h = 1.0 / h
     has_contacts = body_a.shape[0] > 0
     all_pairs = np.arange(pair_start.shape[0] - 1)
-    converge = loaded_pairs.shape[0] > 0 and extra_passes > 0
     pseudo_velocity = np.zeros_like(velocity)
     pseudo_angular = np.zeros_like(angular_velocity)
     pseudo_impulse = np.zeros_like(separation)
+    bodies = (velocity, angular_velocity, inv_mass, inv_inertia)
+    rows = (body_a, body_b, pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
+            tangent_mass, friction, bias_rate, mass_scale, impulse_scale, normal_impulse,
+            tangent_impulse, total_normal_impulse)
+    pseudo = (pseudo_velocity, pseudo_angular, pseudo_impulse)
     passes_run = 0
     push_outs = 0
     for _ in range(substeps):
-        split = has_contacts and np.any(separation < -soft_depth)
+        split = has_contacts and _any_below(separation, -soft_depth)
         push_outs += split
         _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
                               angular_damping, gravity, h)
@@ -1083,20 +1100,8 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
                         pair_start, normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
                         total_normal_impulse)
-            _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
-                   pair_start, all_pairs, normal, anchor_a, anchor_b, separation, normal_mass,
-                   tangent_mass, friction, bias_rate, mass_scale, impulse_scale,
-                   normal_impulse, tangent_impulse, total_normal_impulse, inv_h,
-                   max_push_out, True, use_friction, soft_depth, pseudo_velocity, pseudo_angular,
-                   pseudo_impulse)
-            if converge:
-                passes_run += _converge(
-                    velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
-                    pair_start, loaded_pairs, normal, anchor_a, anchor_b, separation,
-                    normal_mass, tangent_mass, friction, bias_rate, mass_scale, impulse_scale,
-                    normal_impulse, tangent_impulse, total_normal_impulse, inv_h,
-                    max_push_out, True, use_friction, soft_depth, pseudo_velocity, pseudo_angular,
-                    pseudo_impulse, extra_passes)
+            passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded_pairs, inv_h,
+                                  max_push_out, soft_depth, True, use_friction, 1, extra_passes)
         _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h)
         if split:
             _integrate_pseudo(com, angle, pseudo_velocity, pseudo_angular, pseudo_impulse, h)
@@ -1104,21 +1109,9 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             _update_anchors(com, com0, angle, angle0, round_body, cos_d, sin_d, inv_mass,
                             body_a, body_b, normal, anchor_a0, anchor_b0, base_separation,
                             arm_a0, arm_b0, anchor_a, anchor_b, separation)
-            for _ in range(relax_passes):
-                _solve(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
-                       pair_start, all_pairs, normal, anchor_a, anchor_b, separation,
-                       normal_mass, tangent_mass, friction, bias_rate, mass_scale,
-                       impulse_scale, normal_impulse, tangent_impulse, total_normal_impulse,
-                       inv_h, max_push_out, False, use_friction, soft_depth, pseudo_velocity,
-                       pseudo_angular, pseudo_impulse)
-            if converge and relax_passes > 0:
-                passes_run += _converge(
-                    velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
-                    pair_start, loaded_pairs, normal, anchor_a, anchor_b, separation,
-                    normal_mass, tangent_mass, friction, bias_rate, mass_scale, impulse_scale,
-                    normal_impulse, tangent_impulse, total_normal_impulse, inv_h,
-                    max_push_out, False, use_friction, soft_depth, pseudo_velocity, pseudo_angular,
-                    pseudo_impulse, extra_passes)
+            passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded_pairs, inv_h,
+                                  max_push_out, soft_depth, False, use_friction, relax_passes,
+                                  extra_passes)
     return passes_run, push_outs
 
 

@@ -12,12 +12,12 @@ they too must be batch independent.
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest
 
 from fieldcheck import FAR_POINTS, boundary_and_sides, bounds_and_axes
+from test_compiled_fields_shapes import PRIMITIVES
 
 from sdfphys.sdf import compiled, field
 
@@ -31,31 +31,14 @@ IDENTICAL = {
     "capsule_slanted": {"type": "capsule", "a": [-9.0, 9.0], "b": [-1.0, 6.5],
                         "radius": 0.2},
     "capsule_disk": {"type": "capsule", "a": [0.3, 0.3], "b": [0.3, 0.3], "radius": 0.5},
-    "pie": {"type": "pie", "half_angle": 0.6, "radius": 1.2},
-    "pie_half": {"type": "pie", "half_angle": math.pi / 2, "radius": 1.0},
-    "pie_wide": {"type": "pie", "half_angle": 2.3, "radius": 1.0},
-    "pie_full": {"type": "pie", "half_angle": math.pi, "radius": 1.0},
-    "ring": {"type": "ring", "half_angle": 1.0, "radius": 1.0, "thickness": 0.3},
-    "ring_wide": {"type": "ring", "half_angle": 2.6, "radius": 1.0, "thickness": 0.5},
-    "ring_full": {"type": "ring", "half_angle": math.pi, "radius": 1.0, "thickness": 0.5},
-    "horseshoe": {"type": "horseshoe", "half_opening": 1.2, "radius": 1.0, "length": 0.8,
-                  "thickness": 0.3},
-    "horseshoe_short": {"type": "horseshoe", "half_opening": 0.5, "radius": 1.0,
-                        "length": 0.05, "thickness": 0.4},
-    "horseshoe_open": {"type": "horseshoe", "half_opening": 2.2, "radius": 0.8,
-                       "length": 1.0, "thickness": 0.3},
+    **{kind: PRIMITIVES[kind] for kind in (
+        "pie", "pie_half", "pie_wide", "pie_full", "ring", "ring_wide", "ring_full",
+        "horseshoe", "horseshoe_short", "horseshoe_open")},
 }
 
 #: Batch independent, but not bit-identical to the compiled code (transcendentals).
-OTHERS = {
-    "star": {"type": "star", "radius": 1.0, "points": 5, "m": 3.0},
-    "quadratic_bezier": {"type": "quadratic_bezier", "a": [-1.0, 0.0], "b": [0.0, 1.0],
-                         "c": [1.0, 0.0]},
-    "quadratic_bezier_stroke": {"type": "quadratic_bezier", "a": [-1.0, -1.0],
-                                "b": [2.0, 1.5], "c": [0.5, -0.2], "radius": 0.015},
-    "quadratic_bezier_line": {"type": "quadratic_bezier", "a": [-1.0, 0.0],
-                              "b": [0.0, 0.0], "c": [1.0, 0.0], "radius": 0.1},
-}
+OTHERS = {kind: PRIMITIVES[kind] for kind in (
+    "star", "quadratic_bezier", "quadratic_bezier_stroke", "quadratic_bezier_line")}
 
 ALL = {**IDENTICAL, **OTHERS}
 
