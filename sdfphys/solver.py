@@ -193,7 +193,7 @@ def contact_softness(settings: Settings) -> tuple[Softness, Softness]:
 # contacts and one pass per substep (tests/test_solver.py), top box moved in 20 s:
 # 3.3 cm unstiffened, 1.8 cm with a cap of 2, 1.2 cm with 3, 8.3 cm and drifting with
 # 4; with sdfphys' own contacts 41 cm uncapped. The cap is 2, half the unstable value.
-# The 5,000-circle pile of tools/bench_vs_pymunk.py: deepest overlap 0.114 -> 0.050 m
+# The 5,000-circle pile of tools/bench_vs_peers.py: deepest overlap 0.114 -> 0.050 m
 # with it. Bodies
 # carrying only their own weight keep contact_softness's coefficients, bit for bit,
 # and no extra pass runs.
