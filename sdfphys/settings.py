@@ -143,6 +143,17 @@ class Settings:
     time_of_impact: bool = _knob(
         True, "", "Conservative advancement for bodies moving more than half their "
         "extent per step (no tunnelling).")
+    sleeping: bool = _knob(
+        True, "", "Islands (bodies in contact) whose every body stays slower than "
+        "sleep_speed for time_to_sleep fall asleep: they cost nothing until an awake or "
+        "moving body comes within contact range, set_state or remove_body touches them, "
+        "or gravity changes (Box2D v3). false: every body is stepped every step.")
+    sleep_speed: float = _knob(
+        0.05, "m/s", "A body rests while its speed and its bounding radius times its "
+        "angular speed stay under this (Box2D v3's sleep threshold).", low=0.0)
+    time_to_sleep: float = _knob(
+        0.5, "s", "How long every body of an island must rest before it falls asleep.",
+        low=0.0)
     max_linear_speed: float = _knob(
         400.0, "m/s", "Speeds above this are clamped in position integration.",
         low=0.0, low_open=True)

@@ -67,6 +67,7 @@ import numpy as np
 from numba import njit
 
 from .collide.contacts import Contacts
+from .islands import island_roots
 from .settings import Settings
 
 __all__ = [
@@ -175,8 +176,9 @@ def contact_softness(settings: Settings) -> tuple[Softness, Softness]:
 #    accumulated normal impulse.
 #
 # An island is the set of dynamic bodies connected by contacts between dynamic bodies
-# (static and kinematic bodies do not join islands). It is loaded if it has at most
-# ``Settings.stiff_island_limit`` dynamic bodies, or at most ``Settings.rest_island_limit``
+# (``islands``: static, kinematic and sleeping bodies do not join). It is loaded if it
+# has at most ``Settings.stiff_island_limit`` dynamic bodies, or at most
+# ``Settings.rest_island_limit``
 # if none of its rows is deeper than ``Settings.soft_depth`` at the start of the step
 # (it is not pushing out overlap: "Split push-out"), and two touching bodies whose masses
 # differ by MASS_RATIO or more, or (with load stiffening) a body carrying more than
@@ -213,15 +215,6 @@ CONVERGED = 1e-4
 
 
 @njit(cache=True)
-def _root(parent, i):
-    """Union-find root of i, halving the path on the way."""
-    while parent[i] != i:
-        parent[i] = parent[parent[i]]
-        i = parent[i]
-    return i
-
-
-@njit(cache=True)
 def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_impulse, stiff,
                          up, weight_impulse, omega, zeta, h, base_bias_rate, base_mass_scale,
                          base_impulse_scale, stiffen, limit, large_cap, bias_rate, mass_scale,
@@ -249,20 +242,10 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
                 ratio[b] -= lift * inv_mass[b] / weight_impulse
             elif lift > 0.0 and inv_mass[b] > 0.0:
                 ratio[a] += lift * inv_mass[a] / weight_impulse
-    parent = np.arange(nb)
-    for p in range(n_pairs):
-        a = body_a[pair_start[p]]
-        b = body_b[pair_start[p]]
-        if inv_mass[a] > 0.0 and inv_mass[b] > 0.0:
-            ra = _root(parent, a)
-            rb = _root(parent, b)
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
-    root = np.empty(nb, np.int64)
+    root = island_roots(inv_mass, body_a, body_b)
     size = np.zeros(nb, np.int64)
     hot = np.zeros(nb, np.bool_)
     for i in range(nb):
-        root[i] = _root(parent, i)
         if inv_mass[i] > 0.0:
             size[root[i]] += 1
             if ratio[i] > LOADED:
@@ -394,11 +377,34 @@ class ImpulseCache:
 
     def without_body(self, index: int) -> ImpulseCache:
         """The cache after body ``index`` is removed: its rows dropped, later bodies renumbered."""
-        keep = (self.body_a != index) & (self.body_b != index)
-        a, b = self.body_a[keep], self.body_b[keep]
-        anchor = self.anchor[keep] if len(self.anchor) == len(keep) else self.anchor
-        return ImpulseCache(a - (a > index), b - (b > index), self.feature[keep],
-                            self.normal_impulse[keep], self.tangent_impulse[keep], anchor)
+        c = self.take((self.body_a != index) & (self.body_b != index))
+        c.body_a = c.body_a - (c.body_a > index)
+        c.body_b = c.body_b - (c.body_b > index)
+        return c
+
+    def take(self, index: np.ndarray) -> ImpulseCache:
+        """The rows selected by ``index`` (an index or boolean array)."""
+        anchor = self.anchor[index] if len(self.anchor) == len(self) else self.anchor
+        return ImpulseCache(self.body_a[index], self.body_b[index], self.feature[index],
+                            self.normal_impulse[index], self.tangent_impulse[index], anchor)
+
+    @classmethod
+    def concatenate(cls, parts: list[ImpulseCache]) -> ImpulseCache:
+        """The rows of ``parts`` one after the other."""
+        parts = [p for p in parts if len(p)]
+        if not parts:
+            return cls.empty()
+        if any(len(p.anchor) != len(p) for p in parts):
+            parts = [ImpulseCache(p.body_a, p.body_b, p.feature, p.normal_impulse,
+                                  p.tangent_impulse, np.full((len(p), 2), np.inf))
+                     for p in parts]
+        return cls(*(np.concatenate([getattr(p, name) for p in parts])
+                     for name in ("body_a", "body_b", "feature", "normal_impulse",
+                                  "tangent_impulse", "anchor")))
+
+    def sorted(self) -> ImpulseCache:
+        """The rows in (body_a, body_b, feature) order (``match``'s merge join)."""
+        return self.take(np.lexsort((self.feature, self.body_b, self.body_a)))
 
     def match(self, body_a: np.ndarray, body_b: np.ndarray, feature: np.ndarray,
               anchor: np.ndarray | None = None, tolerance: float = 0.0

@@ -19,7 +19,7 @@ from sdfphys.solver import MASS_RATIO, contact_softness, row_softness, soft_coef
 from sdfphys.world import World
 
 G = np.array([0.0, -9.81])
-SETTINGS = Settings()
+SETTINGS = Settings(sleeping=False)          # long horizons: the solver at work
 H = SETTINGS.dt / SETTINGS.substeps
 HERTZ = min(SETTINGS.contact_hertz, 0.25 / H)
 ZETA = SETTINGS.contact_damping_ratio
