@@ -83,6 +83,10 @@ class Settings:
         64, "", "Solver passes per substep, at most, over islands with a mass ratio >= 4 "
         "or a loaded body (they stop once converged); 1: one pass, as elsewhere.",
         low=1, high=1024)
+    rest_iterations: int = _knob(
+        64, "", "Solver passes per substep, at most, over loaded islands larger than "
+        "stiff_island_limit that are at rest (rest_island_limit); after them the smaller "
+        "loaded islands go on alone up to stiff_iterations.", low=1, high=1024)
     stiff_island_limit: int = _knob(
         64, "", "Largest island (dynamic bodies in contact) that load stiffening and "
         "the extra passes treat (islands at rest: rest_island_limit); larger ones keep "

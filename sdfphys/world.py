@@ -313,7 +313,7 @@ class World:
             inv_inertia = np.where(asleep, 0.0, inv_inertia)
         return BodyState(v("com"), v("angle"), v("velocity"), v("angular_velocity"),
                          inv_mass, inv_inertia, v("linear_damping"),
-                         v("angular_damping"), v("round"))
+                         v("angular_damping"), v("round"), v("radius"))
 
     # ----------------------------------------------------------------------------------
     # Sleeping (``sdfphys.sleep``)
