@@ -330,19 +330,24 @@ def test_concave_table_on_its_two_legs():
 def test_box_in_the_notch_of_an_l():
     """A box pressed 0.02 into the L's arm and 0.01 into its wall, corner in the notch.
 
-    Its bottom-left corner (0.99, 0.98) is nearest the L's re-entrant vertex (1, 1),
-    a vertex normal, which polygon pairs do not use. Face contacts instead: the arm
-    under the box's bottom face from x = 1 (the re-entrant vertex measured against
-    the box's bottom face) to x = 1.79 (the box's corner), normal (0, 1), depth 0.02;
-    the wall against the box's left face at its top-left corner (0.99, 1.58), normal
-    (1, 0), depth 0.01.
+    Its bottom-left corner (0.99, 0.98) is inside the L, nearest the L's re-entrant
+    vertex (1, 1): its exact depth sqrt(0.01^2 + 0.02^2) and the gradient from that
+    vertex, (1, 2) / sqrt(5), which is also the direction of the push that clears both
+    faces (0.01 right, 0.02 up); its contact point is midway to the vertex. The other
+    corners press on faces: the box's bottom-right corner (1.79, 0.98) into the arm,
+    normal (0, 1), depth 0.02; the wall against the box's left face at its top-left
+    corner (0.99, 1.58), normal (1, 0), depth 0.01. (The re-entrant vertex measured
+    against the box's bottom face, at (1, 0.99), lies within the corner contact's depth
+    of it: the reduction's shadowing drops it.)
     """
     c = collide(L_SHAPE, (0.0, 0.0, 0.0), {"type": "box", "size": [0.8, 0.6]},
                 (1.39, 1.28, 0.0))
     point, normal, depth = sorted_rows(c)
-    np.testing.assert_allclose(depth, [0.01, 0.02, 0.02], atol=1e-9)
-    np.testing.assert_allclose(normal, [[1.0, 0.0], [0.0, 1.0], [0.0, 1.0]], atol=1e-9)
-    np.testing.assert_allclose(point, [[0.995, 1.58], [1.0, 0.99], [1.79, 0.99]], atol=1e-9)
+    np.testing.assert_allclose(depth, [np.hypot(0.01, 0.02), 0.01, 0.02], atol=1e-9)
+    np.testing.assert_allclose(normal, [np.array([1.0, 2.0]) / np.sqrt(5.0), [1.0, 0.0],
+                                        [0.0, 1.0]], atol=1e-9)
+    np.testing.assert_allclose(point, [[0.995, 0.99], [0.995, 1.58], [1.79, 0.99]],
+                               atol=1e-9)
 
 
 @pytest.mark.parametrize("shift", [(1e-4, 0.0), (0.0, 1e-4), (-1e-4, 1e-4)])
@@ -509,3 +514,37 @@ def test_concave_polygons_scene_steps_past_the_former_crash():
     for _ in range(50):
         world.step()
     assert np.all(np.isfinite(world.position))
+
+
+STAR = {"type": "polygon", "points": [
+    [0.0, 0.7], [-0.1763, 0.2427], [-0.6657, 0.2163], [-0.2853, -0.0927], [-0.4114, -0.5663],
+    [-0.0, -0.3], [0.4114, -0.5663], [0.2853, -0.0927], [0.6657, 0.2163], [0.1763, 0.2427]]}
+ARROW = {"type": "polygon", "points": [[-0.65, 0.25], [0.15, 0.25], [0.15, 0.5], [0.65, 0.0],
+                                       [0.15, -0.5], [0.15, -0.25], [-0.65, -0.25]]}
+
+
+def test_a_spike_tip_in_a_notch_is_found_at_its_exact_depth():
+    """scenes/concave_polygons.toml at t = 1.067 s: the star's spike tip is 4.1 cm inside
+    the arrow, nearest the arrow's re-entrant corner (the deepest point of the star in
+    the arrow, by brute force over a 1 mm grid of the star and its vertices). The contacts reached
+    -1.9e-5 m before reflex corners gave normals; the stars then sank 18 cm."""
+    pose_star = (-0.494332864716853, 0.572414104840528, 1.241222173627571)
+    pose_arrow = (-0.23584928556841564, 1.3535525034783593, 2.5399083167657674)
+    c = collide(STAR, pose_star, ARROW, pose_arrow)
+    star, arrow = shape_from_spec(STAR), shape_from_spec(ARROW)
+    lo, hi = star.bounds()[:2], star.bounds()[2:]
+    grid = np.stack(np.meshgrid(*(np.arange(lo[i], hi[i], 1e-3) for i in range(2))),
+                    -1).reshape(-1, 2)
+    grid = np.concatenate([grid[star.field.distance(grid) <= 0.0], star.vertices])
+
+    def frame(shape, pose):
+        c_, s_ = np.cos(pose[2]), np.sin(pose[2])
+        rot = np.array([[c_, -s_], [s_, c_]])
+        return rot, np.asarray(pose[:2]) - rot @ shape.origin      # centre of mass
+
+    rot_s, com_s = frame(star, pose_star)
+    rot_a, com_a = frame(arrow, pose_arrow)
+    inside = (grid @ rot_s.T + com_s - com_a) @ rot_a
+    deepest = -arrow.field.distance(inside).min()
+    assert deepest > 0.04
+    assert len(c) > 0 and c.depth.max() == pytest.approx(deepest, abs=1e-3)

@@ -202,7 +202,12 @@ def _face_normals(field: Field, p: np.ndarray, depth: np.ndarray
     the gradient is the same at the foot q = p + depth g +- h t, t the tangent
     (the nearest boundary point is inside a face, not a vertex: outside a corner
     the gradient points from that corner and the normal of a vertex-vertex pair
-    is ill-defined). h = ``_PROBE``; "the same" is within ``_KINK`` (rad).
+    is ill-defined). (b) applies outside the field only (depth <= 0): the nearest
+    boundary point of a point inside is a vertex only if that vertex is reflex (a
+    concave corner of the other polygon), which the other direction cannot report,
+    and the gradient there, from the corner to p, is the direction that separates
+    them (a star's spike tip pushed into an arrow's notch was missed 4 cm deep).
+    h = ``_PROBE``; "the same" is within ``_KINK`` (rad).
     """
     n = len(p)
     points = np.concatenate([p, (p[:, None, :] + _PROBE * _AXES[None]).reshape(-1, 2)])
@@ -214,7 +219,8 @@ def _face_normals(field: Field, p: np.ndarray, depth: np.ndarray
     g_foot = safe_normalize(compiled.evaluate(field, sides)[1])
     g_foot = g_foot.reshape(2, n, 2).transpose(1, 0, 2)
     turn = np.sum((np.concatenate([around, g_foot], axis=1) - g0[:, None, :]) ** 2, axis=2)
-    return g0, np.all(turn <= _KINK ** 2, axis=1)
+    same = turn <= _KINK ** 2
+    return g0, np.all(same[:, :4], axis=1) & (np.all(same[:, 4:], axis=1) | (depth > 0.0))
 
 
 def _reference_faces(field: Field, c: _Candidates, vertices: np.ndarray, deepest: np.ndarray,
@@ -503,7 +509,8 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
         for i in range(c):
             gx, gy = g[i, 0], g[i, 1]
             ok = True
-            for a in range(6):
+            # The foot test only outside other (see _face_normals).
+            for a in range(6 if depth[i] <= 0.0 else 4):
                 if a < 4:
                     hx, hy = g[c + 4 * i + a, 0], g[c + 4 * i + a, 1]
                 else:
