@@ -23,12 +23,15 @@ import math
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from .errors import SpecError, check_int, check_number, check_vec2
+from .limits import MAX_DURATION, BodyValues, check_body, check_gravity
 from .sdf.build import suggest
 from .settings import Settings, preset
+from .shapes import shape_from_spec
 
 __all__ = ["BodySpec", "RenderSpec", "Scene", "apply_overrides", "load_scene", "read_scene"]
 
@@ -50,9 +53,8 @@ class RenderSpec:
     fps: int = 60
 
 
-@dataclass(frozen=True)
-class BodySpec:
-    """One validated ``[[body]]`` entry (SI units; ``shape`` is the scene shape dict)."""
+class BodySpec(NamedTuple):
+    """One validated ``[[body]]`` entry (SI units; ``shape`` the Shape built from its dict)."""
 
     name: str
     shape: Any
@@ -78,8 +80,16 @@ class Scene:
     duration: float
     render: RenderSpec
     bodies: list[BodySpec]
-    digest: str = field(default="")
-    """SHA-256 of the scene's canonical JSON form (trajectory files record it)."""
+    data: dict = field(default_factory=dict, repr=False)
+    """The scene as read (after overrides), for ``digest``."""
+
+    @cached_property
+    def digest(self) -> str:
+        """SHA-256 of the scene's canonical JSON form without its ``[render]`` table
+        (trajectory files record it; drawing never changes a trajectory)."""
+        physics = {key: value for key, value in self.data.items() if key != "render"}
+        return hashlib.sha256(
+            json.dumps(physics, sort_keys=True, default=str).encode()).hexdigest()
 
     def build(self):
         """A fresh World with every body added in scene order."""
@@ -87,11 +97,9 @@ class Scene:
 
         world = World(gravity=self.gravity, settings=self.settings)
         for b in self.bodies:
+            values = BodyValues(*b[2:], linear_damping=0.0, angular_damping=0.0)
             try:     # an SDF shape integrates its mass properties on first use, here
-                world.add_body(b.shape, position=b.position, angle=b.angle,
-                               velocity=b.velocity, angular_velocity=b.angular_velocity,
-                               density=b.density, mass=b.mass, friction=b.friction,
-                               restitution=b.restitution, kind=b.kind, name=b.name)
+                world._add(b.shape, values, b.name)     # values checked by _parse_body
             except SpecError as err:
                 raise err.in_file(self.source) from None
         world.scene = self
@@ -107,8 +115,9 @@ def read_scene(scene: str | Path | Mapping, overrides: Sequence[str] = (),
                quality: str | None = None) -> Scene:
     """Parse and validate a scene file or dict; ``overrides`` are ``KEY=VALUE`` strings
     (e.g. ``sim.substeps=8``) applied before validation; ``quality`` overrides the preset."""
-    if isinstance(scene, Mapping):
-        source, data = "<scene>", _deep_copy(scene)
+    if isinstance(scene, Mapping):     # copied: overrides and quality must not change it
+        source = "<scene>"
+        data = _deep_copy(scene) if overrides or quality is not None else dict(scene)
     else:
         source = str(scene)
         try:
@@ -131,8 +140,7 @@ def read_scene(scene: str | Path | Mapping, overrides: Sequence[str] = (),
         parsed = _parse(data, source)
     except SpecError as err:
         raise err.in_file(source) from None
-    parsed.digest = hashlib.sha256(
-        json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()
+    parsed.data = data
     return parsed
 
 
@@ -187,7 +195,7 @@ def _parse(data: Any, source: str) -> Scene:
 
     world = _table(data.get("world", {}), "world")
     _known(world, WORLD_KEYS, "world")
-    gravity = check_vec2(world.get("gravity", (0.0, -9.81)), "world.gravity")
+    gravity = check_gravity(world.get("gravity", (0.0, -9.81)), "world.gravity")
 
     quality, settings, duration = _parse_sim(_table(data.get("sim", {}), "sim"))
     render = _parse_render(_table(data.get("render", {}), "render"))
@@ -217,7 +225,8 @@ def _parse_sim(sim: dict) -> tuple[str, Settings, float]:
         raise SpecError("sim.quality", str(err.args[0])) from None
     values = {key: Settings.check(key, value, f"sim.{key}")
               for key, value in sim.items() if key not in SIM_EXTRA_KEYS}
-    duration = check_number(sim.get("duration", 5.0), "sim.duration", low=0.0, low_open=True)
+    duration = check_number(sim.get("duration", 5.0), "sim.duration", low=0.0, low_open=True,
+                            high=MAX_DURATION)
     return quality, base.with_values(**values), duration
 
 
@@ -251,32 +260,19 @@ def _parse_body(data: Any, i: int) -> BodySpec:
         raise SpecError(f"{path}.kinematic", "a body cannot be both static and kinematic")
     kind = "static" if static else "kinematic" if kinematic else "dynamic"
 
-    from .shapes import shape_from_spec
-
     shape = shape_from_spec(body["shape"], f"{path}.shape")
     if kind == "dynamic" and not math.isfinite(shape.radius):
         raise SpecError(f"{path}.shape", "an unbounded shape (e.g. a half-plane) must be static")
     if "density" in body and "mass" in body:
         raise SpecError(f"{path}.mass", "give density or mass, not both")
-    density = check_number(body.get("density", 1.0), f"{path}.density", low=0.0, low_open=True)
-    mass = None
-    if "mass" in body:
-        mass = check_number(body["mass"], f"{path}.mass", low=0.0, low_open=True)
-    velocity = check_vec2(body.get("velocity", (0.0, 0.0)), f"{path}.velocity")
-    angular_velocity = check_number(body.get("angular_velocity", 0.0), f"{path}.angular_velocity")
-    if kind == "static" and (velocity != (0.0, 0.0) or angular_velocity != 0.0):
-        raise SpecError(f"{path}.velocity",
-                        "a static body cannot move; use kinematic = true for moving platforms")
-    return BodySpec(
-        name=name, shape=shape,
-        position=check_vec2(body.get("position", (0.0, 0.0)), f"{path}.position"),
-        angle=check_number(body.get("angle", 0.0), f"{path}.angle"),
-        velocity=velocity, angular_velocity=angular_velocity,
-        density=density, mass=mass,
-        friction=check_number(body.get("friction", 0.5), f"{path}.friction", low=0.0),
-        restitution=check_number(body.get("restitution", 0.0), f"{path}.restitution",
-                                 low=0.0, high=1.0),
-        kind=kind)
+    values = check_body(path, kind=kind, **{key: body[key] for key in _VALUE_KEYS
+                                            if key in body})
+    return BodySpec(name, shape, *values[:9])
+
+
+#: Body keys whose values ``limits.check_body`` validates.
+_VALUE_KEYS = ("position", "angle", "velocity", "angular_velocity", "density", "mass",
+               "friction", "restitution")
 
 
 def _flag(body: dict, key: str, path: str) -> bool:
