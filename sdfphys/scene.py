@@ -37,7 +37,7 @@ __all__ = ["BodySpec", "RenderSpec", "Scene", "apply_overrides", "load_scene", "
 
 TOP_KEYS = ("version", "world", "sim", "render", "body")
 WORLD_KEYS = ("gravity",)
-RENDER_KEYS = ("size", "center", "scale", "fps")
+RENDER_KEYS = ("size", "center", "scale", "fps", "hud")
 BODY_KEYS = ("name", "shape", "position", "angle", "velocity", "angular_velocity",
              "density", "mass", "friction", "restitution", "static", "kinematic")
 SIM_EXTRA_KEYS = ("quality", "duration")
@@ -45,12 +45,14 @@ SIM_EXTRA_KEYS = ("quality", "duration")
 
 @dataclass(frozen=True)
 class RenderSpec:
-    """Frame size (px, even), world point at the frame centre (m), px per metre, frames/s."""
+    """Frame size (px, even), world point at the frame centre (m), px per metre, frames/s,
+    and ``hud``: print the simulated time and step count on every video frame."""
 
     size: tuple[int, int] = (960, 540)
     center: tuple[float, float] = (0.0, 4.0)
     scale: float = 50.0
     fps: int = 60
+    hud: bool = False
 
 
 class BodySpec(NamedTuple):
@@ -145,7 +147,10 @@ def read_scene(scene: str | Path | Mapping, overrides: Sequence[str] = (),
 
 
 def apply_overrides(data: dict, overrides: Sequence[str]) -> dict:
-    """``data`` with each ``KEY=VALUE`` set (dotted key, TOML value: ``sim.dt=0.01``)."""
+    """``data`` with each ``KEY=VALUE`` set: a dotted key and a TOML value
+    (``sim.dt=0.01``). A body is named by its name or its index: ``body.ball.friction=0.1``,
+    ``body[1].friction=0.1`` or ``body.1.friction=0.1`` (a body without a name is
+    ``body<i>``, as in the World)."""
     for item in overrides:
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
@@ -154,14 +159,40 @@ def apply_overrides(data: dict, overrides: Sequence[str]) -> dict:
             value = tomllib.loads(f"v = {text.strip()}")["v"]
         except tomllib.TOMLDecodeError:
             value = text.strip()           # a bare word: a string such as quality=fast
-        node = data
-        parts = key.strip().split(".")
-        for part in parts[:-1]:
-            node = node.setdefault(part, {})
-            if not isinstance(node, dict):
+        parts = _key_parts(key.strip())
+        node: Any = data
+        for k, part in enumerate(parts[:-1]):
+            if isinstance(node, list):
+                node = node[_list_index(node, part, ".".join(map(str, parts[:k])))]
+            else:
+                node = node.setdefault(part, {})
+            if not isinstance(node, (dict, list)):
                 raise SpecError(key, "cannot set a key inside a non-table value")
+        if isinstance(node, list):
+            raise SpecError(key, "names a whole [[body]]; set one of its keys, e.g. "
+                                 f"{key}.friction=0.5")
         node[parts[-1]] = value
     return data
+
+
+def _key_parts(key: str) -> list[str]:
+    """``body[1].shape.radius`` -> ``["body", "1", "shape", "radius"]``."""
+    return [p for p in key.replace("[", ".").replace("]", "").split(".") if p != ""] or [key]
+
+
+def _list_index(items: list, part: str, where: str) -> int:
+    """The index of the entry of ``items`` (a ``[[body]]`` array) named ``part``, or
+    numbered ``part``."""
+    names = [entry.get("name", f"body{i}") if isinstance(entry, dict) else f"body{i}"
+             for i, entry in enumerate(items)]
+    if part in names:
+        return names.index(part)
+    if part.isdigit() and int(part) < len(items):
+        return int(part)
+    if part.isdigit():
+        raise SpecError(f"--set {where}[{part}]", f"no such body: the scene has "
+                                                  f"{len(items)}, numbered from 0")
+    raise SpecError(f"--set {where}.{part}", f"no body named {part!r}" + suggest(part, names))
 
 
 def _deep_copy(value: Any) -> Any:
@@ -185,9 +216,24 @@ def _known(table: Mapping, keys: Sequence[str], path: str) -> None:
             raise SpecError(where, "unknown key" + suggest(str(key), list(keys)))
 
 
+def _known_sections(data: Mapping) -> None:
+    """Every top-level key is a known section or ``version``; a misspelt one gets the
+    nearest, also a longer or shorter word (``[simulation]``: did you mean 'sim'?)."""
+    for key in data:
+        if key in TOP_KEYS:
+            continue
+        word = str(key).lower()
+        hint = suggest(word, list(TOP_KEYS))
+        stem = [k for k in TOP_KEYS if len(k) >= 3 and (word.startswith(k) or k.startswith(word))]
+        if not hint and stem:
+            hint = f" (did you mean {stem[0]!r}?)"
+        raise SpecError(str(key), f"unknown key{hint}; a scene has version, [world], [sim], "
+                                  "[render] and [[body]]")
+
+
 def _parse(data: Any, source: str) -> Scene:
     data = _table(data, "")
-    _known(data, TOP_KEYS, "")
+    _known_sections(data)
     if "version" not in data:
         raise SpecError("version", "is required (version = 1)")
     if data["version"] != 1 or isinstance(data["version"], bool):
@@ -242,7 +288,8 @@ def _parse_render(render: dict) -> RenderSpec:
     scale = check_number(render.get("scale", default.scale), "render.scale",
                          low=0.0, low_open=True)
     fps = check_int(render.get("fps", default.fps), "render.fps", low=1, high=1000)
-    return RenderSpec((w + w % 2, h + h % 2), center, scale, fps)
+    hud = _flag(render, "hud", "render")
+    return RenderSpec((w + w % 2, h + h % 2), center, scale, fps, hud)
 
 
 def _parse_body(data: Any, i: int) -> BodySpec:
