@@ -85,7 +85,7 @@ from __future__ import annotations
 
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -94,6 +94,8 @@ import pymunk
 
 from .collide import Contacts, find_contacts
 from .errors import SpecError
+from .limits import check_steps
+from .progress import Progress
 from .scene import Scene, read_scene
 from .shapes import Circle, SdfShape, Shape, TriangleMesh
 from .solver import contact_softness
@@ -333,10 +335,12 @@ class PymunkWorld:
 
 
 def sdfphys_contacts(world) -> Contacts:
-    """The contacts sdfphys's next step will use (``find_contacts`` at the world's state)."""
-    return find_contacts(world.shapes, world.shape_id, world.center_of_mass, world.angle,
-                         world.kind == "dynamic", world.settings,
-                         world.velocity, world.angular_velocity)
+    """The contacts sdfphys's next step will use (``find_contacts`` at the world's state;
+    its read-only state copies copied to writeable arrays, as the step passes its own)."""
+    return find_contacts(world.shapes, np.array(world.shape_id),
+                         np.array(world.center_of_mass), np.array(world.angle),
+                         np.array(world.kind == "dynamic"), world.settings,
+                         np.array(world.velocity), np.array(world.angular_velocity))
 
 
 @dataclass
@@ -409,12 +413,14 @@ class Comparison:
                    for c in self.contacts)
 
 
-def compare(scene: Scene, seconds: float | None = None) -> Comparison:
+def compare(scene: Scene, seconds: float | None = None,
+            progress: Callable[[int], None] | None = None) -> Comparison:
     """Run sdfphys and pymunk for ``seconds`` (default: the scene's duration).
 
     Frames are the initial state and the state after every step. Each frame also
     moves a second, never-stepped pymunk space to sdfphys's poses and compares the
     contacts of the two engines there. Raises NotModelledError (see check_modelled).
+    progress: called with the number of steps done after each step.
     """
     seconds = scene.duration if seconds is None else seconds
     world = scene.build()
@@ -427,6 +433,8 @@ def compare(scene: Scene, seconds: float | None = None) -> Comparison:
         if step:
             world.step()
             reference.step()
+            if progress is not None:
+                progress(step)
         probe.set_poses(world.center_of_mass, world.angle)
         contacts.append(contact_difference(sdfphys_contacts(world), probe.contacts()))
         for engine, record in zip((world, reference), states):
@@ -481,22 +489,30 @@ def report(comparison: Comparison, window: float = WINDOW) -> list[str]:
 
 
 def compare_main(scene_path: str | Path, seconds: float | None = None,
-                 overrides: Sequence[str] = ()) -> int:
+                 overrides: Sequence[str] = (), max_steps: int | None = None) -> int:
     """``sdfphys compare SCENE``: print the settings and the two tables.
 
     Returns 0, 1 if some frame's contacts differ by more than CONTACT_TOLERANCE (or a
     pair is found by one engine only), 2 for bad input, including a scene the
-    reference cannot model (one line naming the bodies).
+    reference cannot model (one line naming the bodies) and more than ``max_steps``
+    steps (default ``limits.MAX_STEPS``).
     """
     try:
         if seconds is not None and not (math.isfinite(seconds) and seconds > 0.0):
             raise SpecError("--seconds", f"must be a positive number, got {seconds}")
         scene = read_scene(scene_path, overrides)
         check_modelled(scene)
+        steps = max(1, round((scene.duration if seconds is None else seconds)
+                             / scene.settings.dt))
+        check_steps(steps, "steps", max_steps)
     except SpecError as err:
         print(f"sdfphys: error: {err}", file=sys.stderr)
         return 2
-    comparison = compare(scene, seconds)
+    bar = Progress(steps, "steps", "sdfphys compare")
+    try:
+        comparison = compare(scene, seconds, bar.update)
+    finally:
+        bar.close()
     print(PymunkWorld(scene).describe())
     print()
     for line in report(comparison):
