@@ -85,6 +85,10 @@ class Settings:
         64, "", "Solver passes per substep, at most, over islands with a mass ratio >= 4 "
         "or a loaded body (they stop once converged); 1: one pass, as elsewhere.",
         low=1, high=1024)
+    rest_iterations: int = _knob(
+        64, "", "Solver passes per substep, at most, over loaded islands larger than "
+        "stiff_island_limit that are at rest (rest_island_limit); after them the smaller "
+        "loaded islands go on alone up to stiff_iterations.", low=1, high=1024)
     stiff_island_limit: int = _knob(
         64, "", "Largest island (dynamic bodies in contact) that load stiffening and "
         "the extra passes treat (islands at rest: rest_island_limit); larger ones keep "
@@ -145,6 +149,17 @@ class Settings:
     time_of_impact: bool = _knob(
         True, "", "Conservative advancement for bodies moving more than half their "
         "extent per step (no tunnelling).")
+    sleeping: bool = _knob(
+        True, "", "Islands (bodies in contact) whose every body stays slower than "
+        "sleep_speed for time_to_sleep fall asleep: they cost nothing until an awake or "
+        "moving body comes within contact range, set_state or remove_body touches them, "
+        "or gravity changes (Box2D v3). false: every body is stepped every step.")
+    sleep_speed: float = _knob(
+        0.05, "m/s", "A body rests while its speed and its bounding radius times its "
+        "angular speed stay under this (Box2D v3's sleep threshold).", low=0.0)
+    time_to_sleep: float = _knob(
+        0.5, "s", "How long every body of an island must rest before it falls asleep.",
+        low=0.0)
     max_linear_speed: float = _knob(
         400.0, "m/s", "Speeds above this are clamped in position integration.",
         low=0.0, low_open=True)

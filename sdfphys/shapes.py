@@ -194,6 +194,15 @@ class TriangleMesh(Shape):
         step = (t[:, [2, 0, 1]] - t[:, [1, 2, 0]]) % m
         return (step == 1) | (step == m - 1)
 
+    @cached_property
+    def convex(self) -> bool:
+        """Whether the outline is convex (no reflex vertex; collinear ones allowed):
+        such pairs collide by separating axes and clipping (``collide.polygons``)."""
+        edge = np.roll(self.vertices, -1, axis=0) - self.vertices
+        turn = edge[:, 0] * np.roll(edge[:, 1], -1) - edge[:, 1] * np.roll(edge[:, 0], -1)
+        scale = float(np.max(np.sum(edge * edge, axis=1)))
+        return bool(np.all(turn >= -1e-12 * scale))
+
     @property
     def field(self) -> Field:
         return self._field

@@ -67,6 +67,7 @@ import numpy as np
 from numba import njit
 
 from .collide.contacts import Contacts
+from .islands import island_roots
 from .settings import Settings
 
 __all__ = [
@@ -175,8 +176,9 @@ def contact_softness(settings: Settings) -> tuple[Softness, Softness]:
 #    accumulated normal impulse.
 #
 # An island is the set of dynamic bodies connected by contacts between dynamic bodies
-# (static and kinematic bodies do not join islands). It is loaded if it has at most
-# ``Settings.stiff_island_limit`` dynamic bodies, or at most ``Settings.rest_island_limit``
+# (``islands``: static, kinematic and sleeping bodies do not join). It is loaded if it
+# has at most ``Settings.stiff_island_limit`` dynamic bodies, or at most
+# ``Settings.rest_island_limit``
 # if none of its rows is deeper than ``Settings.soft_depth`` at the start of the step
 # (it is not pushing out overlap: "Split push-out"), and two touching bodies whose masses
 # differ by MASS_RATIO or more, or (with load stiffening) a body carrying more than
@@ -193,7 +195,7 @@ def contact_softness(settings: Settings) -> tuple[Softness, Softness]:
 # contacts and one pass per substep (tests/test_solver.py), top box moved in 20 s:
 # 3.3 cm unstiffened, 1.8 cm with a cap of 2, 1.2 cm with 3, 8.3 cm and drifting with
 # 4; with sdfphys' own contacts 41 cm uncapped. The cap is 2, half the unstable value.
-# The 5,000-circle pile of tools/bench_vs_pymunk.py: deepest overlap 0.114 -> 0.050 m
+# The 5,000-circle pile of tools/bench_vs_peers.py: deepest overlap 0.114 -> 0.050 m
 # with it. Bodies
 # carrying only their own weight keep contact_softness's coefficients, bit for bit,
 # and no extra pass runs.
@@ -210,22 +212,17 @@ MASS_RATIO = 4.0
 LOADED = 1.25
 #: Extra passes stop when the largest impulse change is this fraction of the largest impulse.
 CONVERGED = 1e-4
-
-
-@njit(cache=True)
-def _root(parent, i):
-    """Union-find root of i, halving the path on the way."""
-    while parent[i] != i:
-        parent[i] = parent[parent[i]]
-        i = parent[i]
-    return i
+#: An island with a body faster than this (m/s; |v|^2 + |w r|^2 at the start of the step,
+#: r its bounding radius) is not at rest: rest_island_limit does not apply to it.
+REST_SPEED = 0.5
 
 
 @njit(cache=True)
 def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_impulse, stiff,
                          up, weight_impulse, omega, zeta, h, base_bias_rate, base_mass_scale,
                          base_impulse_scale, stiffen, limit, large_cap, bias_rate, mass_scale,
-                         impulse_scale, loaded_pairs, separation, soft_depth, rest_limit):
+                         impulse_scale, loaded_pairs, small, separation, soft_depth,
+                         rest_limit, moving):
     """Fill the per-row coefficients (K,) and the loaded pairs; returns their count.
 
     weight_impulse: |g| h, the impulse per substep that carries 1 kg (0: no gravity, no
@@ -234,6 +231,9 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
     limit: largest loaded island (dynamic bodies); rest_limit: the same for islands with
     no row deeper than soft_depth (m; separation (K,) at the start of the step);
     large_cap: the most weights counted in larger islands, which get no extra pass.
+    small: (P,) bool, filled per loaded pair: its island has at most ``limit`` bodies
+    (the others are islands at rest up to rest_limit). moving: (B,) bool, bodies
+    faster than REST_SPEED (their islands are not at rest).
     """
     nb = inv_mass.shape[0]
     n_pairs = pair_start.shape[0] - 1
@@ -249,26 +249,20 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
                 ratio[b] -= lift * inv_mass[b] / weight_impulse
             elif lift > 0.0 and inv_mass[b] > 0.0:
                 ratio[a] += lift * inv_mass[a] / weight_impulse
-    parent = np.arange(nb)
-    for p in range(n_pairs):
-        a = body_a[pair_start[p]]
-        b = body_b[pair_start[p]]
-        if inv_mass[a] > 0.0 and inv_mass[b] > 0.0:
-            ra = _root(parent, a)
-            rb = _root(parent, b)
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
-    root = np.empty(nb, np.int64)
+    root = island_roots(inv_mass, body_a, body_b)
     size = np.zeros(nb, np.int64)
     hot = np.zeros(nb, np.bool_)
     for i in range(nb):
-        root[i] = _root(parent, i)
         if inv_mass[i] > 0.0:
             size[root[i]] += 1
             if ratio[i] > LOADED:
                 hot[root[i]] = True
-    # An island pushing out overlap deeper than soft_depth (split rows) is not at rest.
+    # An island pushing out overlap deeper than soft_depth (split rows), or with a body
+    # faster than REST_SPEED, is not at rest.
     largest = np.full(nb, max(limit, rest_limit), np.int64)
+    for i in range(nb):
+        if inv_mass[i] > 0.0 and moving[i]:
+            largest[root[i]] = limit
     for k in range(body_a.shape[0]):
         if separation[k] < -soft_depth:
             for i in (body_a[k], body_b[k]):
@@ -295,6 +289,8 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
             r = max(r, ratio[b] if hot_b else min(ratio[b], large_cap))
         if hot_a or hot_b:
             loaded_pairs[count] = p
+            small[count] = ((not hot_a or size[root[a]] <= limit)
+                            and (not hot_b or size[root[b]] <= limit))
             count += 1
         for k in range(first, pair_start[p + 1]):
             j = stiff[k]
@@ -315,11 +311,15 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
 
 
 def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity: np.ndarray,
-                 settings: Settings) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                 settings: Settings, moving: np.ndarray | None = None
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per-row soft coefficients and the loaded islands' pairs (see the section above).
 
-    inv_mass: (B,) 1/kg. Returns bias_rate (K,) 1/s, mass_scale (K,), impulse_scale (K,)
-    and loaded_pairs (L,) int64, indices into ``constraints.pair_start`` in order.
+    inv_mass: (B,) 1/kg. Returns bias_rate (K,) 1/s, mass_scale (K,), impulse_scale (K,),
+    loaded_pairs (L,) int64, indices into ``constraints.pair_start`` in order, and
+    small (L,) bool: the pair's loaded island has at most ``stiff_island_limit``
+    bodies (else it is at rest, up to ``rest_island_limit``). moving: (B,) bool, the
+    bodies faster than REST_SPEED at the start of the step (None: none).
     """
     c = constraints
     k = len(c.feature)
@@ -329,6 +329,7 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
     up = -gravity / g if g > 0.0 else np.zeros(2)
     bias_rate, mass_scale, impulse_scale = np.empty(k), np.empty(k), np.empty(k)
     loaded_pairs = np.empty(max(len(c.pair_start) - 1, 0), np.int64)
+    small = np.empty(len(loaded_pairs), np.bool_)
     count = _row_softness_kernel(
         inv_mass, c.body_a, c.body_b, c.pair_start, c.normal, c.normal_impulse, c.stiff, up,
         g * h, 2.0 * math.pi * min(settings.contact_hertz, 0.25 / h),
@@ -336,9 +337,10 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
         np.array([soft.bias_rate, stiff.bias_rate]), np.array([soft.mass_scale, stiff.mass_scale]),
         np.array([soft.impulse_scale, stiff.impulse_scale]), settings.load_stiffening,
         settings.stiff_island_limit, settings.large_island_load_cap, bias_rate, mass_scale,
-        impulse_scale, loaded_pairs, c.separation, settings.soft_depth,
-        settings.rest_island_limit)
-    return bias_rate, mass_scale, impulse_scale, loaded_pairs[:count]
+        impulse_scale, loaded_pairs, small, c.separation, settings.soft_depth,
+        settings.rest_island_limit, np.zeros(len(inv_mass), np.bool_) if moving is None
+        else moving)
+    return bias_rate, mass_scale, impulse_scale, loaded_pairs[:count], small[:count]
 
 
 @dataclass
@@ -354,6 +356,8 @@ class BodyState:
     round_body: (B,) bool, True for circles: their contact point is not a material point
     (a rolling circle touches with whichever point is lowest), so re-measuring a
     separation ignores their rotation (see _update_anchors).
+    radius: (B,) m, bounding radius about the centre of mass (inf if unbounded), or
+    None: the speed of a body's points, for REST_SPEED (None counts only |v|).
     """
 
     com: np.ndarray
@@ -365,6 +369,7 @@ class BodyState:
     linear_damping: np.ndarray
     angular_damping: np.ndarray
     round_body: np.ndarray
+    radius: np.ndarray | None = None
 
 
 @dataclass
@@ -394,11 +399,34 @@ class ImpulseCache:
 
     def without_body(self, index: int) -> ImpulseCache:
         """The cache after body ``index`` is removed: its rows dropped, later bodies renumbered."""
-        keep = (self.body_a != index) & (self.body_b != index)
-        a, b = self.body_a[keep], self.body_b[keep]
-        anchor = self.anchor[keep] if len(self.anchor) == len(keep) else self.anchor
-        return ImpulseCache(a - (a > index), b - (b > index), self.feature[keep],
-                            self.normal_impulse[keep], self.tangent_impulse[keep], anchor)
+        c = self.take((self.body_a != index) & (self.body_b != index))
+        c.body_a = c.body_a - (c.body_a > index)
+        c.body_b = c.body_b - (c.body_b > index)
+        return c
+
+    def take(self, index: np.ndarray) -> ImpulseCache:
+        """The rows selected by ``index`` (an index or boolean array)."""
+        anchor = self.anchor[index] if len(self.anchor) == len(self) else self.anchor
+        return ImpulseCache(self.body_a[index], self.body_b[index], self.feature[index],
+                            self.normal_impulse[index], self.tangent_impulse[index], anchor)
+
+    @classmethod
+    def concatenate(cls, parts: list[ImpulseCache]) -> ImpulseCache:
+        """The rows of ``parts`` one after the other."""
+        parts = [p for p in parts if len(p)]
+        if not parts:
+            return cls.empty()
+        if any(len(p.anchor) != len(p) for p in parts):
+            parts = [ImpulseCache(p.body_a, p.body_b, p.feature, p.normal_impulse,
+                                  p.tangent_impulse, np.full((len(p), 2), np.inf))
+                     for p in parts]
+        return cls(*(np.concatenate([getattr(p, name) for p in parts])
+                     for name in ("body_a", "body_b", "feature", "normal_impulse",
+                                  "tangent_impulse", "anchor")))
+
+    def sorted(self) -> ImpulseCache:
+        """The rows in (body_a, body_b, feature) order (``match``'s merge join)."""
+        return self.take(np.lexsort((self.feature, self.body_b, self.body_a)))
 
     def match(self, body_a: np.ndarray, body_b: np.ndarray, feature: np.ndarray,
               anchor: np.ndarray | None = None, tolerance: float = 0.0
@@ -1035,19 +1063,25 @@ def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, use_bia
 
 
 @njit(cache=True)
-def _sweeps(bodies, rows, pseudo, all_pairs, loaded_pairs, inv_h, max_push_out, soft_depth,
-            use_bias, use_friction, passes, extra_passes):
+def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_depth,
+            use_bias, use_friction, passes, extra_passes, rest_passes):
     """One phase of a substep: ``passes`` ``_solve`` passes over every pair, then, if any
-    ran, up to ``extra_passes`` more over the loaded islands' pairs (``loaded_pairs``),
-    stopping after a pass whose largest normal impulse change is at most CONVERGED times
-    the largest accumulated normal impulse. Returns the number of extra passes run."""
+    ran, up to ``extra_passes`` more over the loaded islands' pairs, stopping after a
+    pass whose largest normal impulse change is at most CONVERGED times the largest
+    accumulated normal impulse. loaded: (every loaded pair, the small islands' ones);
+    islands at rest over the small limit take part in the first ``rest_passes`` extra
+    passes only. Returns the number of extra passes run."""
+    loaded_pairs, small_pairs = loaded
     for _ in range(passes):
         _solve(bodies, rows, pseudo, all_pairs, inv_h, max_push_out, soft_depth, use_bias,
                use_friction)
     if passes == 0 or loaded_pairs.shape[0] == 0:
         return 0
     for n in range(extra_passes):
-        change, impulse = _solve(bodies, rows, pseudo, loaded_pairs, inv_h, max_push_out,
+        pairs = loaded_pairs if n < rest_passes else small_pairs
+        if pairs.shape[0] == 0:
+            return n
+        change, impulse = _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out,
                                  soft_depth, use_bias, use_friction)
         if change <= CONVERGED * impulse:
             return n + 1
@@ -1057,11 +1091,11 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded_pairs, inv_h, max_push_out, 
 @njit(cache=True)
 def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
                      linear_damping, angular_damping, round_body, gravity, body_a, body_b,
-                     pair_start, loaded_pairs, normal, anchor_a0, anchor_b0, anchor_a, anchor_b,
+                     pair_start, loaded, normal, anchor_a0, anchor_b0, anchor_a, anchor_b,
                      base_separation, separation, normal_mass, tangent_mass, friction,
                      bias_rate, mass_scale, impulse_scale, normal_impulse, tangent_impulse,
                      total_normal_impulse, h, substeps, relax_passes, max_push_out, max_speed,
-                     use_friction, extra_passes, soft_depth):
+                     use_friction, extra_passes, rest_passes, soft_depth):
     """All substeps of one step: integrate v, warm start, solve, integrate x, relax.
 
     After the solve and after the relax passes, the pairs of loaded islands
@@ -1100,8 +1134,9 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
                         pair_start, normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
                         total_normal_impulse)
-            passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded_pairs, inv_h,
-                                  max_push_out, soft_depth, True, use_friction, 1, extra_passes)
+            passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
+                                  max_push_out, soft_depth, True, use_friction, 1, extra_passes,
+                                  rest_passes)
         _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h)
         if split:
             _integrate_pseudo(com, angle, pseudo_velocity, pseudo_angular, pseudo_impulse, h)
@@ -1109,9 +1144,9 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             _update_anchors(com, com0, angle, angle0, round_body, cos_d, sin_d, inv_mass,
                             body_a, body_b, normal, anchor_a0, anchor_b0, base_separation,
                             arm_a0, arm_b0, anchor_a, anchor_b, separation)
-            passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded_pairs, inv_h,
+            passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
                                   max_push_out, soft_depth, False, use_friction, relax_passes,
-                                  extra_passes)
+                                  extra_passes, rest_passes)
     return passes_run, push_outs
 
 
@@ -1127,18 +1162,23 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     c = constraints
     h = settings.dt / settings.substeps
     gravity = np.asarray(gravity, dtype=np.float64)
-    bias_rate, mass_scale, impulse_scale, loaded_pairs = row_softness(
-        bodies.inv_mass, c, gravity, settings)
+    v, w = bodies.velocity, bodies.angular_velocity
+    spin = 0.0 if bodies.radius is None else w * np.where(bodies.inv_mass > 0.0,
+                                                          bodies.radius, 0.0)
+    moving = v[:, 0] ** 2 + v[:, 1] ** 2 + spin * spin > REST_SPEED ** 2
+    bias_rate, mass_scale, impulse_scale, loaded_pairs, small = row_softness(
+        bodies.inv_mass, c, gravity, settings, moving)
     passes, push_outs = _substeps_kernel(
         bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
         bodies.inv_inertia, bodies.linear_damping, bodies.angular_damping, bodies.round_body,
-        gravity, c.body_a, c.body_b, c.pair_start, loaded_pairs, c.normal,
+        gravity, c.body_a, c.body_b, c.pair_start, (loaded_pairs, loaded_pairs[small]),
+        c.normal,
         c.anchor_a0, c.anchor_b0, c.anchor_a, c.anchor_b, c.base_separation, c.separation,
         c.normal_mass, c.tangent_mass, c.friction, bias_rate, mass_scale, impulse_scale,
         c.normal_impulse, c.tangent_impulse, c.total_normal_impulse,
         h, settings.substeps, settings.relax_passes, settings.max_push_out,
         settings.max_linear_speed, use_friction, settings.stiff_iterations - 1,
-        settings.soft_depth)
+        settings.rest_iterations - 1, settings.soft_depth)
     return int(passes), int(push_outs)
 
 

@@ -49,6 +49,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from .collide.broadphase import candidate_pairs
 from .sdf import Field, compiled
 
 __all__ = ["fast_bodies", "step_fractions", "time_of_impact", "vertex_time_of_impact"]
@@ -56,8 +57,6 @@ __all__ = ["fast_bodies", "step_fractions", "time_of_impact", "vertex_time_of_im
 #: Conservative-advancement iterations per pair; a trace still running after them stops
 #: where it is, which is safe (never past a contact) and only stops the body early.
 MAX_ITERATIONS = 32
-#: Fast-body x other-body candidate tests per numpy batch (memory bound of the broadphase).
-PAIR_BATCH = 1 << 22
 
 
 def fast_bodies(start: np.ndarray, end: np.ndarray, core_radius: np.ndarray,
@@ -86,26 +85,26 @@ def _candidate_pairs(fast: np.ndarray, start: np.ndarray, end: np.ndarray,
 
     Boxes: the fast body's segment inflated by its bounding radius; the other body's
     end position inflated by its radius (infinite for unbounded fields). Fast bodies
-    are not candidates for each other.
+    are not candidates for each other. Returns (index into ``fast``, body index),
+    sorted, found by the broadphase (``collide.broadphase.candidate_pairs``: the grid,
+    O(bodies + pairs)), never by comparing every fast body with every body.
     """
-    others = np.ones(len(radius), bool)
-    others[fast] = False
-    others = np.flatnonzero(others)
-    lo = np.minimum(start[fast], end[fast]) - radius[fast, None]
-    hi = np.maximum(start[fast], end[fast]) + radius[fast, None]
+    is_fast = np.zeros(len(radius), bool)
+    is_fast[fast] = True
     with np.errstate(invalid="ignore"):
-        olo = end[others] - radius[others, None]
-        ohi = end[others] + radius[others, None]
-    rows = max(1, PAIR_BATCH // max(1, len(others)))
-    found_f, found_o = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
-    for first in range(0, len(fast), rows):
-        block = slice(first, first + rows)
-        hit = np.all((lo[block, None, :] <= ohi[None, :, :])
-                     & (olo[None, :, :] <= hi[block, None, :]), axis=2)
-        i, j = np.nonzero(hit)
-        found_f.append(i + first)
-        found_o.append(others[j])
-    return np.concatenate(found_f), np.concatenate(found_o)
+        lo = end - radius[:, None]
+        hi = end + radius[:, None]
+    lo[fast] = np.minimum(start[fast], end[fast]) - radius[fast, None]
+    hi[fast] = np.maximum(start[fast], end[fast]) + radius[fast, None]
+    pairs = candidate_pairs(np.column_stack([lo, hi]), is_fast)
+    i, j = pairs[:, 0], pairs[:, 1]
+    one = is_fast[i] != is_fast[j]
+    i, j = i[one], j[one]
+    body, other = np.where(is_fast[i], i, j), np.where(is_fast[i], j, i)
+    slot = np.empty(len(radius), np.int64)
+    slot[fast] = np.arange(len(fast))
+    order = np.lexsort((other, slot[body]))
+    return slot[body][order], other[order]
 
 
 def _distance(fields: list[Field], shape_id: np.ndarray, com: np.ndarray,

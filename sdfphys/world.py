@@ -29,6 +29,7 @@ import numpy as np
 from .collide import Contacts, find_contacts
 from .collide.narrowphase import PAIR_FUNCTIONS
 from .errors import SpecError
+from .islands import island_roots
 from .limits import (
     KINDS,
     BodyValues,
@@ -41,6 +42,7 @@ from .limits import (
 )
 from .settings import Settings
 from .shapes import Shape, collision_shape, shape_from_spec
+from .sleep import falling_asleep, rest_times
 from .solver import (
     BodyState,
     ContactConstraints,
@@ -88,6 +90,9 @@ _ARRAYS: dict[str, tuple[tuple[int, ...], Any]] = {
     "core_radius": ((), np.float64),
     "shape_id": ((), np.int64),
     "kind": ((), np.int8),
+    "sleep_time": ((), np.float64),
+    "asleep": ((), np.bool_),
+    "island": ((), np.int64),
 }
 
 
@@ -125,7 +130,7 @@ class World:
     """
 
     def __init__(self, gravity: Any = (0.0, -9.81), settings: Settings | None = None):
-        self.gravity = gravity
+        self._gravity = np.array(check_gravity(gravity, "gravity"), np.float64)
         self.settings = settings if settings is not None else Settings()
         self.time = 0.0
         self.step_count = 0
@@ -141,6 +146,10 @@ class World:
         self._created = 0
         self._contacts = Contacts.empty()
         self._impulses = ImpulseCache.empty()
+        # Sleeping islands' contacts and impulses, kept for their warm start (``sleep``).
+        self._sleep_contacts = Contacts.empty()
+        self._sleep_impulses = ImpulseCache.empty()
+        self._islands_made = 0
 
     # ----------------------------------------------------------------------------------
     # Bodies
@@ -149,12 +158,15 @@ class World:
     @property
     def gravity(self) -> np.ndarray:
         """(2,) m/s^2, a read-only copy; assign a pair to change it (checked: finite,
-        magnitude at most ``limits.MAX_GRAVITY``)."""
+        magnitude at most ``limits.MAX_GRAVITY``). Setting it wakes every sleeping
+        island."""
         return _read_only(self._gravity.copy())
 
     @gravity.setter
     def gravity(self, value: Any) -> None:
         self._gravity = np.array(check_gravity(value, "gravity"), np.float64)
+        if self._n:
+            self.wake()
 
     @property
     def settings(self) -> Settings:
@@ -236,6 +248,9 @@ class World:
         d["core_radius"][i] = core_radius
         d["shape_id"][i] = number
         d["kind"][i] = code
+        d["sleep_time"][i] = 0.0
+        d["asleep"][i] = False
+        d["island"][i] = 0
         self._names.append(name)
         self._name_set.add(name)
         self._created += 1
@@ -256,8 +271,10 @@ class World:
         return row
 
     def remove_body(self, index: int) -> None:
-        """Remove body ``index``; later bodies move down one index (their contacts too)."""
+        """Remove body ``index``; later bodies move down one index (their contacts too).
+        Sleeping islands it belonged to or touched wake up."""
         i = self._check(index)
+        self._wake_touching(i)
         n = self._n
         for array in self._data.values():
             array[i:n - 1] = array[i + 1:n]
@@ -265,19 +282,18 @@ class World:
         self._name_set.discard(self._names[i])
         del self._names[i]
         self._impulses = self._impulses.without_body(i)
-        c = self._contacts
-        keep = (c.body_a != i) & (c.body_b != i)
-        self._contacts = c.take(keep)
-        self._contacts.body_a -= self._contacts.body_a > i
-        self._contacts.body_b -= self._contacts.body_b > i
+        self._sleep_impulses = self._sleep_impulses.without_body(i)
+        self._contacts = self._contacts.without_body(i)
+        self._sleep_contacts = self._sleep_contacts.without_body(i)
 
     def set_state(self, index: int, *, position: Any = None, angle: float | None = None,
                   velocity: Any = None, angular_velocity: float | None = None) -> None:
         """Set a body's pose (user frame origin, m; rad) and/or velocities (m/s, rad/s).
 
         Changing only the angle turns the body about its user origin. Static bodies
-        may be moved but not given a velocity. Values are checked as ``add_body``'s
-        (SpecError naming the argument); nothing changes if one is bad.
+        may be moved but not given a velocity. The body's sleeping island, and the
+        islands it touches, wake up. Values are checked as ``add_body``'s (SpecError
+        naming the argument); nothing changes if one is bad.
         """
         i = self._check(index)
         d = self._data
@@ -292,6 +308,7 @@ class World:
         if d["kind"][i] == _STATIC and ((velocity is not None and velocity != (0.0, 0.0))
                                         or angular_velocity not in (None, 0.0)):
             raise SpecError("velocity", "a static body cannot move; use kind='kinematic'")
+        self._wake_touching(i)
         if position is not None or angle is not None:
             user = self.position[i] if position is None else np.array(position)
             if angle is not None:
@@ -338,24 +355,140 @@ class World:
 
         Stages: collide once; prepare the contact rows (warm start matched by feature
         key); the substeps (each: integrate velocities, warm start, solve, integrate
-        positions, relax); restitution; time of impact for fast bodies; store impulses.
+        positions, relax); restitution; time of impact for fast bodies; store impulses;
+        with ``settings.sleeping``, islands at rest fall asleep (``sdfphys.sleep``): a
+        step with no awake dynamic and no moving kinematic body only advances the time,
+        and sleeping islands within contact range of an active body wake first.
         """
-        bodies = self._body_state()
-        start_com, start_angle = bodies.com.copy(), bodies.angle.copy()
-        contacts = self._collide(bodies)
-        constraints = self._prepare(contacts, bodies)
-        self._substeps(constraints, bodies)
-        self._restitution(constraints, bodies)
-        self._time_of_impact(bodies, start_com, start_angle)
-        self._store_impulses(constraints)
+        sleeping = self.settings.sleeping
+        if not sleeping or np.any(self._active()):
+            bodies = self._body_state()
+            start_com, start_angle = bodies.com.copy(), bodies.angle.copy()
+            contacts = self._collide(bodies)
+            if sleeping:
+                if self._wake_reached(contacts):
+                    bodies = self._body_state()
+                    contacts = self._collide(bodies)
+                # Kinematic-static pairs, found because moving kinematic bodies were
+                # movable for the wake test, carry no row.
+                awake = self._awake()
+                self._contacts = contacts = contacts.take(awake[contacts.body_a]
+                                                          | awake[contacts.body_b])
+            constraints = self._prepare(contacts, bodies)
+            self._substeps(constraints, bodies)
+            self._restitution(constraints, bodies)
+            self._time_of_impact(bodies, start_com, start_angle)
+            self._store_impulses(constraints)
+            if sleeping:
+                self._fall_asleep(bodies, constraints, start_com, start_angle)
         self.time += self.settings.dt
         self.step_count += 1
 
     def _body_state(self) -> BodyState:
+        """The solver's view; sleeping bodies take part with zero inverse mass."""
         v = self._view
+        inv_mass, inv_inertia = v("inv_mass"), v("inv_inertia")
+        asleep = v("asleep")
+        if np.any(asleep):
+            inv_mass = np.where(asleep, 0.0, inv_mass)
+            inv_inertia = np.where(asleep, 0.0, inv_inertia)
         return BodyState(v("com"), v("angle"), v("velocity"), v("angular_velocity"),
-                         v("inv_mass"), v("inv_inertia"), v("linear_damping"),
-                         v("angular_damping"), v("round"))
+                         inv_mass, inv_inertia, v("linear_damping"),
+                         v("angular_damping"), v("round"), v("radius"))
+
+    # ----------------------------------------------------------------------------------
+    # Sleeping (``sdfphys.sleep``)
+    # ----------------------------------------------------------------------------------
+
+    def _awake(self) -> np.ndarray:
+        """(B,) bool: dynamic bodies that are not asleep."""
+        return (self._view("kind") == _DYNAMIC) & ~self._view("asleep")
+
+    def _active(self) -> np.ndarray:
+        """(B,) bool: awake dynamic bodies and moving kinematic ones (what a step moves)."""
+        v, w = self._view("velocity"), self._view("angular_velocity")
+        moving = (v[:, 0] != 0.0) | (v[:, 1] != 0.0) | (w != 0.0)
+        return self._awake() | ((self._view("kind") == _KINEMATIC) & moving)
+
+    def _wake_reached(self, contacts: Contacts) -> bool:
+        """Wake the sleeping islands that an active body has a contact with; True if any."""
+        asleep = self._view("asleep")
+        if len(contacts) == 0 or not np.any(asleep):
+            return False
+        active = self._active()
+        a, b = contacts.body_a, contacts.body_b
+        reached = np.r_[b[active[a] & asleep[b]], a[asleep[a] & active[b]]]
+        if len(reached) == 0:
+            return False
+        self._wake_islands(self._view("island")[reached])
+        return True
+
+    def _wake_touching(self, index: int) -> None:
+        """Wake body ``index``'s island and the sleeping islands that touch it."""
+        c = self._sleep_contacts
+        touching = np.r_[c.body_a[c.body_b == index], c.body_b[c.body_a == index], index]
+        touching = touching[self._view("asleep")[touching]]
+        if len(touching):
+            self._wake_islands(self._view("island")[touching])
+
+    def wake(self) -> None:
+        """Wake every sleeping island."""
+        self._wake_islands(self._view("island")[self._view("asleep")])
+
+    def _wake_islands(self, islands: np.ndarray) -> None:
+        """Wake every body of the given sleeping islands; their contacts' impulses return
+        to the warm-start cache."""
+        if len(islands) == 0:
+            return
+        d = self._data
+        woken = self._view("asleep") & np.isin(self._view("island"), islands)
+        d["asleep"][:self._n][woken] = False
+        d["sleep_time"][:self._n][woken] = 0.0
+        rows = woken[self._sleep_impulses.body_a] | woken[self._sleep_impulses.body_b]
+        self._impulses = ImpulseCache.concatenate(
+            [self._impulses, self._sleep_impulses.take(rows)]).sorted()
+        self._sleep_impulses = self._sleep_impulses.take(~rows)
+        c = self._sleep_contacts
+        self._sleep_contacts = c.take(~(woken[c.body_a] | woken[c.body_b]))
+
+    def _fall_asleep(self, bodies: BodyState, constraints: ContactConstraints,
+                     start_com: np.ndarray, start_angle: np.ndarray) -> None:
+        """Count each awake body's rest (``sleep.rest_times``) and put to sleep the
+        islands that have rested ``time_to_sleep``: velocities zeroed, their contacts and
+        impulses moved to the sleeping caches. start_com, start_angle: the poses at the
+        start of the step (a body pushed out of overlap moves without velocity)."""
+        s = self.settings
+        awake = self._awake()
+        sleep_time = self._view("sleep_time")
+        rest_times(bodies.velocity, bodies.angular_velocity, bodies.com, bodies.angle,
+                   start_com, start_angle, self._view("radius"), awake, sleep_time, s.dt,
+                   s.sleep_speed)
+        c = constraints
+        kinematic = self._active() & (self._view("kind") == _KINEMATIC)
+        sleep_time[c.body_b[kinematic[c.body_a]]] = 0.0
+        sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
+        root = island_roots(bodies.inv_mass, c.body_a, c.body_b)
+        falling = falling_asleep(root, awake, sleep_time, s.time_to_sleep)
+        if not np.any(falling):
+            return
+        d = self._data
+        n = self._n
+        d["asleep"][:n][falling] = True
+        d["velocity"][:n][falling] = 0.0
+        d["angular_velocity"][:n][falling] = 0.0
+        roots, label = np.unique(root[falling], return_inverse=True)
+        d["island"][:n][falling] = self._islands_made + label
+        self._islands_made += len(roots)
+        cache = self._impulses
+        rows = falling[cache.body_a] | falling[cache.body_b]
+        self._sleep_impulses = ImpulseCache.concatenate([self._sleep_impulses,
+                                                         cache.take(rows)])
+        self._impulses = cache.take(~rows)
+        contacts = self._contacts
+        rows = falling[contacts.body_a] | falling[contacts.body_b]
+        self._sleep_contacts = Contacts.concatenate([self._sleep_contacts,
+                                                     contacts.take(rows)])
+        self._contacts = contacts.take(~rows)
 
     def _collision_shapes(self) -> list[Shape]:
         """The distinct shapes as collisions see them under the field knobs."""
@@ -368,9 +501,9 @@ class World:
         reach at the step's starting velocities (``sdfphys.collide``), once per step;
         each pair kind whose narrowphase ran is counted (PAIR_STAGES)."""
         ran: set[tuple[str, str]] = set()
+        movable = self._active() if self.settings.sleeping else self._view("kind") == _DYNAMIC
         self._contacts = find_contacts(self._collision_shapes(), self._view("shape_id"),
-                                       bodies.com, bodies.angle,
-                                       self._view("kind") == _DYNAMIC, self.settings,
+                                       bodies.com, bodies.angle, movable, self.settings,
                                        bodies.velocity, bodies.angular_velocity, ran)
         self.stage_counts["collide"] += 1
         for a, b in ran:
@@ -478,8 +611,18 @@ class World:
 
     @property
     def contacts(self) -> Contacts:
-        """The contacts found at the start of the last step (empty before the first)."""
-        return self._contacts
+        """The contacts found at the start of the last step (empty before the first),
+        with those of sleeping islands as they fell asleep; sorted by (body_a, body_b,
+        feature)."""
+        if len(self._sleep_contacts) == 0:
+            return self._contacts
+        c = Contacts.concatenate([self._contacts, self._sleep_contacts])
+        return c.take(np.lexsort((c.feature, c.body_b, c.body_a)))
+
+    @property
+    def asleep(self) -> np.ndarray:
+        """(B,) bool: bodies of sleeping islands (``settings.sleeping``)."""
+        return _read_only(self._view("asleep").copy())
 
     @property
     def shapes(self) -> list[Shape]:

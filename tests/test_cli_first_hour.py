@@ -206,8 +206,8 @@ def test_a_signal_while_writing_a_video_leaves_no_file(tmp_path, sig, status, na
     def encoding():     # the partial file exists and has frames in it
         return any(p.stat().st_size > 0 for p in tmp_path.iterdir())
 
-    code, err = _interrupt(["run", "scenes/pyramid.toml", "-o", str(out), "--seconds", "600"],
-                           sig, encoding)
+    code, err = _interrupt(["run", "scenes/pyramid.toml", "-o", str(out), "--seconds", "600",
+                            "--set", "sim.sleeping=false"], sig, encoding)
     assert (code, err) == (status, f"sdfphys: interrupted ({name})")
     assert list(tmp_path.iterdir()) == []
 
@@ -223,7 +223,8 @@ def test_a_signal_at_any_moment_of_a_record_is_one_line(tmp_path, sig, status, n
     """In the build, a first step's compilation or the steps: one line, no traceback, no
     file."""
     code, err = _interrupt(["record", "scenes/pyramid.toml", "-o", str(tmp_path / "t.npz"),
-                            "--seconds", "600"], sig, _after(delay))
+                            "--seconds", "600", "--set", "sim.sleeping=false"], sig,
+                           _after(delay))     # awake: 600 s take minutes
     assert (code, err) == (status, f"sdfphys: interrupted ({name})")
     assert list(tmp_path.iterdir()) == []
 

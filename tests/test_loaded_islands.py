@@ -19,7 +19,7 @@ from sdfphys.solver import MASS_RATIO, contact_softness, row_softness, soft_coef
 from sdfphys.world import World
 
 G = np.array([0.0, -9.81])
-SETTINGS = Settings()
+SETTINGS = Settings(sleeping=False)          # long horizons: the solver at work
 H = SETTINGS.dt / SETTINGS.substeps
 HERTZ = min(SETTINGS.contact_hertz, 0.25 / H)
 ZETA = SETTINGS.contact_damping_ratio
@@ -52,7 +52,7 @@ def test_a_stack_stiffens_each_row_by_the_weights_its_bodies_carry():
     boxes carry 6, 2.5 and 1 times their weight (the 1 kg box is pushed down by 5 kg, the
     2 kg one by 3 kg); each row takes its bodies' larger ratio."""
     inv_mass, c = rows([(0, 1), (1, 2), (2, 3)], [0.0, 1.0, 0.5, 1.0 / 3.0], [6.0, 5.0, 3.0])
-    bias_rate, mass_scale, impulse_scale, loaded = row_softness(inv_mass, c, G, SETTINGS)
+    bias_rate, mass_scale, impulse_scale, loaded, _ = row_softness(inv_mass, c, G, SETTINGS)
     for k, (r, static) in enumerate([(6.0, True), (6.0, False), (2.5, False)]):
         np.testing.assert_allclose([bias_rate[k], mass_scale[k], impulse_scale[k]],
                                    expected(r, static), rtol=1e-12)
@@ -63,7 +63,7 @@ def test_unloaded_rows_keep_contact_softness_bit_for_bit():
     """Boxes side by side on the ground, each carrying its own weight: no loaded island."""
     inv_mass, c = rows([(0, 1), (0, 2), (1, 2)], [0.0, 1.0, 1.0], [1.0, 1.0, 0.0],
                        normals=[[0.0, 1.0], [0.0, 1.0], [1.0, 0.0]])
-    bias_rate, mass_scale, impulse_scale, loaded = row_softness(inv_mass, c, G, SETTINGS)
+    bias_rate, mass_scale, impulse_scale, loaded, _ = row_softness(inv_mass, c, G, SETTINGS)
     soft, stiff = contact_softness(SETTINGS)
     assert list(bias_rate) == [stiff.bias_rate, stiff.bias_rate, soft.bias_rate]
     assert list(mass_scale) == [stiff.mass_scale, stiff.mass_scale, soft.mass_scale]
@@ -77,7 +77,7 @@ def test_islands_larger_than_the_limit_get_no_extra_pass_and_capped_stiffening()
     inv_mass, c = rows([(0, 1), (1, 2), (2, 3)], [0.0, 1.0, 1.0, 1.0], [3.0, 2.0, 1.0])
 
     def ground_row(**knobs):
-        bias_rate, mass_scale, impulse_scale, loaded = row_softness(
+        bias_rate, mass_scale, impulse_scale, loaded, _ = row_softness(
             inv_mass, c, G, SETTINGS.with_values(**knobs))
         return [bias_rate[0], mass_scale[0], impulse_scale[0]], len(loaded)
 
@@ -101,7 +101,7 @@ def test_islands_at_rest_are_treated_up_to_the_rest_limit():
     def ground_row(separation, **knobs):
         inv_mass, c = rows([(0, 1), (1, 2), (2, 3)], [0.0, 1.0, 1.0, 1.0], [3.0, 2.0, 1.0],
                            separation=separation)
-        bias_rate, mass_scale, impulse_scale, loaded = row_softness(
+        bias_rate, mass_scale, impulse_scale, loaded, _ = row_softness(
             inv_mass, c, G, SETTINGS.with_values(stiff_island_limit=2, **knobs))
         return [bias_rate[0], mass_scale[0], impulse_scale[0]], len(loaded)
 
@@ -129,7 +129,7 @@ def test_a_mass_ratio_loads_its_island_even_without_gravity():
     for ratio, is_loaded in [(MASS_RATIO, True), (0.99 * MASS_RATIO, False)]:
         inv_mass, c = rows([(0, 1), (1, 2)], [1.0, 1.0, 1.0 / ratio], [0.0, 0.0],
                            normals=[[1.0, 0.0], [1.0, 0.0]])
-        bias_rate, _, _, loaded = row_softness(inv_mass, c, np.zeros(2), SETTINGS)
+        bias_rate, _, _, loaded, _ = row_softness(inv_mass, c, np.zeros(2), SETTINGS)
         assert list(bias_rate) == [contact_softness(SETTINGS)[0].bias_rate] * 2
         assert len(loaded) == (2 if is_loaded else 0)
 
@@ -137,7 +137,7 @@ def test_a_mass_ratio_loads_its_island_even_without_gravity():
 def test_load_stiffening_off_keeps_the_plain_coefficients():
     inv_mass, c = rows([(0, 1), (1, 2), (2, 3)], [0.0, 1.0, 0.5, 1.0 / 3.0], [6.0, 5.0, 3.0])
     off = SETTINGS.with_values(load_stiffening=False)
-    bias_rate, _, _, loaded = row_softness(inv_mass, c, G, off)
+    bias_rate, _, _, loaded, _ = row_softness(inv_mass, c, G, off)
     soft, stiff = contact_softness(off)
     assert list(bias_rate) == [stiff.bias_rate, soft.bias_rate, soft.bias_rate]
     assert len(loaded) == 0         # masses 1, 2, 3: no neighbours MASS_RATIO apart

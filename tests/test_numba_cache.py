@@ -35,8 +35,8 @@ def test_the_stamp_follows_every_file_s_bytes_and_name(tmp_path):
 
 
 def test_sdfphys_kernels_use_the_package_stamp_and_numba_s_directory():
-    solver._root(np.arange(3), 2)
-    locator = solver._root._cache._impl.locator
+    solver._any_below(np.zeros(1), 0.0)
+    locator = solver._any_below._cache._impl.locator
     assert isinstance(locator, _numba_cache.PackageStampLocator)
     assert locator.get_source_stamp()[1] == _numba_cache.package_stamp()
     assert locator.get_cache_path() == locator._inner.get_cache_path()
@@ -59,9 +59,9 @@ def test_an_edit_of_another_sdfphys_file_recompiles_a_cached_kernel(tmp_path):
     load the old kernel) the third recompiles it."""
     shutil.copytree(Path(sdfphys.__file__).parent, tmp_path / "pkg" / "sdfphys",
                     ignore=shutil.ignore_patterns("__pycache__"))
-    script = ("import numpy as np, sdfphys.solver as s; s._root(np.arange(3), 2); "
-              "print(sum(s._root.stats.cache_hits.values()), "
-              "sum(s._root.stats.cache_misses.values()), s.__file__)")
+    script = ("import numpy as np, sdfphys.solver as s; s._any_below(np.zeros(1), 0.0); "
+              "print(sum(s._any_below.stats.cache_hits.values()), "
+              "sum(s._any_below.stats.cache_misses.values()), s.__file__)")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
                PYTHONPATH=str(tmp_path / "pkg"))
 

@@ -349,7 +349,7 @@ def test_a_box_resting_on_a_box_keeps_its_warm_start_every_step(monkeypatch):
         return real(bodies, constraints, *args)
 
     monkeypatch.setattr(world_module, "solve_substeps", spy)
-    world = World(gravity=(0.0, -9.81))
+    world = World(gravity=(0.0, -9.81), settings=Settings(sleeping=False))
     world.add_body({"type": "box", "size": [20.0, 2.0]}, position=(0.0, -1.0), kind="static")
     world.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 0.5), mass=1.0)
     world.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 1.5), mass=30.0)

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from sdfphys import toi
 from sdfphys.settings import Settings
 from sdfphys.shapes import shape_from_spec
 from sdfphys.toi import fast_bodies, time_of_impact, vertex_time_of_impact
@@ -189,3 +190,48 @@ def test_distances_are_the_numpy_fields_bit_for_bit_and_fall_back():
     for k in range(n_bodies):
         rows = target == k
         np.testing.assert_array_equal(d[rows], fields[shape_id[k]].distance(local[rows]))
+
+
+def brute_force_pairs(fast, start, end, radius):
+    """Every (fast slot, non-fast body) whose boxes overlap, by comparing all of them."""
+    found = []
+    others = [j for j in range(len(radius)) if j not in set(fast.tolist())]
+    for slot, i in enumerate(fast):
+        lo = np.minimum(start[i], end[i]) - radius[i]
+        hi = np.maximum(start[i], end[i]) + radius[i]
+        for j in others:
+            with np.errstate(invalid="ignore"):
+                olo, ohi = end[j] - radius[j], end[j] + radius[j]
+            if np.all(lo <= ohi) and np.all(olo <= hi):
+                found.append((slot, j))
+    return found
+
+
+@pytest.mark.parametrize("n", [50, 3000])
+def test_candidate_pairs_are_the_brute_force_ones_from_the_broadphase(n, monkeypatch):
+    """The time-of-impact candidates come from the broadphase (grid beyond SWEEP_BODIES
+    bodies), in (fast slot, body) order, and equal the all-pairs comparison."""
+    rng = np.random.default_rng(n)
+    side = np.sqrt(n) * 2.0
+    end = rng.uniform(-side, side, (n, 2))
+    start = end - rng.normal(scale=3.0, size=(n, 2))
+    radius = rng.uniform(0.1, 1.0, n)
+    radius[0] = np.inf                                  # an unbounded ground
+    fast = np.sort(rng.choice(np.arange(1, n), n // 10, replace=False))
+    calls = []
+    original = toi.candidate_pairs
+    monkeypatch.setattr(toi, "candidate_pairs",
+                        lambda *args: calls.append(1) or original(*args))
+    slot, other = toi._candidate_pairs(fast, start, end, radius)
+    assert calls == [1]
+    expected = brute_force_pairs(fast, start, end, radius) if n <= 50 else None
+    if expected is not None:
+        assert list(zip(slot.tolist(), other.tolist())) == expected
+    else:
+        # Spot-check a sample of fast bodies against the brute force.
+        pick = fast[:25]
+        sub = brute_force_pairs(pick, start, end, radius)
+        keep = slot < 25
+        got = list(zip(slot[keep].tolist(), other[keep].tolist()))
+        assert got == [(s, j) for s, j in sub if j not in set(fast.tolist())]
+    assert np.all(np.diff(slot * n + other) > 0)

@@ -17,13 +17,14 @@ One step of ``find_contacts`` (no Python loop over bodies, pairs or contacts):
 4. contacts with depth > -margin of their pair kept, reduced to at most
    ``contacts_per_pair`` per pair (``reduce``), sorted by (body_a, body_b, feature).
 
-Fast path for circles (``circle_kernels``, the default): steps 1-2 are one compiled
-pass over the bodies and the grid broadphase; the circle-circle and circle-box
-(``TriangleMesh.box``) candidate pairs go straight from the sorted pair list to
-their contacts (one compiled pass, same arithmetic, same order: such a pair has one
-contact, so grouping and reduction change nothing for it), only the other pairs
-take steps 3-4, and the two sorted lists are merged. The result is identical to the general path
-(``find_contacts(..., fast_circles=False)``), bit for bit.
+Fast path (``circle_kernels``, the default): steps 1-2 are one compiled pass over
+the bodies and the grid broadphase; the circle-circle, circle-box (``TriangleMesh.box``)
+and convex polygon (boxes and convex meshes: ``polygons.clip_pair``, at most two
+contacts, a manifold the reduction keeps whole) candidate pairs go straight from the
+sorted pair list to their contacts in one compiled pass, in (body_a, body_b, feature)
+order; only the other pairs take steps 3-4, and the two sorted lists are merged. The
+result is identical to the general path (``find_contacts(..., fast_circles=False)``),
+bit for bit.
 
 Velocity-aware speculative margin. A contact found before the bodies touch costs
 nothing (the solver's speculative rows, s > 0, only forbid closing more than s), and
@@ -52,14 +53,23 @@ from typing import Any
 
 import numpy as np
 
+from ..sdf.polygonal import Box
 from ..settings import Settings
 from ..shapes import Shape, shape_from_spec
 from .broadphase import candidate_pairs, world_bounds
-from .circle_kernels import BOX, CIRCLE, OTHER, analytic_contacts, merge_order, reach_and_boxes
+from .circle_kernels import (
+    BOX,
+    CIRCLE,
+    OTHER,
+    POLYGON,
+    analytic_contacts,
+    merge_order,
+    reach_and_boxes,
+)
 from .contacts import Contacts
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
+from .polygons import SOURCE_CLIP, polygon_table
 from .reduce import reduce_contacts
-from ..sdf.polygonal import Box
 
 __all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "Contacts", "collide", "find_contacts",
            "speculative_reach"]
@@ -80,12 +90,50 @@ def _distinct(shapes: Sequence[Shape]) -> tuple[list[Shape], np.ndarray]:
 
 
 def _shape_class(shape: Shape) -> int:
-    """CIRCLE, BOX (a mesh whose field is the box primitive) or OTHER (general path)."""
+    """CIRCLE, BOX (a mesh whose field is the box primitive), POLYGON (another convex
+    mesh) or OTHER (general path)."""
     if shape.kind == "circle":
         return CIRCLE
     if shape.kind == "mesh" and type(shape.field) is Box:
         return BOX
+    if shape.kind == "mesh" and shape.convex:
+        return POLYGON
     return OTHER
+
+
+class _ShapeTables:
+    """Per distinct shape, what the compiled stages read (built once per shape list).
+
+    bounds (S, 4) body-frame AABBs; radius (S,); shape_class (S,) int64; half (S, 2)
+    box half-extents; polygons: ``polygons.polygon_table`` of the boxes and convex
+    meshes.
+    """
+
+    def __init__(self, shapes: Sequence[Shape]):
+        self.bounds = np.array([s.bounds() for s in shapes], np.float64).reshape(-1, 4)
+        self.radius = np.array([s.radius for s in shapes], np.float64)
+        self.shape_class = np.array([_shape_class(s) for s in shapes], np.int64)
+        self.half = np.array([s.field.half if c == BOX else (0.0, 0.0)
+                              for s, c in zip(shapes, self.shape_class)],
+                             np.float64).reshape(-1, 2)
+        self.polygons = polygon_table([s.vertices if c >= BOX else None
+                                       for s, c in zip(shapes, self.shape_class)])
+
+
+_TABLES: dict[tuple[Shape, ...], _ShapeTables] = {}
+#: Shape lists whose tables are kept (a world keeps one; tests make many).
+_TABLES_KEPT = 16
+
+
+def _tables(shapes: list[Shape]) -> _ShapeTables:
+    """The tables of a list of distinct shapes, cached by the shapes' identities."""
+    key = tuple(shapes)
+    tables = _TABLES.get(key)
+    if tables is None:
+        if len(_TABLES) >= _TABLES_KEPT:
+            _TABLES.pop(next(iter(_TABLES)))
+        tables = _TABLES[key] = _ShapeTables(shapes)
+    return tables
 
 
 def speculative_reach(radius: np.ndarray, velocity: np.ndarray,
@@ -149,6 +197,9 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
     starts = np.flatnonzero(np.diff(pair_key)) + 1
     keep = reduce_contacts(np.r_[0, starts, len(c)], c.point, c.depth,
                            settings.contacts_per_pair, settings.linear_slop)
+    if settings.contacts_per_pair >= 2:
+        # Clipped polygon manifolds (two points at most) are kept whole.
+        keep |= (c.feature >> np.int64(56)) == SOURCE_CLIP
     c, pair_key = c.take(keep), pair_key[keep]
     return c.take(np.lexsort((c.feature, pair_key)))
 
@@ -175,8 +226,8 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     """
     distinct, canonical = _distinct(shapes)
     body_shape = canonical[np.asarray(shape_id, np.int64)]
-    local_bounds = np.array([s.bounds() for s in distinct], np.float64).reshape(-1, 4)
-    radius = np.array([s.radius for s in distinct], np.float64)
+    tables = _tables(distinct)
+    local_bounds, radius = tables.bounds, tables.radius
     position = np.ascontiguousarray(position, np.float64).reshape(-1, 2)
     angle = np.ascontiguousarray(angle, np.float64).reshape(-1)
     n = len(angle)
@@ -200,30 +251,32 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                     angular_velocity, float(settings.dt), 0.5 * margin,
                     UNBOUNDED_RADIUS, REACH_CAP_RADII, reach, boxes)
     pairs = candidate_pairs(boxes, movable)
-    shape_class = np.array([_shape_class(s) for s in distinct], np.int64)
-    half = np.array([s.field.half if c == BOX else (0.0, 0.0)
-                     for s, c in zip(distinct, shape_class)], np.float64).reshape(-1, 2)
+    shape_class = tables.shape_class
     trig = np.empty((n, 4))
     box_body = shape_class[body_shape] == BOX
     if np.any(box_body):
         a_box = angle[box_body]
         trig[box_body] = np.column_stack([np.cos(-a_box), np.sin(-a_box), np.cos(a_box),
                                           np.sin(a_box)])
-    a, b, point, normal, depth, rest, n_circles, n_boxes = analytic_contacts(
-        pairs, body_shape, shape_class, radius, half, position, trig, reach, float(margin))
+    a, b, point, normal, depth, feature, rest, n_circles, n_boxes, n_polygons = (
+        analytic_contacts(pairs, body_shape, shape_class, radius, tables.half,
+                          tables.polygons, position, angle, trig, reach, float(margin),
+                          float(settings.linear_slop), int(settings.contacts_per_pair)))
     if ran is not None:
         if n_circles:
             ran.add(("circle", "circle"))
         if n_boxes:
             ran.add(("circle", "mesh"))
+        if n_polygons:
+            ran.add(("mesh", "mesh"))
+    analytic = Contacts(a, b, point, normal, depth, feature)
     if len(rest) == 0:
-        return Contacts(a, b, point, normal, depth, np.zeros(len(a), np.int64))
+        return analytic
     pose = np.column_stack([position, angle])
     other = _narrowphase(distinct, body_shape, pairs[rest], pose, margin, reach, settings,
                          ran)
-    circles = Contacts(a, b, point, normal, depth, np.zeros(len(a), np.int64))
     order = merge_order(a * np.int64(n) + b, other.body_a * np.int64(n) + other.body_b)
-    return Contacts.concatenate([circles, other]).take(order)
+    return Contacts.concatenate([analytic, other]).take(order)
 
 
 def collide(shape_a: Any, pose_a: Sequence[float], shape_b: Any, pose_b: Sequence[float],

@@ -51,8 +51,9 @@ import numpy as np
 from numba import njit
 
 from .broadphase import body_box
+from .polygons import clip_pair
 
-__all__ = ["BOX", "CIRCLE", "OTHER", "analytic_contacts", "merge_order", "reach_and_boxes"]
+__all__ = ["BOX", "CIRCLE", "OTHER", "POLYGON", "analytic_contacts", "merge_order", "reach_and_boxes"]
 
 #: Vectors not longer than this normalize to (1, 0) (``sdf.base._TINY``).
 _TINY_LENGTH = 1e-300
@@ -84,8 +85,9 @@ def reach_and_boxes(shape_bounds: np.ndarray, shape_radius: np.ndarray,
                  half_margin + reach[i], boxes[i])
 
 
-#: Shape classes of ``analytic_contacts``: handled by the general path, circle, box.
-OTHER, CIRCLE, BOX = 0, 1, 2
+#: Shape classes of ``analytic_contacts``: handled by the general path, circle, box
+#: (``TriangleMesh.box``), other convex polygon (``TriangleMesh.convex``).
+OTHER, CIRCLE, BOX, POLYGON = 0, 1, 2, 3
 
 
 @njit(cache=True)
@@ -113,30 +115,37 @@ def _box_field(px: float, py: float, hx: float, hy: float) -> tuple[float, float
 
 @njit(cache=True)
 def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np.ndarray,
-                      shape_radius: np.ndarray, shape_half: np.ndarray,
-                      position: np.ndarray, trig: np.ndarray, reach: np.ndarray,
-                      margin: float):
-    """Contacts of the circle-circle and circle-box candidate pairs; the others' indices.
+                      shape_radius: np.ndarray, shape_half: np.ndarray, polygons: tuple,
+                      position: np.ndarray, angle: np.ndarray, trig: np.ndarray,
+                      reach: np.ndarray, margin: float, slop: float, budget: int):
+    """Contacts of the circle-circle, circle-box and convex polygon candidate pairs;
+    the others' indices.
 
     pairs: (P, 2) int64 candidate pairs (i < j), sorted by (i, j); body_shape: (B,)
     int64 index into the distinct shapes, whose order decides the orientation of a
-    circle-circle pair; shape_class: (S,) int64 OTHER / CIRCLE / BOX; shape_radius:
-    (S,) m (circles); shape_half: (S, 2) m, half-extents (boxes); position: (B, 2)
-    centres of mass, m; trig: (B, 4) ``[cos(-a), sin(-a), cos(a), sin(a)]`` of each
-    box body's angle a (numpy's values; other rows unused); reach: (B,) m; margin:
-    m, the speculative distance.
+    pair of the same kinds; shape_class: (S,) int64 OTHER / CIRCLE / BOX / POLYGON;
+    shape_radius: (S,) m (circles); shape_half: (S, 2) m, half-extents (boxes);
+    polygons: ``polygons.polygon_table`` of the shapes (boxes and convex polygons);
+    position: (B, 2) centres of mass, m; angle: (B,) rad; trig: (B, 4)
+    ``[cos(-a), sin(-a), cos(a), sin(a)]`` of each box body's angle a (numpy's
+    values; other rows unused); reach: (B,) m; margin: m, the speculative distance;
+    slop: m, ``Settings.linear_slop``; budget: ``Settings.contacts_per_pair``.
 
     Circle-circle: module doc. Circle-box (``collide_circle_and_field`` with the box
     field): the circle is first; its centre in the box frame c = R(-a)(x_c - x_b),
     (d, g) = box field and gradient at c, g normalized (``safe_normalize``) and
     turned to the world by R(a); depth = r - d, normal = -g, point = x_c - (d + r)/2 g;
-    kept and flipped by the same rules.
+    kept and flipped by the same rules. Two convex polygons (boxes or convex meshes):
+    ``polygons.clip_pair`` with the pair's own margin, at most two contacts (the
+    deeper one if budget is 1, ties to the smaller key), in key order.
 
     Returns (body_a, body_b (K,) int64 with body_a < body_b, point (K, 2) m,
-    normal (K, 2) unit a -> b, depth (K,) m > 0 overlapping, rest (R,) int64 indices
-    into ``pairs`` of the other pairs, n_circles, n_boxes: the circle-circle and
-    circle-box candidate pairs seen). Contacts are sorted by (body_a, body_b).
+    normal (K, 2) unit a -> b, depth (K,) m > 0 overlapping, feature (K,) int64,
+    rest (R,) int64 indices into ``pairs`` of the other pairs, n_circles, n_boxes,
+    n_polygons: the circle-circle, circle-box and polygon candidate pairs seen).
+    Contacts are sorted by (body_a, body_b, feature).
     """
+    vertices, normals, poly_start, poly_count = polygons
     n_pairs = pairs.shape[0]
     n_shapes = shape_radius.shape[0]
     group_reach = np.empty((n_shapes, n_shapes))
@@ -149,6 +158,7 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     n_fast = 0
     n_circles = 0
     n_boxes = 0
+    n_polygons = 0
     for p in range(n_pairs):
         i = pairs[p, 0]
         j = pairs[p, 1]
@@ -163,6 +173,9 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
         elif ci == BOX and cj == CIRCLE:
             swap = True
             n_boxes += 1
+        elif ci >= BOX and cj >= BOX:
+            swap = body_shape[i] > body_shape[j]
+            n_polygons += 1
         else:
             rest[n_rest] = p
             n_rest += 1
@@ -174,11 +187,17 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
         value = reach[f] + reach[s]
         if value > group_reach[body_shape[f], body_shape[s]]:
             group_reach[body_shape[f], body_shape[s]] = value
-    body_a = np.empty(n_fast, np.int64)
-    body_b = np.empty(n_fast, np.int64)
-    point = np.empty((n_fast, 2))
-    normal = np.empty((n_fast, 2))
-    depth = np.empty(n_fast)
+    rows = 2 * n_fast
+    body_a = np.empty(rows, np.int64)
+    body_b = np.empty(rows, np.int64)
+    point = np.empty((rows, 2))
+    normal = np.empty((rows, 2))
+    depth = np.empty(rows)
+    feature = np.zeros(rows, np.int64)
+    largest = 0
+    for u in range(poly_count.shape[0]):
+        largest = max(largest, poly_count[u])
+    work = np.empty((2 * largest, 2))
     k = 0
     for c in range(n_fast):
         p = code[c] if code[c] >= 0 else -code[c] - 1
@@ -186,9 +205,24 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
         s = pairs[p, 1] if code[c] >= 0 else pairs[p, 0]
         sf = body_shape[f]
         ss = body_shape[s]
-        rf = shape_radius[sf]
-        group_margin = margin + group_reach[sf, ss]
-        if shape_class[ss] == CIRCLE:
+        found = 1
+        if shape_class[sf] >= BOX:
+            found = clip_pair(vertices, normals, poly_start[sf], poly_count[sf],
+                              poly_start[ss], poly_count[ss], position[f, 0], position[f, 1],
+                              angle[f], position[s, 0], position[s, 1], angle[s],
+                              (margin + reach[f]) + reach[s], slop, work, point, normal,
+                              depth, feature, k) - k
+            if found == 2 and (budget == 1 or feature[k + 1] < feature[k]):
+                if budget == 1:
+                    found = 1
+                    if depth[k + 1] > depth[k] or (depth[k + 1] == depth[k]
+                                                   and feature[k + 1] < feature[k]):
+                        _move_row(point, normal, depth, feature, k + 1, k)
+                else:
+                    _swap_rows(point, normal, depth, feature, k, k + 1)
+        elif shape_class[ss] == CIRCLE:
+            rf = shape_radius[sf]
+            group_margin = margin + group_reach[sf, ss]
             dx = position[s, 0] - position[f, 0]
             dy = position[s, 1] - position[f, 1]
             distance = math.hypot(dx, dy)
@@ -202,9 +236,14 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
                 nx = 1.0
                 ny = 0.0
             offset = rf - 0.5 * d
-            px = position[f, 0] + offset * nx
-            py = position[f, 1] + offset * ny
+            point[k, 0] = position[f, 0] + offset * nx
+            point[k, 1] = position[f, 1] + offset * ny
+            normal[k, 0] = nx
+            normal[k, 1] = ny
+            depth[k] = d
         else:
+            rf = shape_radius[sf]
+            group_margin = margin + group_reach[sf, ss]
             vx = position[f, 0] - position[s, 0]
             vy = position[f, 1] - position[s, 1]
             cl, sl = trig[s, 0], trig[s, 1]
@@ -224,26 +263,44 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
             wx = cw * gx - sw * gy
             wy = sw * gx + cw * gy
             half = 0.5 * (value + rf)
-            px = position[f, 0] - half * wx
-            py = position[f, 1] - half * wy
-            nx = -wx
-            ny = -wy
-        point[k, 0] = px
-        point[k, 1] = py
-        depth[k] = d
-        if f > s:
-            body_a[k] = s
-            body_b[k] = f
-            normal[k, 0] = -nx
-            normal[k, 1] = -ny
-        else:
-            body_a[k] = f
-            body_b[k] = s
-            normal[k, 0] = nx
-            normal[k, 1] = ny
-        k += 1
-    return (body_a[:k], body_b[:k], point[:k], normal[:k], depth[:k], rest[:n_rest],
-            n_circles, n_boxes)
+            point[k, 0] = position[f, 0] - half * wx
+            point[k, 1] = position[f, 1] - half * wy
+            normal[k, 0] = -wx
+            normal[k, 1] = -wy
+            depth[k] = d
+        for r in range(k, k + found):
+            if f > s:
+                body_a[r] = s
+                body_b[r] = f
+                normal[r, 0] = -normal[r, 0]
+                normal[r, 1] = -normal[r, 1]
+            else:
+                body_a[r] = f
+                body_b[r] = s
+        k += found
+    return (body_a[:k], body_b[:k], point[:k], normal[:k], depth[:k], feature[:k],
+            rest[:n_rest], n_circles, n_boxes, n_polygons)
+
+
+@njit(cache=True)
+def _move_row(point, normal, depth, feature, source, target):
+    """Copy contact row ``source`` over row ``target``."""
+    point[target, 0] = point[source, 0]
+    point[target, 1] = point[source, 1]
+    normal[target, 0] = normal[source, 0]
+    normal[target, 1] = normal[source, 1]
+    depth[target] = depth[source]
+    feature[target] = feature[source]
+
+
+@njit(cache=True)
+def _swap_rows(point, normal, depth, feature, u, v):
+    """Exchange contact rows u and v."""
+    for axis in range(2):
+        point[u, axis], point[v, axis] = point[v, axis], point[u, axis]
+        normal[u, axis], normal[v, axis] = normal[v, axis], normal[u, axis]
+    depth[u], depth[v] = depth[v], depth[u]
+    feature[u], feature[v] = feature[v], feature[u]
 
 
 @njit(cache=True)

@@ -48,3 +48,11 @@ class Contacts:
         if not parts:
             return cls.empty()
         return cls(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(cls)))
+
+    def without_body(self, index: int) -> Contacts:
+        """The rows after body ``index`` is removed: its rows dropped, later bodies
+        renumbered."""
+        c = self.take((self.body_a != index) & (self.body_b != index))
+        c.body_a = c.body_a - (c.body_a > index)
+        c.body_b = c.body_b - (c.body_b > index)
+        return c

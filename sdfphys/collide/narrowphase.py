@@ -27,6 +27,8 @@ Feature key layout (int64): ``source << 56 | element << 8 | start``
                 of the deepest point, k + 4096 (``mesh_sdf.FAR_END``) for the far
                 end of its incident face; start uses 13 bits, so the key is
                 ``4 << 56 | e << 21 | start``
+             5  (``polygons.SOURCE_CLIP``) two convex meshes, separating axes and
+                clipping: element = vertex_a << 24 | vertex_b, start = 0
     start    0-6: a descent minimum of triangle ``element`` from start id 0-2
              (vertices), 3-5 (edge midpoints), 6 (centroid);
              255 (``VERTEX_START``): mesh vertex ``element``, whichever triangle or
@@ -63,6 +65,7 @@ from ..settings import Settings
 from ..shapes import Shape
 from .contacts import Contacts
 from .mesh_contacts import mesh_in_field
+from .polygons import polygon_contacts, polygon_table
 
 __all__ = [
     "KIND_ORDER",
@@ -157,12 +160,21 @@ def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray
 def collide_meshes(mesh_a: Shape, mesh_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
                    pose_a: np.ndarray, pose_b: np.ndarray, margin: float,
                    settings: Settings) -> Contacts:
-    """Mesh-mesh: a's triangles in b's polygon field, then b's triangles in a's field.
+    """Mesh-mesh: two convex meshes by separating axes and clipping
+    (``polygons.polygon_contacts``); otherwise a's triangles in b's polygon field, then
+    b's triangles in a's field.
 
     Both directions are needed: a vertex of a inside b is found by the first, a
     vertex of b inside a by the second (each is the exact deepest point when the
     face it presses on is flat, which the reduction then picks from).
     """
+    if mesh_a.convex and mesh_b.convex:
+        vertices, normals, start, count = polygon_table([mesh_a.vertices, mesh_b.vertices])
+        pair, point, normal, depth, feature = polygon_contacts(
+            vertices, normals, start[0], count[0], start[1], count[1],
+            np.ascontiguousarray(pose_a, np.float64), np.ascontiguousarray(pose_b, np.float64),
+            float(margin), float(settings.linear_slop))
+        return Contacts(body_a[pair], body_b[pair], point, normal, depth, feature)
     pair, point, out_b, depth, tri, start = mesh_in_field(mesh_a, mesh_b, pose_a, pose_b,
                                                           margin, settings, True)
     first = Contacts(body_a[pair], body_b[pair], point, -out_b, depth,

@@ -101,8 +101,12 @@ def pm_steps(space: pymunk.Space, steps: int, dt: float = DT) -> Iterator[int]:
 def ground_world(width: float = 200.0, friction: float = MU, centre: tuple = (0.0, 0.0),
                  thickness: float = 20.0, gravity: float = -G, **settings) -> World:
     """A World (``settings``: Settings knobs) with a static ground box of ``width`` x
-    ``thickness`` m whose top face is y = centre[1], centred on x = centre[0]."""
-    world = World(gravity=(0.0, gravity), settings=Settings(**settings))
+    ``thickness`` m whose top face is y = centre[1], centred on x = centre[0].
+
+    Sleeping is off unless a case turns it on: these cases measure the solver, and a
+    sleeping island cannot drift."""
+    world = World(gravity=(0.0, gravity), settings=Settings(**{"sleeping": False,
+                                                               **settings}))
     world.add_body({"type": "box", "size": [width, thickness]},
                    position=(centre[0], centre[1] - thickness / 2), kind="static",
                    friction=friction, name="ground")
