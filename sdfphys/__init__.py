@@ -4,7 +4,14 @@
 window live in ``sdfphys.render``, ``sdfphys.video`` and ``sdfphys.play``.
 """
 
+from importlib import metadata as _metadata
+
 from . import _numba_cache
+
+try:
+    __version__ = _metadata.version("sdfphys")      # pyproject.toml's, once installed
+except _metadata.PackageNotFoundError:              # a source tree that was never installed
+    __version__ = "0+unknown"
 
 _numba_cache.install()      # before any kernel is defined: caches follow the whole package
 
@@ -15,8 +22,6 @@ from .scene import load_scene, read_scene  # noqa: E402
 from .settings import Settings, preset  # noqa: E402
 from .shapes import shape_from_spec  # noqa: E402
 from .world import World  # noqa: E402
-
-__version__ = "0.1.0"
 
 __all__ = ["Contacts", "Settings", "SpecError", "World", "__version__", "collide",
            "load_scene", "preset", "read_scene", "sdf", "shape_from_spec"]

@@ -56,7 +56,10 @@ from __future__ import annotations
 import argparse
 import csv
 import math
+import os
 import statistics
+import sys
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -65,6 +68,8 @@ from typing import Any
 
 import numpy as np
 
+from .errors import SpecError
+from .interrupt import deferred
 from .settings import PRESETS, Settings, preset
 from .world import World
 
@@ -611,8 +616,7 @@ def run_bench(out_dir: str | Path, quick: bool = False,
     progress: called with one line per scene.
     """
     start = time.perf_counter()
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = _output_directory(out_dir)
     rows: list[dict[str, Any]] = []
     notes: list[str] = []
     for name in QUICK_SCENES if quick else tuple(SCENES):
@@ -622,12 +626,66 @@ def run_bench(out_dir: str | Path, quick: bool = False,
             progress(f"{name}: {sum(r['scene'] == name for r in rows)} settings, "
                      f"{time.perf_counter() - start:.0f} s")
     csv_path, md_path = out / "bench.csv", out / "bench.md"
-    _write_csv(rows, csv_path)
-    png_path = _plot(rows, out / "bench.png", notes)
-    results = BenchResults(rows, csv_path, md_path, png_path, 0.0, notes)
-    results.seconds = time.perf_counter() - start
-    md_path.write_text(markdown(results))
+    created = not out.exists()
+    out.mkdir(parents=True, exist_ok=True)
+    written: list[Path] = []
+    try:
+        _write_new(csv_path, lambda path: _write_csv(rows, path), written)
+        png_path = out / "bench.png"
+        if not _write_new(png_path, lambda path: _plot(rows, path, notes) is not None,
+                          written):
+            png_path = None
+        results = BenchResults(rows, csv_path, md_path, png_path, 0.0, notes)
+        results.seconds = time.perf_counter() - start
+        _write_new(md_path, lambda path: path.write_text(markdown(results)), written)
+    except BaseException:
+        with deferred():
+            for path in written:
+                path.unlink(missing_ok=True)
+            if created and not any(out.iterdir()):
+                out.rmdir()
+        raise
     return results
+
+
+def _output_directory(out_dir: str | Path) -> Path:
+    """``out_dir`` as a Path, or a SpecError if it cannot be the output directory (an
+    existing file, or under one); checked before the study runs."""
+    out = Path(out_dir)
+    for parent in (out, *out.parents):
+        if parent.exists():
+            if not parent.is_dir():
+                where = "is" if parent == out else f"is under {str(parent)!r}, which is"
+                raise SpecError("", f"{where} a file, not a directory: bench writes "
+                                "bench.csv, bench.md and bench.png into a directory "
+                                "(existing ones are replaced)", str(out_dir))
+            if not os.access(parent, os.W_OK):
+                raise SpecError("", f"cannot write in {str(parent)!r}", str(out_dir))
+            break
+    return out
+
+
+def _write_new(path: Path, write: Callable[[Path], Any], written: list[Path]) -> bool:
+    """``write(temporary)`` to a hidden temporary file beside ``path``, renamed onto
+    ``path`` (replacing it) once complete and appended to ``written``. A ``write`` that
+    returns False wrote nothing (no matplotlib: no PNG): then so does this."""
+    with deferred():
+        handle, name = tempfile.mkstemp(prefix=f".{path.stem}.",
+                                        suffix=f".partial{path.suffix}", dir=path.parent)
+        os.close(handle)
+    temporary = Path(name)
+    try:
+        if write(temporary) is False:
+            temporary.unlink()
+            return False
+        with deferred():
+            os.replace(temporary, path)
+            written.append(path)
+    except BaseException:
+        with deferred():
+            temporary.unlink(missing_ok=True)
+        raise
+    return True
 
 
 # ---------------------------------------------------------------------------------------
@@ -770,7 +828,9 @@ def _plot(rows: list[dict[str, Any]], path: Path, notes: list[str]) -> Path | No
 def bench_main(argv: Sequence[str] | None = None) -> int:
     """``sdfphys bench [-o DIR] [--quick]``: run the study, print the markdown report.
 
-    Exit 0, or 2 for bad usage (argparse).
+    Exit 0, or 2 for bad usage (argparse) or an output directory that cannot be one (an
+    existing file: one line saying so, before the study runs). bench.csv, bench.md and
+    bench.png in an existing directory are replaced.
     """
     parser = argparse.ArgumentParser(prog="sdfphys bench", description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--output", default="bench-out", metavar="DIR",
@@ -780,6 +840,11 @@ def bench_main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exit_:
         return int(exit_.code or 0)
+    try:
+        _output_directory(args.output)
+    except SpecError as err:
+        print(f"sdfphys bench: error: -o {err}", file=sys.stderr)
+        return 2
     results = run_bench(args.output, quick=args.quick,
                         progress=lambda line: print(line, flush=True))
     print(results.markdown_path.read_text())

@@ -1,9 +1,10 @@
-"""The ``sdfphys`` command line (DESIGN.md): run | play | record | check.
+"""The ``sdfphys`` command line (DESIGN.md): run | play | record | check | bench | compare.
 
-Exit status: 0 ok, 1 a check failed, 2 bad input or usage. Bad input prints one
-line ``sdfphys: error: <file>: <key path>: <what is wrong>`` and no traceback;
-nothing half-written is left behind (video sinks and trajectory files are written
-under a temporary name and renamed when complete).
+Exit status: 0 ok, 1 a check failed, 2 bad input or usage, 130 after SIGINT (Ctrl-C)
+and 143 after SIGTERM. Bad input prints one line ``sdfphys: error: <file>: <key
+path>: <what is wrong>`` and no traceback, a signal one line ``sdfphys: interrupted
+(SIGTERM)``; nothing half-written is left behind (video sinks, trajectory files and
+bench outputs are written under a temporary name and renamed when complete).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import dataclasses
 import hashlib
 import math
 import os
+import signal
 import sys
 import time
 from collections.abc import Sequence
@@ -20,8 +22,14 @@ from pathlib import Path
 
 import numpy as np
 
+from . import __version__, interrupt
 from .errors import SpecError
+from .limits import MAX_DURATION, MAX_STEPS, check_steps
+from .progress import Progress
 from .trajectory import TOLERANCES
+
+# pygame prints a banner when imported unless this is set; the commands import it late.
+os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 __all__ = ["main", "state_hash"]
 
@@ -40,6 +48,7 @@ def state_hash(world) -> str:
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="sdfphys", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"sdfphys {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
     run = sub.add_parser("run", help="simulate a scene, optionally to a video")
@@ -75,13 +84,20 @@ def _parser() -> argparse.ArgumentParser:
                          "scene's sim.duration)")
     compare.add_argument("--set", dest="overrides", action="append", default=[],
                          metavar="KEY=VALUE", help="override a scene value")
+    _max_steps_option(compare)
     return parser
+
+
+def _max_steps_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--max-steps", type=int, metavar="N",
+                        help=f"allow a run of up to N steps or frames (default {MAX_STEPS:,})")
 
 
 def _scene_options(parser: argparse.ArgumentParser, seconds: bool = True) -> None:
     if seconds:
         parser.add_argument("--seconds", type=float, help="simulated seconds (default: the "
                             "scene's sim.duration)")
+        _max_steps_option(parser)
     parser.add_argument("--quality", choices=("fast", "balanced", "accurate"),
                         help="quality preset (overrides the scene's sim.quality)")
     parser.add_argument("--set", dest="overrides", action="append", default=[],
@@ -89,7 +105,24 @@ def _scene_options(parser: argparse.ArgumentParser, seconds: bool = True) -> Non
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one command; return its exit status (see the module docstring)."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    with interrupt.handled():
+        try:
+            return _dispatch(argv)
+        except BaseException as err:
+            signum = interrupt.received()
+            if signum is None:
+                if isinstance(err, KeyboardInterrupt):   # outside handled(): a thread
+                    signum = signal.SIGINT
+                else:
+                    raise
+            sys.stdout.flush()
+            print(f"sdfphys: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
+            return interrupt.exit_status(signum)
+
+
+def _dispatch(argv: list[str]) -> int:
     if argv[:1] == ["bench"]:
         from .bench import bench_main
 
@@ -102,15 +135,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (SpecError, UsageError) as err:
         print(f"sdfphys: error: {err}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("sdfphys: interrupted", file=sys.stderr)
-        return 130
 
 
 def _compare(args) -> int:
     from .reference import compare_main
 
-    return compare_main(args.scene, args.seconds, args.overrides)
+    return compare_main(args.scene, args.seconds, args.overrides, args.max_steps)
 
 
 def _read(args):
@@ -120,43 +150,54 @@ def _read(args):
 
 
 def _seconds(args, scene) -> float:
-    """``--seconds`` if given (checked > 0 and finite), else the scene's duration."""
+    """``--seconds`` if given (checked > 0, finite, at most ``MAX_DURATION``), else the
+    scene's duration."""
     seconds = scene.duration if args.seconds is None else args.seconds
     if not (math.isfinite(seconds) and seconds > 0):
         raise UsageError(f"--seconds: must be a positive number, got {args.seconds}")
+    if seconds > MAX_DURATION:
+        raise UsageError(f"--seconds: must be <= {MAX_DURATION:g}, got {seconds:g}")
+    if args.max_steps is not None and args.max_steps < 1:
+        raise UsageError(f"--max-steps: must be >= 1, got {args.max_steps}")
     return seconds
 
 
 def _run(args) -> int:
+    if args.output:
+        from .video import output_error
+
+        problem = output_error(args.output)
+        if problem:
+            raise SpecError("", problem, args.output)
     scene = _read(args)
     seconds = _seconds(args, scene)
-    world = scene.build()
-    dt = scene.settings.dt
+    dt, fps = scene.settings.dt, scene.render.fps
     steps = max(1, round(seconds / dt))
-    frames = round(seconds * scene.render.fps) if args.output else 0
+    frames = round(seconds * fps) if args.output else 0
+    check_steps(steps, "steps", args.max_steps)
+    check_steps(frames, "frames", args.max_steps)
+    world = scene.build()
     sink = renderer = surface = None
-    if args.output:
-        import pygame
-
-        from .render import Camera, Renderer
-        from .video import open_sink
-
-        size = scene.render.size
-        sink = open_sink(args.output, size, scene.render.fps)
-        renderer = Renderer(Camera(scene.render.center, scene.render.scale, size))
-        surface = pygame.Surface(size)
-
-    progress = _Progress(steps) if sys.stderr.isatty() else None
+    progress = Progress(steps, "steps", "sdfphys run")
     energy0 = world.kinetic_energy() + world.potential_energy()
     max_depth = 0.0
     frame = 0
     start = time.perf_counter()
     try:
+        if args.output:
+            import pygame
+
+            from .render import Camera, Renderer
+            from .video import open_sink
+
+            size = scene.render.size
+            renderer = Renderer(Camera(scene.render.center, scene.render.scale, size))
+            surface = pygame.Surface(size)
+            sink = open_sink(args.output, size, fps)
         for step in range(steps + 1):
             # Frame k shows the state at time k / fps: draw every frame due by now.
-            while (sink is not None and frame < frames
-                   and frame / scene.render.fps <= step * dt + 1e-9):
-                renderer.draw(surface, world)
+            while sink is not None and frame < frames and frame / fps <= step * dt + 1e-9:
+                renderer.draw(surface, world, hud=scene.render.hud)
                 sink.write(surface)
                 frame += 1
             if step == steps:
@@ -164,21 +205,20 @@ def _run(args) -> int:
             world.step()
             if len(world.contacts):
                 max_depth = max(max_depth, float(world.contacts.depth.max()))
-            if progress:
-                progress.update(step + 1)
+            progress.update(step + 1)
         if sink is not None:
             while frame < frames:     # rounding: the last frames show the final state
-                renderer.draw(surface, world)
+                renderer.draw(surface, world, hud=scene.render.hud)
                 sink.write(surface)
                 frame += 1
             sink.close()
     except BaseException:
+        progress.close()
         if sink is not None:
             sink.abort()
         raise
     wall = time.perf_counter() - start
-    if progress:
-        progress.done()
+    progress.close()
     energy1 = world.kinetic_energy() + world.potential_energy()
     print(f"steps          {steps}")
     print(f"wall time      {wall:.3f} s")
@@ -186,8 +226,9 @@ def _run(args) -> int:
     print(f"max penetration {max_depth:.6f} m")
     print(f"energy         {energy0:.6g} J -> {energy1:.6g} J")
     print(f"state hash     {state_hash(world)}")
-    if args.output:
-        print(f"wrote          {args.output} ({frames} frames at {scene.render.fps} fps)")
+    if sink is not None:
+        print(f"wrote          {args.output} ({sink.frames_written} frames at "
+              f"{sink.fps_written:g} fps)")
     return 0
 
 
@@ -206,9 +247,17 @@ def _record(args) -> int:
         raise UsageError(f"-o: a trajectory file ends in .npz, got {args.output!r}")
     if not output.parent.is_dir():
         raise UsageError(f"{args.output}: no such directory {str(output.parent)!r}")
-    seconds = _seconds(args, _read(args))
+    scene = _read(args)
+    seconds = _seconds(args, scene)
+    steps = max(1, round(seconds / scene.settings.dt))
+    check_steps(steps, "steps", args.max_steps)
     start = time.perf_counter()
-    trajectory = record(args.scene, seconds, args.overrides, args.quality)
+    progress = Progress(steps, "steps", "sdfphys record")
+    try:
+        trajectory = record(args.scene, seconds, args.overrides, args.quality,
+                            max_steps=steps, progress=progress.update)
+    finally:
+        progress.close()
     wall = time.perf_counter() - start
     try:
         trajectory.save(output)
@@ -243,7 +292,12 @@ def _check(args) -> int:
                if meta["settings"].get(key) != value]
     if changed:
         print(f"note: settings changed since the recording: {', '.join(changed)}")
-    replay = record(args.scene, meta["seconds"], meta["overrides"], meta["quality"])
+    progress = Progress(meta["steps"], "steps", "sdfphys check")
+    try:      # as many steps as the file holds frames: its own --max-steps
+        replay = record(args.scene, meta["seconds"], meta["overrides"], meta["quality"],
+                        max_steps=reference.frames - 1, progress=progress.update)
+    finally:
+        progress.close()
     tolerances = None if args.atol is None else dict.fromkeys(TOLERANCES, args.atol)
     try:
         deviation = compare(reference, replay, tolerances)
@@ -255,25 +309,5 @@ def _check(args) -> int:
     return 0 if deviation.ok else 1
 
 
-class _Progress:
-    """A one-line progress bar on stderr (only when stderr is a terminal)."""
-
-    def __init__(self, total: int):
-        self.total = total
-        self.last = -1
-
-    def update(self, done: int) -> None:
-        percent = 100 * done // self.total
-        if percent != self.last:
-            self.last = percent
-            bar = "#" * (percent // 4)
-            sys.stderr.write(f"\r[{bar:<25}] {percent:3d}% ({done}/{self.total} steps)")
-            sys.stderr.flush()
-
-    def done(self) -> None:
-        sys.stderr.write("\n")
-
-
 if __name__ == "__main__":
-    os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
     sys.exit(main())

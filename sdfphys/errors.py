@@ -8,8 +8,11 @@ loader can prefix the file name and print one line:
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Sequence
 from typing import Any
+
+import numpy as np
 
 __all__ = ["SpecError", "check_int", "check_number", "check_points", "check_vec2"]
 
@@ -42,7 +45,10 @@ class SpecError(ValueError):
 
 
 def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
+    """An int or float, numpy's included (not a bool)."""
+    if type(value) is float or type(value) is int:
+        return True
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def check_number(value: Any, path: str, *, low: float | None = None,
@@ -65,7 +71,7 @@ def check_number(value: Any, path: str, *, low: float | None = None,
 
 def check_int(value: Any, path: str, *, low: int | None = None, high: int | None = None) -> int:
     """An integer (a float with an integral value is not accepted)."""
-    if isinstance(value, bool) or not isinstance(value, int):
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
         raise SpecError(path, f"must be an integer, got {value!r}")
     if low is not None and value < low:
         raise SpecError(path, f"must be >= {low}, got {value}")
@@ -75,8 +81,13 @@ def check_int(value: Any, path: str, *, low: int | None = None, high: int | None
 
 
 def check_vec2(value: Any, path: str, *, positive: bool = False) -> tuple[float, float]:
-    """A pair of finite floats ``[x, y]`` (both > 0 if ``positive``)."""
-    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
+    """A pair of finite floats ``[x, y]`` (both > 0 if ``positive``); a numpy array of
+    shape (2,) is accepted too."""
+    if isinstance(value, np.ndarray) and value.shape == (2,):
+        value = value.tolist()
+    pair = type(value) in (list, tuple) or (          # the common case first: fast
+        not isinstance(value, (str, bytes)) and isinstance(value, Sequence))
+    if not pair or len(value) != 2:
         raise SpecError(path, f"must be a pair [x, y], got {value!r}")
     x = check_number(value[0], f"{path}[0]", low=0.0 if positive else None, low_open=positive)
     y = check_number(value[1], f"{path}[1]", low=0.0 if positive else None, low_open=positive)

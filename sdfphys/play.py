@@ -1,8 +1,9 @@
 """The interactive window: ``play(world_factory, render_settings)``.
 
-Keys: P pause / resume, O one step (while paused), R reset (a new world from the
-factory), S screenshot (PNG in the current directory, its name printed), C contacts
-overlay, F field overlay, B bounds overlay, Esc or closing the window quits.
+Keys (``KEYS``; H shows them in the window): P pause / resume, O one step (while
+paused), R reset (a new world from the factory), S screenshot (PNG in the current
+directory, its name printed), C contacts overlay, F field overlay, B bounds overlay,
+H key help, Esc or closing the window quits. The overlays shown have a legend.
 Mouse: press the left button on a dynamic body and drag; the grabbed point is
 pulled toward the pointer by a soft spring (``DragSpring``). The right button on
 any body shows that body's field alone (and turns the field overlay on); on empty
@@ -34,10 +35,11 @@ import numpy as np
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import pygame
 
-from .render import DYNAMIC, Camera, Overlays, Palette, Renderer, body_frames
+from .render import DYNAMIC, Camera, Overlays, Palette, Renderer, body_frames, draw_panel
 
 __all__ = [
     "HEADLESS_DRIVERS",
+    "KEYS",
     "DragSpring",
     "RateMeter",
     "RenderSettings",
@@ -49,8 +51,22 @@ __all__ = [
 #: SDL video drivers that have no window a person could see.
 HEADLESS_DRIVERS = ("offscreen", "dummy")
 
-CAPTION = ("sdfphys   P pause   O step   R reset   S screenshot   C contacts   F field   "
-           "B bounds   Esc quit")
+#: The keys and mouse buttons, as the help panel (H) lists them.
+KEYS = (
+    ("P", "pause / resume"),
+    ("O", "one step (while paused)"),
+    ("R", "reset the scene"),
+    ("S", "screenshot (PNG in the current directory)"),
+    ("C", "contacts overlay"),
+    ("F", "field overlay (union of all bodies)"),
+    ("B", "bounding boxes overlay"),
+    ("H", "this help"),
+    ("Esc", "quit"),
+    ("left drag", "pull a dynamic body"),
+    ("right click", "a body's own field (empty space: all again)"),
+)
+
+CAPTION = "sdfphys   (H: keys)"
 
 
 class RenderSettings(Protocol):
@@ -175,7 +191,8 @@ class _Session:
         self.step_once = False
         self.screenshot = False
         self.running = True
-        self.overlays = Overlays()
+        self.help = False
+        self.overlays = Overlays(legend=True)
         self.grab: _Grab | None = None
         self.step_rate = RateMeter()
 
@@ -224,6 +241,8 @@ class _Session:
             self.overlays = replace(self.overlays, field=not self.overlays.field)
         elif key == pygame.K_b:
             self.overlays = replace(self.overlays, bounds=not self.overlays.bounds)
+        elif key == pygame.K_h:
+            self.help = not self.help
 
     def advance(self) -> None:
         """Run this frame's steps: enough to keep pace with ``fps`` (at least one),
@@ -255,11 +274,14 @@ class _Session:
         flags = [name for name, on in (("PAUSED", self.paused),
                                        ("contacts", self.overlays.contacts),
                                        ("field", self.overlays.field),
-                                       ("bounds", self.overlays.bounds)) if on]
+                                       ("bounds", self.overlays.bounds)) if on] + ["H: keys"]
         line = (f"{frame_rate:5.1f} frames/s   {self.step_rate.rate:6.1f} steps/s   "
                 f"t = {float(self.world.time):7.3f} s   {len(self.world.shape_id)} bodies   "
                 + "  ".join(flags))
         screen.blit(font.render(line, True, palette.text), (8, 6))
+        if self.help:
+            draw_panel(screen, ["Keys"] + [f"{k}:  {what}" for k, what in KEYS], palette,
+                       corner="center", size=22)
 
     def save_screenshot(self, screen: pygame.Surface, frame: int) -> Path:
         stem = f"sdfphys-{time.strftime('%Y%m%d-%H%M%S')}-{frame:05d}"

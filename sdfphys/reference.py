@@ -9,21 +9,28 @@ pymunk space to compare the contacts of the two engines at identical poses;
 
 What is modelled
 ----------------
-Every pair that can collide has a circle in it, so that its contact is exact in both
-engines (``tests/test_collide_pymunk.py``): dynamic bodies are circles; static and
-kinematic bodies are circles, boxes, convex polygons (``pymunk.Poly``) or a
-``capsule`` / ``segment`` field, optionally placed by ``offset`` and ``angle``
-(``pymunk.Segment`` with the capsule's radius, 0 for a segment). Anything else (SDF
-bodies, concave polygons, dynamic boxes or polygons, whose contacts are multi-point
-manifolds that the two engines build differently) raises ``NotModelledError`` naming
-the bodies.
+Circles, boxes and polygons of any kind (``pymunk.Circle``, ``pymunk.Poly``; a
+concave polygon as the convex parts of ``pymunk.autogeometry.convex_decomposition``
+at tolerance 0, which cover it exactly), and static or kinematic ``capsule`` /
+``segment`` fields, optionally placed by ``offset`` and ``angle``
+(``pymunk.Segment`` with the capsule's radius, 0 for a segment). Other SDF bodies
+raise ``NotModelledError`` naming them.
+
+A pair with a circle against a convex shape has one contact, exact in both engines
+(``tests/test_collide_pymunk.py``): its point, normal and depth are compared to
+``CONTACT_TOLERANCE`` and decide the exit status. Other pairs (two polygons, or a
+circle against a decomposed polygon) have manifolds that the two engines build
+differently (clipped edges in pymunk, deepest points of triangles in fields in
+sdfphys, other points and counts): they are compared by their deepest contact's depth
+and normal, for information.
 
 How the engines are matched, and what cannot be
 -----------------------------------------------
 - Bodies: each pymunk body sits at sdfphys's centre of mass and angle, with its
   shape in the body frame (user geometry shifted by ``Shape.origin``). Mass is
   ``mass`` or density x area, the moment ``pymunk.moment_for_circle(m, 0, r)``
-  (= m r^2 / 2, sdfphys's value to round-off). Gravity is the scene's; no damping;
+  (= m r^2 / 2) or the sum of ``moment_for_poly`` over a polygon's parts, sdfphys's
+  values to round-off. Gravity is the scene's; no damping;
   pymunk never sleeps by default.
 - Time: pymunk has no substeps, so one sdfphys step is ``substeps`` calls of
   ``Space.step(h)``, h = dt / substeps. (One call with dt would integrate gravity
@@ -85,15 +92,18 @@ from __future__ import annotations
 
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pymunk
+import pymunk.autogeometry
 
 from .collide import Contacts, find_contacts
 from .errors import SpecError
+from .limits import check_steps
+from .progress import Progress
 from .scene import Scene, read_scene
 from .shapes import Circle, SdfShape, Shape, TriangleMesh
 from .solver import contact_softness
@@ -113,8 +123,8 @@ WINDOW = 0.5
 SEGMENT_FIELDS = ("capsule", "segment")
 
 #: What the reference can build, for error messages.
-MODELLED = ("dynamic circles, and static or kinematic circles, boxes, convex polygons "
-            "and capsule or segment fields")
+MODELLED = ("circles, boxes and polygons (concave ones as pymunk's convex decomposition), "
+            "and static or kinematic capsule or segment fields")
 
 
 class NotModelledError(SpecError):
@@ -147,16 +157,36 @@ def _is_convex(vertices: np.ndarray) -> bool:
 
 def _why_not(shape: Shape, kind: str) -> str | None:
     """Why the reference cannot build this body, or None if it can."""
-    if isinstance(shape, Circle):
+    if isinstance(shape, (Circle, TriangleMesh)):
         return None
     if kind == "dynamic":
-        what = "sdf" if isinstance(shape, SdfShape) else shape.spec["type"]
-        return f"dynamic {what}"
-    if isinstance(shape, TriangleMesh):
-        return None if _is_convex(shape.vertices) else "concave polygon"
+        return "dynamic sdf"
     if _segment(shape) is not None:
         return None
     return "sdf"
+
+
+def convex_parts(vertices: np.ndarray) -> list[np.ndarray]:
+    """The convex pieces (each (M_k, 2), counter-clockwise) pymunk builds a polygon
+    ``vertices`` (M, 2, counter-clockwise, body frame) from: itself if convex, else
+    ``pymunk.autogeometry.convex_decomposition`` of the closed outline at tolerance 0.
+    Raises NotModelledError if the pieces do not cover the polygon's area (to 1e-9)."""
+    if _is_convex(vertices):
+        return [np.asarray(vertices, np.float64)]
+    closed = [tuple(v) for v in vertices] + [tuple(vertices[0])]
+    parts = [np.array([tuple(v) for v in part[:-1]], np.float64)
+             for part in pymunk.autogeometry.convex_decomposition(closed, 0.0)]
+    area = sum(_area(p) for p in parts)
+    if not math.isclose(area, _area(vertices), rel_tol=1e-9):
+        raise NotModelledError("", f"pymunk's convex decomposition covers {area:g} m^2 of "
+                                   f"a polygon of {_area(vertices):g} m^2")
+    return parts
+
+
+def _area(vertices: np.ndarray) -> float:
+    """Area (m^2) of a counter-clockwise polygon (M, 2), by the shoelace formula."""
+    x, y = vertices[:, 0], vertices[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
 
 def check_modelled(scene: Scene) -> None:
@@ -197,28 +227,45 @@ class PymunkWorld:
         space.collision_bias = math.exp(-stiff.bias_rate * stiff.mass_scale)
         self.space = space
         self.bodies: list[pymunk.Body] = []
-        self.shapes: list[pymunk.Shape] = []
+        self.parts: list[list[pymunk.Shape]] = []
         self._index: dict[int, int] = {}
         for i, spec in enumerate(scene.bodies):
-            body, shape = self._build(spec)
-            space.add(body, shape)
+            body, parts = self._build(spec)
+            space.add(body, *parts)
             self.bodies.append(body)
-            self.shapes.append(shape)
-            self._index[id(shape)] = i
+            self.parts.append(parts)
+            for part in parts:
+                self._index[id(part)] = i
+        self.shapes = [parts[0] for parts in self.parts]
+        """Each body's (first) pymunk shape; ``parts`` has all of a decomposed polygon's."""
         self.dynamic = np.array([b.kind == "dynamic" for b in scene.bodies])
         self.circle = np.array([isinstance(s, pymunk.Circle) for s in self.shapes])
+        self.exact = np.where(self.circle, 2,
+                              np.array([len(parts) == 1 for parts in self.parts], int))
+        """(B,) 2 for a circle, 1 for a single convex shape, 0 for a decomposed polygon:
+        a pair with a circle and no decomposed polygon has one exact contact."""
         self._threshold = settings.restitution_threshold
         self._primed = False
         space.on_collision(None, None, pre_solve=self._mix_materials)
 
     @staticmethod
-    def _build(spec) -> tuple[pymunk.Body, pymunk.Shape]:
-        """The pymunk body (at the centre of mass) and shape of one modelled BodySpec,
-        the shape carrying the body's own friction and restitution."""
+    def _build(spec) -> tuple[pymunk.Body, list[pymunk.Shape]]:
+        """The pymunk body (at the centre of mass) and shapes of one modelled BodySpec
+        (several for a concave polygon), carrying the body's friction and restitution.
+
+        A dynamic polygon's moment is the sum of ``pymunk.moment_for_poly`` over its
+        parts, each with its share of the mass (sdfphys's exact polygon moment to
+        round-off)."""
         shape = spec.shape
+        parts = convex_parts(shape.vertices) if isinstance(shape, TriangleMesh) else None
         if spec.kind == "dynamic":
             mass = spec.mass if spec.mass is not None else spec.density * shape.area
-            body = pymunk.Body(mass, pymunk.moment_for_circle(mass, 0.0, shape.radius))
+            if parts is None:
+                moment = pymunk.moment_for_circle(mass, 0.0, shape.radius)
+            else:
+                moment = sum(pymunk.moment_for_poly(mass * _area(p) / shape.area,
+                                                    [tuple(v) for v in p]) for p in parts)
+            body = pymunk.Body(mass, moment)
         else:
             body = pymunk.Body(body_type=pymunk.Body.STATIC if spec.kind == "static"
                                else pymunk.Body.KINEMATIC)
@@ -231,14 +278,15 @@ class PymunkWorld:
             body.velocity = spec.velocity
             body.angular_velocity = spec.angular_velocity
         if isinstance(shape, Circle):
-            made = pymunk.Circle(body, shape.radius)
-        elif isinstance(shape, TriangleMesh):
-            made = pymunk.Poly(body, [tuple(v) for v in shape.vertices])
+            made = [pymunk.Circle(body, shape.radius)]
+        elif parts is not None:
+            made = [pymunk.Poly(body, [tuple(v) for v in p]) for p in parts]
         else:
             a, b, radius = _segment(shape)
-            made = pymunk.Segment(body, tuple(a), tuple(b), radius)
-        made.friction = spec.friction
-        made.elasticity = spec.restitution
+            made = [pymunk.Segment(body, tuple(a), tuple(b), radius)]
+        for part in made:
+            part.friction = spec.friction
+            part.elasticity = spec.restitution
         return body, made
 
     def _mix_materials(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data) -> None:
@@ -302,27 +350,32 @@ class PymunkWorld:
         """pymunk's contacts at the current poses, as sdfphys's Contacts.
 
         Pairs with a dynamic body that pymunk finds overlapping (``Space.shape_query``),
-        body_a < body_b; each pair's contact from ``Shape.shapes_collide`` called with
-        the circle first (pymunk reports a wrong-signed distance when a polygon comes
-        first): point midway between point_a and point_b, normal from a to b, depth =
-        -distance. ``feature`` is 0.
+        body_a < body_b; each pair's contacts from ``Shape.shapes_collide`` of every two
+        parts that touch, called with a circle first (pymunk reports a wrong-signed
+        distance when a polygon comes first): point midway between point_a and point_b,
+        normal from a to b, depth = -distance. ``feature`` is 0.
         """
         pairs = set()
         for i in np.flatnonzero(self.dynamic):
-            for info in self.space.shape_query(self.shapes[i]):
-                j = self._index[id(info.shape)]
-                pairs.add((min(i, j), max(i, j)))
+            for part in self.parts[i]:
+                for info in self.space.shape_query(part):
+                    j = self._index[id(info.shape)]
+                    if j != i:
+                        pairs.add((min(i, j), max(i, j)))
         rows = []
         for i, j in sorted(pairs):
             first, second = (i, j) if self.circle[i] else (j, i)
-            try:
-                result = self.shapes[first].shapes_collide(self.shapes[second])
-            except AssertionError:        # pymunk 7 asserts when the shapes do not touch
-                continue
             sign = 1.0 if first == i else -1.0
-            for p in result.points:
-                point = (np.array(p.point_a) + np.array(p.point_b)) / 2
-                rows.append((i, j, point, sign * np.array(result.normal), -p.distance))
+            for part_a in self.parts[first]:
+                for part_b in self.parts[second]:
+                    try:
+                        result = part_a.shapes_collide(part_b)
+                    except AssertionError:   # pymunk 7 asserts when the shapes do not touch
+                        continue
+                    for p in result.points:
+                        point = (np.array(p.point_a) + np.array(p.point_b)) / 2
+                        rows.append((i, j, point, sign * np.array(result.normal),
+                                     -p.distance))
         if not rows:
             return Contacts.empty()
         return Contacts(np.array([r[0] for r in rows], np.int64),
@@ -333,21 +386,26 @@ class PymunkWorld:
 
 
 def sdfphys_contacts(world) -> Contacts:
-    """The contacts sdfphys's next step will use (``find_contacts`` at the world's state)."""
-    return find_contacts(world.shapes, world.shape_id, world.center_of_mass, world.angle,
-                         world.kind == "dynamic", world.settings,
-                         world.velocity, world.angular_velocity)
+    """The contacts sdfphys's next step will use (``find_contacts`` at the world's state;
+    its read-only state copies copied to writeable arrays, as the step passes its own)."""
+    return find_contacts(world.shapes, np.array(world.shape_id),
+                         np.array(world.center_of_mass), np.array(world.angle),
+                         np.array(world.kind == "dynamic"), world.settings,
+                         np.array(world.velocity), np.array(world.angular_velocity))
 
 
 @dataclass
 class ContactDifference:
     """One frame's contact comparison.
 
-    compared: pairs found by both engines. point, normal, depth: largest differences
-    over them (m, unit-vector components, m). one_sided: pairs found by one engine only
-    with depth > CONTACT_TOLERANCE (a pair that barely touches may be found by one
-    engine and not the other; sdfphys's speculative contacts, depth <= 0, are not
-    counted).
+    compared: exact pairs (one contact each: a circle against a convex shape) found by
+    both engines. point, normal, depth: largest differences over them (m, unit-vector
+    components, m). one_sided: exact pairs found by one engine only with depth >
+    CONTACT_TOLERANCE (a pair that barely touches may be found by one engine and not the
+    other; sdfphys's speculative contacts, depth <= 0, are not counted).
+    manifolds: other pairs overlapping in both engines; manifold_depth,
+    manifold_normal: largest differences of their deepest contacts' depth (m) and
+    normal (for information: the engines build manifolds differently).
     """
 
     compared: int
@@ -355,10 +413,57 @@ class ContactDifference:
     normal: float
     depth: float
     one_sided: int
+    manifolds: int = 0
+    manifold_depth: float = 0.0
+    manifold_normal: float = 0.0
 
 
-def contact_difference(ours: Contacts, theirs: Contacts) -> ContactDifference:
-    """Compare two Contacts pair by pair (circle pairs have one point per pair)."""
+def _deepest(contacts: Contacts, pairs: np.ndarray) -> dict[tuple[int, int], int]:
+    """Index of the deepest contact of each pair (body_a, body_b) whose ``pairs`` flag is
+    set."""
+    out: dict[tuple[int, int], int] = {}
+    for k, (a, b) in enumerate(zip(contacts.body_a.tolist(), contacts.body_b.tolist())):
+        if pairs[k] and ((a, b) not in out or contacts.depth[k] > contacts.depth[out[a, b]]):
+            out[a, b] = k
+    return out
+
+
+def contact_difference(ours: Contacts, theirs: Contacts,
+                       exact: np.ndarray | None = None) -> ContactDifference:
+    """Compare two Contacts pair by pair. ``exact`` (B,) bool: the bodies whose pairs
+    with a circle have one exact contact (default: every pair is exact, as when every
+    pair has a circle against a convex shape)."""
+    if exact is None:
+        exact_ours = np.ones(len(ours.depth), bool)
+        exact_theirs = np.ones(len(theirs.depth), bool)
+    else:
+        exact_ours = _exact_pairs(ours, exact)
+        exact_theirs = _exact_pairs(theirs, exact)
+    difference = _exact_difference(ours.take(exact_ours), theirs.take(exact_theirs))
+    mine = _deepest(ours, ~exact_ours & (ours.depth > CONTACT_TOLERANCE))
+    other = _deepest(theirs, ~exact_theirs & (theirs.depth > CONTACT_TOLERANCE))
+    both = sorted(mine.keys() & other.keys())
+    if both:
+        k_ours = np.array([mine[p] for p in both], np.int64)
+        k_theirs = np.array([other[p] for p in both], np.int64)
+        difference.manifolds = len(both)
+        difference.manifold_depth = float(np.max(np.abs(ours.depth[k_ours]
+                                                        - theirs.depth[k_theirs])))
+        difference.manifold_normal = float(np.max(np.abs(ours.normal[k_ours]
+                                                         - theirs.normal[k_theirs])))
+    return difference
+
+
+def _exact_pairs(contacts: Contacts, exact: np.ndarray) -> np.ndarray:
+    """(C,) bool: contacts whose pair is exact. ``exact`` (B,) marks circles with 2 and
+    convex (single-part) shapes with 1: a pair is exact when it holds a circle and both
+    are convex."""
+    a, b = exact[contacts.body_a], exact[contacts.body_b]
+    return (a > 0) & (b > 0) & ((a == 2) | (b == 2))
+
+
+def _exact_difference(ours: Contacts, theirs: Contacts) -> ContactDifference:
+    """The exact pairs' comparison (one contact per pair)."""
     mine = {(a, b): k for k, (a, b) in enumerate(zip(ours.body_a.tolist(), ours.body_b.tolist()))}
     other = {(a, b): k for k, (a, b) in enumerate(zip(theirs.body_a.tolist(),
                                                        theirs.body_b.tolist()))}
@@ -409,12 +514,14 @@ class Comparison:
                    for c in self.contacts)
 
 
-def compare(scene: Scene, seconds: float | None = None) -> Comparison:
+def compare(scene: Scene, seconds: float | None = None,
+            progress: Callable[[int], None] | None = None) -> Comparison:
     """Run sdfphys and pymunk for ``seconds`` (default: the scene's duration).
 
     Frames are the initial state and the state after every step. Each frame also
     moves a second, never-stepped pymunk space to sdfphys's poses and compares the
     contacts of the two engines there. Raises NotModelledError (see check_modelled).
+    progress: called with the number of steps done after each step.
     """
     seconds = scene.duration if seconds is None else seconds
     world = scene.build()
@@ -427,8 +534,11 @@ def compare(scene: Scene, seconds: float | None = None) -> Comparison:
         if step:
             world.step()
             reference.step()
+            if progress is not None:
+                progress(step)
         probe.set_poses(world.center_of_mass, world.angle)
-        contacts.append(contact_difference(sdfphys_contacts(world), probe.contacts()))
+        contacts.append(contact_difference(sdfphys_contacts(world), probe.contacts(),
+                                           probe.exact))
         for engine, record in zip((world, reference), states):
             record.append((engine.center_of_mass, engine.angle, engine.velocity))
     (ours_com, ours_angle, ours_velocity), (theirs_com, theirs_angle, theirs_velocity) = (
@@ -456,16 +566,21 @@ def report(comparison: Comparison, window: float = WINDOW) -> list[str]:
     """The two tables of ``sdfphys compare`` as lines (per time window of ``window`` s)."""
     c = comparison
     title = ("contacts at sdfphys's poses (find_contacts vs pymunk shapes_collide; "
-             f"agreement expected to {CONTACT_TOLERANCE:g}); pairs: compared, summed over "
-             "the window's frames")
+             f"pairs with a circle: agreement expected to {CONTACT_TOLERANCE:g}; other pairs: "
+             "their deepest contacts, for information); pairs summed over the window's "
+             "frames")
     header = (f"{'window s':>13} {'pairs':>6} {'|d point| m':>12} {'|d normal|':>11} "
-              f"{'|d depth| m':>12} {'one engine only':>16}")
+              f"{'|d depth| m':>12} {'one engine only':>16} {'other pairs':>12} "
+              f"{'|d depth| m':>12} {'|d normal|':>11}")
     lines = [title, header]
     for frames in _windows(c.time, window):
         rows = [c.contacts[f] for f in frames]
         lines.append(f"{_label(c.time, frames)} {sum(r.compared for r in rows):>6} "
                      f"{max(r.point for r in rows):>12.2e} {max(r.normal for r in rows):>11.2e} "
-                     f"{max(r.depth for r in rows):>12.2e} {sum(r.one_sided for r in rows):>16}")
+                     f"{max(r.depth for r in rows):>12.2e} {sum(r.one_sided for r in rows):>16} "
+                     f"{sum(r.manifolds for r in rows):>12} "
+                     f"{max(r.manifold_depth for r in rows):>12.2e} "
+                     f"{max(r.manifold_normal for r in rows):>11.2e}")
     header = (f"{'window s':>13} {'max |dx| m':>11} {'body':>12} {'max |dangle| rad':>17} "
               f"{'body':>12}")
     lines += ["", "trajectories from the same initial state (centres of mass and angles)",
@@ -481,22 +596,31 @@ def report(comparison: Comparison, window: float = WINDOW) -> list[str]:
 
 
 def compare_main(scene_path: str | Path, seconds: float | None = None,
-                 overrides: Sequence[str] = ()) -> int:
+                 overrides: Sequence[str] = (), max_steps: int | None = None) -> int:
     """``sdfphys compare SCENE``: print the settings and the two tables.
 
     Returns 0, 1 if some frame's contacts differ by more than CONTACT_TOLERANCE (or a
     pair is found by one engine only), 2 for bad input, including a scene the
-    reference cannot model (one line naming the bodies).
+    reference cannot model (one line naming the bodies) and more than ``max_steps``
+    steps (default ``limits.MAX_STEPS``).
     """
     try:
         if seconds is not None and not (math.isfinite(seconds) and seconds > 0.0):
             raise SpecError("--seconds", f"must be a positive number, got {seconds}")
         scene = read_scene(scene_path, overrides)
         check_modelled(scene)
+        steps = max(1, round((scene.duration if seconds is None else seconds)
+                             / scene.settings.dt))
+        check_steps(steps, "steps", max_steps)
+        PymunkWorld(scene)                          # a polygon pymunk cannot decompose
     except SpecError as err:
         print(f"sdfphys: error: {err}", file=sys.stderr)
         return 2
-    comparison = compare(scene, seconds)
+    bar = Progress(steps, "steps", "sdfphys compare")
+    try:
+        comparison = compare(scene, seconds, bar.update)
+    finally:
+        bar.close()
     print(PymunkWorld(scene).describe())
     print()
     for line in report(comparison):

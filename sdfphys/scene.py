@@ -23,18 +23,21 @@ import math
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from .errors import SpecError, check_int, check_number, check_vec2
+from .limits import MAX_DURATION, BodyValues, check_body, check_gravity
 from .sdf.build import suggest
 from .settings import Settings, preset
+from .shapes import shape_from_spec
 
 __all__ = ["BodySpec", "RenderSpec", "Scene", "apply_overrides", "load_scene", "read_scene"]
 
 TOP_KEYS = ("version", "world", "sim", "render", "body")
 WORLD_KEYS = ("gravity",)
-RENDER_KEYS = ("size", "center", "scale", "fps")
+RENDER_KEYS = ("size", "center", "scale", "fps", "hud")
 BODY_KEYS = ("name", "shape", "position", "angle", "velocity", "angular_velocity",
              "density", "mass", "friction", "restitution", "static", "kinematic")
 SIM_EXTRA_KEYS = ("quality", "duration")
@@ -42,17 +45,18 @@ SIM_EXTRA_KEYS = ("quality", "duration")
 
 @dataclass(frozen=True)
 class RenderSpec:
-    """Frame size (px, even), world point at the frame centre (m), px per metre, frames/s."""
+    """Frame size (px, even), world point at the frame centre (m), px per metre, frames/s,
+    and ``hud``: print the simulated time and step count on every video frame."""
 
     size: tuple[int, int] = (960, 540)
     center: tuple[float, float] = (0.0, 4.0)
     scale: float = 50.0
     fps: int = 60
+    hud: bool = False
 
 
-@dataclass(frozen=True)
-class BodySpec:
-    """One validated ``[[body]]`` entry (SI units; ``shape`` is the scene shape dict)."""
+class BodySpec(NamedTuple):
+    """One validated ``[[body]]`` entry (SI units; ``shape`` the Shape built from its dict)."""
 
     name: str
     shape: Any
@@ -78,8 +82,16 @@ class Scene:
     duration: float
     render: RenderSpec
     bodies: list[BodySpec]
-    digest: str = field(default="")
-    """SHA-256 of the scene's canonical JSON form (trajectory files record it)."""
+    data: dict = field(default_factory=dict, repr=False)
+    """The scene as read (after overrides), for ``digest``."""
+
+    @cached_property
+    def digest(self) -> str:
+        """SHA-256 of the scene's canonical JSON form without its ``[render]`` table
+        (trajectory files record it; drawing never changes a trajectory)."""
+        physics = {key: value for key, value in self.data.items() if key != "render"}
+        return hashlib.sha256(
+            json.dumps(physics, sort_keys=True, default=str).encode()).hexdigest()
 
     def build(self):
         """A fresh World with every body added in scene order."""
@@ -87,11 +99,9 @@ class Scene:
 
         world = World(gravity=self.gravity, settings=self.settings)
         for b in self.bodies:
+            values = BodyValues(*b[2:], linear_damping=0.0, angular_damping=0.0)
             try:     # an SDF shape integrates its mass properties on first use, here
-                world.add_body(b.shape, position=b.position, angle=b.angle,
-                               velocity=b.velocity, angular_velocity=b.angular_velocity,
-                               density=b.density, mass=b.mass, friction=b.friction,
-                               restitution=b.restitution, kind=b.kind, name=b.name)
+                world._add(b.shape, values, b.name)     # values checked by _parse_body
             except SpecError as err:
                 raise err.in_file(self.source) from None
         world.scene = self
@@ -107,8 +117,9 @@ def read_scene(scene: str | Path | Mapping, overrides: Sequence[str] = (),
                quality: str | None = None) -> Scene:
     """Parse and validate a scene file or dict; ``overrides`` are ``KEY=VALUE`` strings
     (e.g. ``sim.substeps=8``) applied before validation; ``quality`` overrides the preset."""
-    if isinstance(scene, Mapping):
-        source, data = "<scene>", _deep_copy(scene)
+    if isinstance(scene, Mapping):     # copied: overrides and quality must not change it
+        source = "<scene>"
+        data = _deep_copy(scene) if overrides or quality is not None else dict(scene)
     else:
         source = str(scene)
         try:
@@ -131,13 +142,15 @@ def read_scene(scene: str | Path | Mapping, overrides: Sequence[str] = (),
         parsed = _parse(data, source)
     except SpecError as err:
         raise err.in_file(source) from None
-    parsed.digest = hashlib.sha256(
-        json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()
+    parsed.data = data
     return parsed
 
 
 def apply_overrides(data: dict, overrides: Sequence[str]) -> dict:
-    """``data`` with each ``KEY=VALUE`` set (dotted key, TOML value: ``sim.dt=0.01``)."""
+    """``data`` with each ``KEY=VALUE`` set: a dotted key and a TOML value
+    (``sim.dt=0.01``). A body is named by its name or its index: ``body.ball.friction=0.1``,
+    ``body[1].friction=0.1`` or ``body.1.friction=0.1`` (a body without a name is
+    ``body<i>``, as in the World)."""
     for item in overrides:
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
@@ -146,14 +159,40 @@ def apply_overrides(data: dict, overrides: Sequence[str]) -> dict:
             value = tomllib.loads(f"v = {text.strip()}")["v"]
         except tomllib.TOMLDecodeError:
             value = text.strip()           # a bare word: a string such as quality=fast
-        node = data
-        parts = key.strip().split(".")
-        for part in parts[:-1]:
-            node = node.setdefault(part, {})
-            if not isinstance(node, dict):
+        parts = _key_parts(key.strip())
+        node: Any = data
+        for k, part in enumerate(parts[:-1]):
+            if isinstance(node, list):
+                node = node[_list_index(node, part, ".".join(map(str, parts[:k])))]
+            else:
+                node = node.setdefault(part, {})
+            if not isinstance(node, (dict, list)):
                 raise SpecError(key, "cannot set a key inside a non-table value")
+        if isinstance(node, list):
+            raise SpecError(key, "names a whole [[body]]; set one of its keys, e.g. "
+                                 f"{key}.friction=0.5")
         node[parts[-1]] = value
     return data
+
+
+def _key_parts(key: str) -> list[str]:
+    """``body[1].shape.radius`` -> ``["body", "1", "shape", "radius"]``."""
+    return [p for p in key.replace("[", ".").replace("]", "").split(".") if p != ""] or [key]
+
+
+def _list_index(items: list, part: str, where: str) -> int:
+    """The index of the entry of ``items`` (a ``[[body]]`` array) named ``part``, or
+    numbered ``part``."""
+    names = [entry.get("name", f"body{i}") if isinstance(entry, dict) else f"body{i}"
+             for i, entry in enumerate(items)]
+    if part in names:
+        return names.index(part)
+    if part.isdigit() and int(part) < len(items):
+        return int(part)
+    if part.isdigit():
+        raise SpecError(f"--set {where}[{part}]", f"no such body: the scene has "
+                                                  f"{len(items)}, numbered from 0")
+    raise SpecError(f"--set {where}.{part}", f"no body named {part!r}" + suggest(part, names))
 
 
 def _deep_copy(value: Any) -> Any:
@@ -177,9 +216,24 @@ def _known(table: Mapping, keys: Sequence[str], path: str) -> None:
             raise SpecError(where, "unknown key" + suggest(str(key), list(keys)))
 
 
+def _known_sections(data: Mapping) -> None:
+    """Every top-level key is a known section or ``version``; a misspelt one gets the
+    nearest, also a longer or shorter word (``[simulation]``: did you mean 'sim'?)."""
+    for key in data:
+        if key in TOP_KEYS:
+            continue
+        word = str(key).lower()
+        hint = suggest(word, list(TOP_KEYS))
+        stem = [k for k in TOP_KEYS if len(k) >= 3 and (word.startswith(k) or k.startswith(word))]
+        if not hint and stem:
+            hint = f" (did you mean {stem[0]!r}?)"
+        raise SpecError(str(key), f"unknown key{hint}; a scene has version, [world], [sim], "
+                                  "[render] and [[body]]")
+
+
 def _parse(data: Any, source: str) -> Scene:
     data = _table(data, "")
-    _known(data, TOP_KEYS, "")
+    _known_sections(data)
     if "version" not in data:
         raise SpecError("version", "is required (version = 1)")
     if data["version"] != 1 or isinstance(data["version"], bool):
@@ -187,7 +241,7 @@ def _parse(data: Any, source: str) -> Scene:
 
     world = _table(data.get("world", {}), "world")
     _known(world, WORLD_KEYS, "world")
-    gravity = check_vec2(world.get("gravity", (0.0, -9.81)), "world.gravity")
+    gravity = check_gravity(world.get("gravity", (0.0, -9.81)), "world.gravity")
 
     quality, settings, duration = _parse_sim(_table(data.get("sim", {}), "sim"))
     render = _parse_render(_table(data.get("render", {}), "render"))
@@ -217,7 +271,8 @@ def _parse_sim(sim: dict) -> tuple[str, Settings, float]:
         raise SpecError("sim.quality", str(err.args[0])) from None
     values = {key: Settings.check(key, value, f"sim.{key}")
               for key, value in sim.items() if key not in SIM_EXTRA_KEYS}
-    duration = check_number(sim.get("duration", 5.0), "sim.duration", low=0.0, low_open=True)
+    duration = check_number(sim.get("duration", 5.0), "sim.duration", low=0.0, low_open=True,
+                            high=MAX_DURATION)
     return quality, base.with_values(**values), duration
 
 
@@ -233,7 +288,8 @@ def _parse_render(render: dict) -> RenderSpec:
     scale = check_number(render.get("scale", default.scale), "render.scale",
                          low=0.0, low_open=True)
     fps = check_int(render.get("fps", default.fps), "render.fps", low=1, high=1000)
-    return RenderSpec((w + w % 2, h + h % 2), center, scale, fps)
+    hud = _flag(render, "hud", "render")
+    return RenderSpec((w + w % 2, h + h % 2), center, scale, fps, hud)
 
 
 def _parse_body(data: Any, i: int) -> BodySpec:
@@ -251,32 +307,19 @@ def _parse_body(data: Any, i: int) -> BodySpec:
         raise SpecError(f"{path}.kinematic", "a body cannot be both static and kinematic")
     kind = "static" if static else "kinematic" if kinematic else "dynamic"
 
-    from .shapes import shape_from_spec
-
     shape = shape_from_spec(body["shape"], f"{path}.shape")
     if kind == "dynamic" and not math.isfinite(shape.radius):
         raise SpecError(f"{path}.shape", "an unbounded shape (e.g. a half-plane) must be static")
     if "density" in body and "mass" in body:
         raise SpecError(f"{path}.mass", "give density or mass, not both")
-    density = check_number(body.get("density", 1.0), f"{path}.density", low=0.0, low_open=True)
-    mass = None
-    if "mass" in body:
-        mass = check_number(body["mass"], f"{path}.mass", low=0.0, low_open=True)
-    velocity = check_vec2(body.get("velocity", (0.0, 0.0)), f"{path}.velocity")
-    angular_velocity = check_number(body.get("angular_velocity", 0.0), f"{path}.angular_velocity")
-    if kind == "static" and (velocity != (0.0, 0.0) or angular_velocity != 0.0):
-        raise SpecError(f"{path}.velocity",
-                        "a static body cannot move; use kinematic = true for moving platforms")
-    return BodySpec(
-        name=name, shape=shape,
-        position=check_vec2(body.get("position", (0.0, 0.0)), f"{path}.position"),
-        angle=check_number(body.get("angle", 0.0), f"{path}.angle"),
-        velocity=velocity, angular_velocity=angular_velocity,
-        density=density, mass=mass,
-        friction=check_number(body.get("friction", 0.5), f"{path}.friction", low=0.0),
-        restitution=check_number(body.get("restitution", 0.0), f"{path}.restitution",
-                                 low=0.0, high=1.0),
-        kind=kind)
+    values = check_body(path, kind=kind, **{key: body[key] for key in _VALUE_KEYS
+                                            if key in body})
+    return BodySpec(name, shape, *values[:9])
+
+
+#: Body keys whose values ``limits.check_body`` validates.
+_VALUE_KEYS = ("position", "angle", "velocity", "angular_velocity", "density", "mass",
+               "friction", "restitution")
 
 
 def _flag(body: dict, key: str, path: str) -> bool:

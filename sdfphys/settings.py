@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from .errors import SpecError, check_int, check_number
+from .limits import MIN_DT
 from .sdf.gradient import METHODS
 
 __all__ = ["FIELD_REPRESENTATIONS", "GRADIENT_METHODS", "PRESETS", "Settings", "preset"]
@@ -29,12 +30,13 @@ FIELD_REPRESENTATIONS = ("analytic", "grid")
 
 
 def _knob(default: Any, unit: str, doc: str, *, low: float | None = None,
-          low_open: bool = False, high: float | None = None,
+          low_open: bool = False, least: float | None = None, high: float | None = None,
           choices: tuple[str, ...] = ()) -> Any:
-    """A Settings field: default, unit ("" when dimensionless), effect, valid range."""
+    """A Settings field: default, unit ("" when dimensionless), effect, valid range
+    (``least``: the smallest meaningful value above an open ``low``, see ``limits``)."""
     return field(default=default, metadata={"unit": unit, "doc": doc, "low": low,
-                                            "low_open": low_open, "high": high,
-                                            "choices": choices})
+                                            "low_open": low_open, "least": least,
+                                            "high": high, "choices": choices})
 
 
 @dataclass(frozen=True)
@@ -47,7 +49,7 @@ class Settings:
 
     dt: float = _knob(
         1.0 / 60.0, "s", "Seconds per step. Smaller: more accurate, proportionally more "
-        "steps per simulated second.", low=0.0, low_open=True, high=1.0)
+        "steps per simulated second.", low=0.0, low_open=True, least=MIN_DT, high=1.0)
     substeps: int = _knob(
         4, "", "Solver substeps per step (h = dt / substeps). More: stiffer contacts, "
         "smaller integration error; cost grows with the solver's share of a step.",
@@ -64,7 +66,7 @@ class Settings:
         low_open=True)
     contact_damping_ratio: float = _knob(
         10.0, "", "Soft contact damping ratio. Higher: overlap removed without "
-        "oscillation, more slowly.", low=0.0)
+        "oscillation, more slowly (at 1000 it takes minutes).", low=0.0, high=1e3)
     max_push_out: float = _knob(
         3.0, "m/s", "Cap on the speed at which overlap is removed (no popping).",
         low=0.0, low_open=True)
@@ -214,8 +216,12 @@ class Settings:
             return value
         if kind == "int":
             return check_int(value, path, low=meta["low"], high=meta["high"])
-        return check_number(value, path, low=meta["low"], low_open=meta["low_open"],
-                            high=meta["high"])
+        value = check_number(value, path, low=meta["low"], low_open=meta["low_open"],
+                             high=meta["high"])
+        if meta["least"] is not None and value < meta["least"]:
+            raise SpecError(path, f"must be >= {meta['least']:g}"
+                            + (f" {meta['unit']}" if meta["unit"] else "") + f", got {value:g}")
+        return value
 
     @classmethod
     def describe(cls, name: str) -> str:
@@ -228,6 +234,8 @@ class Settings:
         elif meta["low"] is not None or meta["high"] is not None:
             low = "" if meta["low"] is None else (
                 f"{meta['low']:g} {'<' if meta['low_open'] else '<='} ")
+            if meta["least"] is not None:
+                low = f"{meta['least']:g} <= "
             high = "" if meta["high"] is None else f" <= {meta['high']:g}"
             valid = f"{low}{name}{high}"
         else:

@@ -34,6 +34,7 @@ import numpy as np
 
 from .errors import SpecError, check_number, check_points, check_vec2
 from .geometry import field_mass_properties, polygon_mass_properties, triangulate, validate_polygon
+from .limits import MAX_SIZE, MIN_SIZE
 from .sdf import Field, field
 from .sdf.build import suggest
 from .sdf.gradient import NumericGradientField
@@ -107,7 +108,7 @@ class Circle(Shape):
     kind = "circle"
 
     def __init__(self, radius: float):
-        r = check_number(radius, "radius", low=0.0, low_open=True)
+        r = check_number(radius, "radius", low=0.0, low_open=True, high=MAX_SIZE)
         self._radius = r
         self._field = field({"type": "circle", "radius": r})
         self.spec = {"type": "circle", "radius": r}
@@ -154,6 +155,7 @@ class TriangleMesh(Shape):
 
     def __init__(self, points: Any, path: str = "points"):
         ccw = validate_polygon(points, path)
+        _check_extent(np.asarray(points, dtype=np.float64), path)
         area, centroid, second_moment = polygon_mass_properties(ccw, path)
         self.vertices = ccw - centroid
         self.triangles = triangulate(ccw, path)
@@ -168,6 +170,8 @@ class TriangleMesh(Shape):
     def box(cls, size: Any, path: str = "size") -> TriangleMesh:
         """A ``[w, h]`` (m) box centred at the origin, with the exact box field."""
         w, h = check_vec2(size, path, positive=True)
+        for i, side in enumerate((w, h)):
+            check_number(side, f"{path}[{i}]", high=MAX_SIZE)
         mesh = cls.__new__(cls)
         mesh.vertices = np.array([[-w, -h], [w, -h], [w, h], [-w, h]]) / 2.0
         mesh.triangles = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int64)
@@ -223,6 +227,20 @@ class TriangleMesh(Shape):
         return np.concatenate([self.vertices.min(axis=0), self.vertices.max(axis=0)])
 
 
+def _check_extent(points: np.ndarray, path: str) -> None:
+    """Polygon ``points`` (M, 2), m: within MAX_SIZE of the user origin on both axes, and
+    at least MIN_SIZE across on both axes (as a box's sides)."""
+    far = np.abs(points) > MAX_SIZE
+    if np.any(far):
+        i, j = np.argwhere(far)[0]
+        raise SpecError(f"{path}[{i}][{j}]", f"must be within {MAX_SIZE:g} m of the body's "
+                                             f"origin, got {points[i, j]:g}")
+    extent = float(np.min(points.max(axis=0) - points.min(axis=0)))
+    if extent < MIN_SIZE:
+        raise SpecError(path, f"must be at least {MIN_SIZE:g} m across on both axes, "
+                              f"got {extent:g}")
+
+
 class SdfShape(Shape):
     """Any field as a shape; mass properties by quadrature, computed on first use.
 
@@ -240,6 +258,12 @@ class SdfShape(Shape):
         self.user_field = user_field
         self._path = path
         self._user_bounds = np.asarray(user_field.bounds(), dtype=np.float64)
+        finite = self._user_bounds[np.isfinite(self._user_bounds)]
+        if len(finite) and np.max(np.abs(finite)) > MAX_SIZE:
+            w, h = self._user_bounds[2:] - self._user_bounds[:2]
+            raise SpecError(path, f"spans {w:g} x {h:g} m and reaches "
+                                  f"{np.max(np.abs(finite)):g} m from the body's origin, "
+                                  f"more than {MAX_SIZE:g} m")
         self.bounded = bool(np.all(np.isfinite(self._user_bounds)))
         self.spec = {"type": "sdf",
                      "field": user_field if user_field.spec is None else user_field.spec}
@@ -369,13 +393,6 @@ def collision_shape(shape: Shape, gradient: str = "analytic",
 _CACHE: dict[str, Shape] = {}
 
 
-#: Smallest circle radius or box side, m. The solver's length scales are the 5 mm
-#: contact slop and the soft contact's resting sag g / (2 pi 60 Hz)^2 = 69 um: a body of
-#: 1e-9 m rests tens of thousands of its own radii deep and is thrown out of contact.
-#: A millimetre is still 14 sags.
-MIN_SIZE = 1e-3
-
-
 def shape_from_spec(spec: Any, path: str = "shape") -> Shape:
     """The Shape for a scene shape dict (the same object for equal canonical specs).
 
@@ -407,11 +424,12 @@ def shape_from_spec(spec: Any, path: str = "shape") -> Shape:
 
     if kind == "circle":
         canonical = {"type": "circle",
-                     "radius": check_number(spec["radius"], f"{path}.radius", low=MIN_SIZE)}
+                     "radius": check_number(spec["radius"], f"{path}.radius", low=MIN_SIZE,
+                                            high=MAX_SIZE)}
     elif kind == "box":
         size = check_vec2(spec["size"], f"{path}.size", positive=True)
         for i, side in enumerate(size):
-            check_number(side, f"{path}.size[{i}]", low=MIN_SIZE)
+            check_number(side, f"{path}.size[{i}]", low=MIN_SIZE, high=MAX_SIZE)
         canonical = {"type": "box", "size": list(size)}
     elif kind == "polygon":
         canonical = {"type": "polygon", "points": [
@@ -425,12 +443,22 @@ def shape_from_spec(spec: Any, path: str = "shape") -> Shape:
         if user_field.spec is None:
             return SdfShape(user_field, canonical.get("cell"), f"{path}.field")
 
-    key = json.dumps(canonical, sort_keys=True)
+    key = _cache_key(canonical)
     shape = _CACHE.get(key)
     if shape is None:
         shape = _build(canonical, path)
         _CACHE[key] = shape
     return shape
+
+
+def _cache_key(canonical: dict) -> Any:
+    """The key of ``_CACHE``: equal for equal canonical specs (a tuple for circles and
+    boxes, which are most bodies and cheap to key; the sorted JSON otherwise)."""
+    if canonical["type"] == "circle":
+        return ("circle", canonical["radius"])
+    if canonical["type"] == "box":
+        return ("box", *canonical["size"])
+    return json.dumps(canonical, sort_keys=True)
 
 
 def _build(canonical: dict, path: str) -> Shape:

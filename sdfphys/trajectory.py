@@ -31,7 +31,7 @@ import os
 import tempfile
 import zipfile
 import zlib
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -40,6 +40,8 @@ import numpy as np
 
 from . import __version__
 from .errors import SpecError
+from .interrupt import deferred
+from .limits import check_steps
 from .scene import read_scene
 
 __all__ = ["QUANTITIES", "TOLERANCES", "Deviation", "Trajectory", "compare", "load",
@@ -109,36 +111,47 @@ class Trajectory:
         """Write the ``.npz`` atomically: a hidden temporary file next to ``path``,
         renamed onto it once complete (nothing half-written is ever at ``path``)."""
         target = Path(path)
-        handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".partial",
-                                             dir=target.parent)
+        temporary = None
         try:
+            with deferred():     # a signal never comes between creating and naming it
+                handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.",
+                                                     suffix=".partial", dir=target.parent)
             with os.fdopen(handle, "wb") as stream:
                 np.savez_compressed(stream, **self.arrays(),
                                     meta=np.array(json.dumps(self.meta, sort_keys=True)))
             umask = os.umask(0)
             os.umask(umask)
             os.chmod(temporary, 0o666 & ~umask)
-            os.replace(temporary, target)
+            with deferred():
+                os.replace(temporary, target)
+                temporary = None
         except BaseException:
-            Path(temporary).unlink(missing_ok=True)
+            if temporary is not None:
+                with deferred():
+                    Path(temporary).unlink(missing_ok=True)
             raise
 
 
 def record(scene: str | os.PathLike | Mapping, seconds: float | None = None,
-           overrides: Sequence[str] = (), quality: str | None = None) -> Trajectory:
+           overrides: Sequence[str] = (), quality: str | None = None, *,
+           max_steps: int | None = None,
+           progress: Callable[[int], None] | None = None) -> Trajectory:
     """Simulate a scene and return every step's body states.
 
     scene: a scene file path or a dict shaped like one; overrides (``KEY=VALUE``) and
     quality are applied as by ``read_scene`` and stored in ``meta`` so that a check
     can rebuild the same scene. seconds: simulated time (default: the scene's
-    ``sim.duration``); steps = max(1, round(seconds / dt)). Bad scenes raise SpecError.
+    ``sim.duration``); steps = max(1, round(seconds / dt)), at most ``max_steps``
+    (default ``limits.MAX_STEPS``; the frames are kept in memory). progress: called
+    with the number of steps done after each step. Bad scenes raise SpecError.
     """
     parsed = read_scene(scene, overrides, quality=quality)
     seconds = parsed.duration if seconds is None else seconds
     if not (isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds > 0):
         raise ValueError(f"seconds must be a positive number, got {seconds!r}")
-    world = parsed.build()
     steps = max(1, round(seconds / parsed.settings.dt))
+    check_steps(steps, "steps", max_steps)
+    world = parsed.build()
     count = len(world)
     position = np.empty((steps + 1, count, 2))
     angle = np.empty((steps + 1, count))
@@ -147,6 +160,8 @@ def record(scene: str | os.PathLike | Mapping, seconds: float | None = None,
     for k in range(steps + 1):
         if k:
             world.step()
+            if progress is not None:
+                progress(k)
         position[k] = world.position
         angle[k] = world.angle
         velocity[k] = world.velocity

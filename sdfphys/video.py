@@ -17,7 +17,8 @@ closes on success and aborts on an exception::
   60 frames/s is written as 30.
 - a directory (a path ending in ``/``, an existing directory or a path without an
   extension): ``frame_00000.png``, ``frame_00001.png``, ... An existing directory
-  is replaced only if it holds nothing but such frames.
+  is replaced only if it holds nothing but such frames. (The command line asks for
+  the ``/``: ``output_error``.)
 
 Frame sizes are even (H.264 in yuv420p needs it; every sink does the same so the
 outputs agree): an odd width or height is rounded up by repeating the last column
@@ -26,7 +27,9 @@ or row of pixels. ``sink.size`` is the size written, ``sink.frame_size`` the siz
 
 Nothing half-written is left behind: output goes to a hidden temporary name in
 the target directory and is renamed onto the target by ``close()``; ``abort()``
-(or an exception inside the ``with`` block, or an encoder failure) deletes it.
+(or an exception inside the ``with`` block, a SIGINT or SIGTERM under
+``interrupt.handled()``, or an encoder failure) deletes it. ffmpeg runs in a session
+of its own, so a Ctrl-C at the terminal reaches this process only, which ends it.
 """
 
 from __future__ import annotations
@@ -46,8 +49,10 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import pygame
 
 from .errors import SpecError
+from .interrupt import deferred
 
-__all__ = ["GIF_MAX_FPS", "FrameSink", "PngFolderSink", "VideoSink", "even_size", "open_sink"]
+__all__ = ["GIF_MAX_FPS", "FrameSink", "PngFolderSink", "VideoSink", "even_size", "open_sink",
+           "output_error"]
 
 #: Highest frame rate the GIF sink writes (see the module docstring).
 GIF_MAX_FPS = 50
@@ -84,6 +89,16 @@ class FrameSink:
         self.frames = 0
         self.closed = False
 
+    @property
+    def frames_written(self) -> int:
+        """Frames in the output (``frames`` received, fewer where frames are dropped)."""
+        return self.frames
+
+    @property
+    def fps_written(self) -> float:
+        """Frame rate of the output, frames/s."""
+        return self.fps
+
     def write(self, surface: pygame.Surface) -> None:
         """Append one frame; ``surface`` must have ``frame_size`` (or the even ``size``)."""
         if self.closed:
@@ -110,10 +125,11 @@ class FrameSink:
         self.closed = True
 
     def abort(self) -> None:
-        """Stop and delete everything written so far (idempotent)."""
+        """Stop and delete everything written so far (idempotent; signals wait for it)."""
         if not self.closed:
             self.closed = True
-            self._discard()
+            with deferred():
+                self._discard()
 
     def __enter__(self) -> Self:
         return self
@@ -171,21 +187,25 @@ class VideoSink(FrameSink):
             output = ["-filter_complex",
                       "split[a][b];[a]palettegen=stats_mode=single[p];[b][p]paletteuse=new=1",
                       "-f", "gif"]
-        handle, temporary = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".partial",
-                                             dir=self.path.parent)
-        os.close(handle)
-        self._temporary = Path(temporary)
-        self._log = tempfile.TemporaryFile()  # noqa: SIM115  (ffmpeg writes it until close)
         w, h = self.size
-        command = [imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-loglevel", "error", "-nostdin",
-                   "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{w}x{h}", "-r", str(rate),
-                   "-i", "-", "-an", *output, str(self._temporary)]
+        executable = imageio_ffmpeg.get_ffmpeg_exe()
+        self._temporary: Path | None = None
+        self._process: subprocess.Popen | None = None
+        self._log = tempfile.TemporaryFile()  # noqa: SIM115  (ffmpeg writes it until close)
         try:
-            self._process = subprocess.Popen(command, stdin=subprocess.PIPE,
-                                             stdout=subprocess.DEVNULL, stderr=self._log)
-        except OSError:
-            self._temporary.unlink(missing_ok=True)
-            self._log.close()
+            with deferred():         # the file and the process exist only once recorded
+                handle, temporary = tempfile.mkstemp(prefix=f".{self.path.name}.",
+                                                     suffix=".partial", dir=self.path.parent)
+                os.close(handle)
+                self._temporary = Path(temporary)
+                command = [executable, "-y", "-loglevel", "error", "-nostdin", "-f",
+                           "rawvideo", "-pix_fmt", "rgb24", "-s", f"{w}x{h}", "-r",
+                           str(rate), "-i", "-", "-an", *output, str(self._temporary)]
+                self._process = subprocess.Popen(command, stdin=subprocess.PIPE,
+                                                 stdout=subprocess.DEVNULL, stderr=self._log,
+                                                 start_new_session=True)
+        except BaseException:
+            self.abort()
             raise
         self._received = 0
 
@@ -199,6 +219,16 @@ class VideoSink(FrameSink):
             self._process.wait()
             raise RuntimeError(self._failure()) from None
 
+    @property
+    def frames_written(self) -> int:
+        """Frames in the output: every ``frame_step``-th frame received."""
+        return -(-self._received // self.frame_step)
+
+    @property
+    def fps_written(self) -> float:
+        """Frame rate of the output: ``fps / frame_step``, frames/s."""
+        return self.fps / self.frame_step
+
     def _finish(self) -> None:
         self._process.stdin.close()
         status = self._process.wait()
@@ -206,20 +236,25 @@ class VideoSink(FrameSink):
             raise RuntimeError(f"{self.path}: no frames were written")
         if status != 0:
             raise RuntimeError(self._failure())
-        _public(self._temporary, 0o666)
-        os.replace(self._temporary, self.path)
+        with deferred():
+            _public(self._temporary, 0o666)
+            os.replace(self._temporary, self.path)
+            self._temporary = None
         self._log.close()
 
     def _discard(self) -> None:
-        if self._process.poll() is None:
-            self._process.kill()
-        self._process.wait()
-        if self._process.stdin and not self._process.stdin.closed:
-            try:
-                self._process.stdin.close()
-            except OSError:
-                pass
-        self._temporary.unlink(missing_ok=True)
+        process = self._process
+        if process is not None:
+            if process.poll() is None:
+                process.kill()
+            process.wait()
+            if process.stdin and not process.stdin.closed:
+                try:
+                    process.stdin.close()
+                except OSError:
+                    pass
+        if self._temporary is not None:
+            self._temporary.unlink(missing_ok=True)
         self._log.close()
 
     def _failure(self) -> str:
@@ -247,23 +282,33 @@ class PngFolderSink(FrameSink):
                 raise SpecError("", f"directory holds other files than frames "
                                 f"(e.g. {others[0]!r}); choose an empty or new directory",
                                 str(path))
-        self._temporary = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.",
-                                                suffix=".partial", dir=self.path.parent))
+        self._temporary: Path | None = None
+        try:
+            with deferred():
+                self._temporary = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.",
+                                                        suffix=".partial",
+                                                        dir=self.path.parent))
+        except BaseException:
+            self.abort()
+            raise
 
     def _write_frame(self, surface: pygame.Surface) -> None:
         pygame.image.save(surface, str(self._temporary / f"frame_{self.frames:05d}.png"))
 
     def _finish(self) -> None:
-        if self.path.exists():
-            for old in self.path.iterdir():
-                if _FRAME_NAME.fullmatch(old.name):
-                    old.unlink()
-            self.path.rmdir()
-        _public(self._temporary, 0o777)
-        os.replace(self._temporary, self.path)
+        with deferred():
+            if self.path.exists():
+                for old in self.path.iterdir():
+                    if _FRAME_NAME.fullmatch(old.name):
+                        old.unlink()
+                self.path.rmdir()
+            _public(self._temporary, 0o777)
+            os.replace(self._temporary, self.path)
+            self._temporary = None
 
     def _discard(self) -> None:
-        shutil.rmtree(self._temporary, ignore_errors=True)
+        if self._temporary is not None:
+            shutil.rmtree(self._temporary, ignore_errors=True)
 
 
 def _public(path: Path, mode: int) -> None:
@@ -271,6 +316,20 @@ def _public(path: Path, mode: int) -> None:
     umask = os.umask(0)
     os.umask(umask)
     path.chmod(mode & ~umask)
+
+
+def output_error(text: str) -> str | None:
+    """Why the command line refuses ``-o text``, or None: a name with another extension
+    than .mp4 or .gif, or none without a trailing ``/`` (``-o movie`` is more likely a
+    forgotten ``.mp4`` than a folder) that is not an existing directory."""
+    target = Path(text)
+    if text.endswith(("/", os.sep)) or target.is_dir():
+        return None
+    suffix = target.suffix.lower()
+    if suffix in (".mp4", ".gif"):
+        return None
+    what = f"unsupported output type {suffix!r}" if suffix else "no output type"
+    return f"{what}: use .mp4, .gif or a directory (a path ending in '/') for PNG frames"
 
 
 def open_sink(path: str | os.PathLike, size: tuple[int, int], fps: float) -> FrameSink:
@@ -287,5 +346,4 @@ def open_sink(path: str | os.PathLike, size: tuple[int, int], fps: float) -> Fra
     suffix = target.suffix.lower()
     if suffix in (".mp4", ".gif"):
         return VideoSink(target, size, fps)
-    raise SpecError("", f"unsupported output type {suffix!r}: use .mp4, .gif or a directory "
-                    "(a path ending in '/') for PNG frames", text)
+    raise SpecError("", output_error(text), text)

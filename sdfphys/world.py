@@ -28,7 +28,18 @@ import numpy as np
 
 from .collide import Contacts, find_contacts
 from .collide.narrowphase import PAIR_FUNCTIONS
+from .errors import SpecError
 from .islands import island_roots
+from .limits import (
+    KINDS,
+    BodyValues,
+    check_angle,
+    check_angular_velocity,
+    check_body,
+    check_gravity,
+    check_position,
+    check_velocity,
+)
 from .settings import Settings
 from .shapes import Shape, collision_shape, shape_from_spec
 from .sleep import falling_asleep, rest_times
@@ -45,8 +56,7 @@ from .toi import fast_bodies, step_fractions
 
 __all__ = ["KINDS", "PAIR_STAGES", "STAGES", "World"]
 
-#: Body kinds, in the order of their integer codes.
-KINDS = ("dynamic", "static", "kinematic")
+#: Body kinds, in the order of their integer codes (``limits.KINDS``).
 _DYNAMIC, _STATIC, _KINEMATIC = range(3)
 
 #: Narrowphase stages, one per pair kind (``collide.narrowphase.PAIR_FUNCTIONS``):
@@ -92,6 +102,21 @@ def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return np.column_stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]])
 
 
+def _rotate_one(v: np.ndarray, angle: float) -> np.ndarray:
+    """(2,) ``v`` rotated counter-clockwise by ``angle`` rad (numpy's cos and sin, as
+    ``_rotate``: the same bits)."""
+    a = np.array([angle], dtype=np.float64)
+    c, s = float(np.cos(a)[0]), float(np.sin(a)[0])
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    """``array`` (a fresh copy) marked read-only: writing to it raises numpy's
+    "assignment destination is read-only"."""
+    array.flags.writeable = False
+    return array
+
+
 class World:
     """A 2D rigid-body world: bodies as arrays, ``step()`` advances ``settings.dt``.
 
@@ -105,7 +130,7 @@ class World:
     """
 
     def __init__(self, gravity: Any = (0.0, -9.81), settings: Settings | None = None):
-        self._gravity = np.array(gravity, dtype=np.float64).reshape(2)
+        self._gravity = np.array(check_gravity(gravity, "gravity"), np.float64)
         self.settings = settings if settings is not None else Settings()
         self.time = 0.0
         self.step_count = 0
@@ -116,6 +141,8 @@ class World:
         self._shapes: list[Shape] = []
         self._shape_index: dict[int, int] = {}
         self._names: list[str] = []
+        self._name_set: set[str] = set()
+        self._shape_rows: dict[int, tuple] = {}
         self._created = 0
         self._contacts = Contacts.empty()
         self._impulses = ImpulseCache.empty()
@@ -127,6 +154,30 @@ class World:
     # ----------------------------------------------------------------------------------
     # Bodies
     # ----------------------------------------------------------------------------------
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """(2,) m/s^2, a read-only copy; assign a pair to change it (checked: finite,
+        magnitude at most ``limits.MAX_GRAVITY``). Setting it wakes every sleeping
+        island."""
+        return _read_only(self._gravity.copy())
+
+    @gravity.setter
+    def gravity(self, value: Any) -> None:
+        self._gravity = np.array(check_gravity(value, "gravity"), np.float64)
+        if self._n:
+            self.wake()
+
+    @property
+    def settings(self) -> Settings:
+        """Every knob (``Settings``, validated on construction); assign a Settings."""
+        return self._settings
+
+    @settings.setter
+    def settings(self, value: Settings) -> None:
+        if not isinstance(value, Settings):
+            raise SpecError("settings", f"must be a Settings, got {value!r}")
+        self._settings = value
 
     def add_body(self, shape: Shape | Mapping, position: Any = (0.0, 0.0), angle: float = 0.0,
                  velocity: Any = (0.0, 0.0), angular_velocity: float = 0.0,
@@ -142,28 +193,33 @@ class World:
         friction >= 0, restitution in [0, 1]. kind: dynamic | static | kinematic.
         name: unique; default ``body<k>`` with k counting every body ever added.
         linear_damping, angular_damping: 1/s (v / (1 + h c) per substep).
+        Every value is checked as a scene's (``limits``: finite, within the documented
+        ranges); a bad one raises SpecError naming the argument, e.g.
+        ``position[0]: must be finite, got nan``.
         """
         shape = shape_from_spec(shape)
-        if kind not in KINDS:
-            raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
-        code = KINDS.index(kind)
-        velocity = np.array(velocity, dtype=np.float64).reshape(2)
-        if code == _STATIC and (np.any(velocity != 0.0) or angular_velocity != 0.0):
-            raise ValueError("a static body cannot move; use kind='kinematic'")
-        if not density > 0.0 or (mass is not None and not mass > 0.0):
-            raise ValueError(f"density and mass must be > 0, got {density}, {mass}")
-        if friction < 0.0 or not 0.0 <= restitution <= 1.0:
-            raise ValueError(f"need friction >= 0 and 0 <= restitution <= 1, got "
-                             f"{friction}, {restitution}")
+        values = check_body(position=position, angle=angle, velocity=velocity,
+                            angular_velocity=angular_velocity, density=density, mass=mass,
+                            friction=friction, restitution=restitution, kind=kind,
+                            linear_damping=linear_damping, angular_damping=angular_damping)
+        if name is not None and (not isinstance(name, str) or not name):
+            raise SpecError("name", f"must be a non-empty string, got {name!r}")
+        if kind == "dynamic" and not math.isfinite(shape.radius):
+            raise SpecError("shape", "an unbounded shape can only be static")
+        return self._add(shape, values, name)
+
+    def _add(self, shape: Shape, values: BodyValues, name: str | None) -> int:
+        """Add a body whose values ``limits.check_body`` validated (``Scene.build`` calls
+        this directly: the scene was checked when read)."""
         if name is None:
             name = f"body{self._created}"
-        if name in self._names:
-            raise ValueError(f"duplicate body name {name!r}")
+        if name in self._name_set:
+            raise SpecError("name", f"duplicate body name {name!r}")
+        number, origin, radius, core_radius, area, second_moment = self._shape_row(shape)
+        code = KINDS.index(values.kind)
         if code == _DYNAMIC:
-            if not math.isfinite(shape.radius):
-                raise ValueError("an unbounded shape can only be static")
-            m = mass if mass is not None else density * shape.area
-            inertia = m / shape.area * shape.second_moment
+            m = values.mass if values.mass is not None else values.density * area
+            inertia = m / area * second_moment
         else:
             m = inertia = math.inf
 
@@ -171,32 +227,48 @@ class World:
         self._reserve(i + 1)
         self._n = i + 1
         d = self._data
-        origin = np.asarray(shape.origin, dtype=np.float64)
-        d["com"][i] = np.asarray(position, dtype=np.float64) - _rotate(origin[None],
-                                                                     np.array([angle]))[0]
-        d["angle"][i] = angle
-        d["velocity"][i] = velocity
-        d["angular_velocity"][i] = angular_velocity
+        if origin[0] == 0.0 and origin[1] == 0.0:     # circles and boxes
+            d["com"][i] = values.position
+        else:
+            d["com"][i] = np.asarray(values.position) - _rotate_one(origin, values.angle)
+        d["angle"][i] = values.angle
+        d["velocity"][i] = values.velocity
+        d["angular_velocity"][i] = values.angular_velocity
         d["mass"][i] = m
         d["inertia"][i] = inertia
         d["inv_mass"][i] = 1.0 / m
         d["inv_inertia"][i] = 1.0 / inertia if inertia > 0.0 else 0.0
-        d["linear_damping"][i] = linear_damping
-        d["angular_damping"][i] = angular_damping
+        d["linear_damping"][i] = values.linear_damping
+        d["angular_damping"][i] = values.angular_damping
         d["round"][i] = shape.kind == "circle"
-        d["friction"][i] = friction
-        d["restitution"][i] = restitution
+        d["friction"][i] = values.friction
+        d["restitution"][i] = values.restitution
         d["origin"][i] = origin
-        d["radius"][i] = shape.radius
-        d["core_radius"][i] = -float(shape.field.distance(np.zeros((1, 2)))[0])
-        d["shape_id"][i] = self._shape_number(shape)
+        d["radius"][i] = radius
+        d["core_radius"][i] = core_radius
+        d["shape_id"][i] = number
         d["kind"][i] = code
         d["sleep_time"][i] = 0.0
         d["asleep"][i] = False
         d["island"][i] = 0
         self._names.append(name)
+        self._name_set.add(name)
         self._created += 1
         return i
+
+    def _shape_row(self, shape: Shape) -> tuple:
+        """(shape number, origin (2,), radius, core radius, area, second moment) of
+        ``shape``, computed once per distinct shape (area and second moment None for an
+        unbounded one). The core radius is -f(centre of mass): the deepest inside."""
+        row = self._shape_rows.get(id(shape))
+        if row is None:
+            bounded = math.isfinite(shape.radius)
+            row = (self._shape_number(shape), np.asarray(shape.origin, dtype=np.float64),
+                   shape.radius, -float(shape.field.distance(np.zeros((1, 2)))[0]),
+                   shape.area if bounded else None,
+                   shape.second_moment if bounded else None)
+            self._shape_rows[id(shape)] = row
+        return row
 
     def remove_body(self, index: int) -> None:
         """Remove body ``index``; later bodies move down one index (their contacts too).
@@ -207,6 +279,7 @@ class World:
         for array in self._data.values():
             array[i:n - 1] = array[i + 1:n]
         self._n = n - 1
+        self._name_set.discard(self._names[i])
         del self._names[i]
         self._impulses = self._impulses.without_body(i)
         self._sleep_impulses = self._sleep_impulses.without_body(i)
@@ -219,22 +292,30 @@ class World:
 
         Changing only the angle turns the body about its user origin. Static bodies
         may be moved but not given a velocity. The body's sleeping island, and the
-        islands it touches, wake up.
+        islands it touches, wake up. Values are checked as ``add_body``'s (SpecError
+        naming the argument); nothing changes if one is bad.
         """
         i = self._check(index)
-        self._wake_touching(i)
         d = self._data
-        if self._data["kind"][i] == _STATIC and (
-                (velocity is not None and np.any(np.asarray(velocity) != 0.0))
-                or (angular_velocity is not None and angular_velocity != 0.0)):
-            raise ValueError("a static body cannot move; use kind='kinematic'")
+        if position is not None:
+            position = check_position(position, "position")
+        if angle is not None:
+            angle = check_angle(angle, "angle")
+        if velocity is not None:
+            velocity = check_velocity(velocity, "velocity")
+        if angular_velocity is not None:
+            angular_velocity = check_angular_velocity(angular_velocity, "angular_velocity")
+        if d["kind"][i] == _STATIC and ((velocity is not None and velocity != (0.0, 0.0))
+                                        or angular_velocity not in (None, 0.0)):
+            raise SpecError("velocity", "a static body cannot move; use kind='kinematic'")
+        self._wake_touching(i)
         if position is not None or angle is not None:
-            user = self.position[i] if position is None else np.asarray(position, np.float64)
+            user = self.position[i] if position is None else np.array(position)
             if angle is not None:
                 d["angle"][i] = angle
-            d["com"][i] = user - _rotate(d["origin"][i:i + 1], d["angle"][i:i + 1])[0]
+            d["com"][i] = user - _rotate_one(d["origin"][i], float(d["angle"][i]))
         if velocity is not None:
-            d["velocity"][i] = np.asarray(velocity, dtype=np.float64).reshape(2)
+            d["velocity"][i] = velocity
         if angular_velocity is not None:
             d["angular_velocity"][i] = angular_velocity
 
@@ -433,7 +514,7 @@ class World:
         """Stage 2: anchors, masses, base separations, warm-start impulses."""
         constraints = prepare_contacts(contacts, bodies, self._view("friction"),
                                        self._view("restitution"), self._impulses,
-                                       self.settings.warm_starting, self.gravity,
+                                       self.settings.warm_starting, self._gravity,
                                        self.settings.linear_slop)
         if len(constraints):
             self.stage_counts["prepare"] += 1
@@ -447,7 +528,7 @@ class World:
         pseudo-velocities, solver "Split push-out")."""
         s = self.settings
         use_friction = bool(np.any(constraints.friction > 0.0))
-        extra, push_outs = solve_substeps(bodies, constraints, self.gravity, s, use_friction)
+        extra, push_outs = solve_substeps(bodies, constraints, self._gravity, s, use_friction)
         counts = self.stage_counts
         counts["converge"] += extra
         counts["push_out"] += push_outs
@@ -496,7 +577,7 @@ class World:
         self.stage_counts["store_impulses"] += 1
 
     # ----------------------------------------------------------------------------------
-    # State (copies; scene order)
+    # State (read-only copies, scene order: set_state changes a body)
     # ----------------------------------------------------------------------------------
 
     def __len__(self) -> int:
@@ -505,27 +586,28 @@ class World:
     @property
     def position(self) -> np.ndarray:
         """(B, 2) m, world position of each body's user frame origin."""
-        return self._view("com") + _rotate(self._view("origin"), self._view("angle"))
+        return _read_only(self._view("com") + _rotate(self._view("origin"),
+                                                      self._view("angle")))
 
     @property
     def center_of_mass(self) -> np.ndarray:
         """(B, 2) m, world position of each body's centre of mass."""
-        return self._view("com").copy()
+        return _read_only(self._view("com").copy())
 
     @property
     def angle(self) -> np.ndarray:
         """(B,) rad, counter-clockwise."""
-        return self._view("angle").copy()
+        return _read_only(self._view("angle").copy())
 
     @property
     def velocity(self) -> np.ndarray:
         """(B, 2) m/s, velocity of each centre of mass."""
-        return self._view("velocity").copy()
+        return _read_only(self._view("velocity").copy())
 
     @property
     def angular_velocity(self) -> np.ndarray:
         """(B,) rad/s, counter-clockwise."""
-        return self._view("angular_velocity").copy()
+        return _read_only(self._view("angular_velocity").copy())
 
     @property
     def contacts(self) -> Contacts:
@@ -540,18 +622,7 @@ class World:
     @property
     def asleep(self) -> np.ndarray:
         """(B,) bool: bodies of sleeping islands (``settings.sleeping``)."""
-        return self._view("asleep").copy()
-
-    @property
-    def gravity(self) -> np.ndarray:
-        """(2,) m/s^2. Setting it wakes every sleeping island."""
-        return self._gravity
-
-    @gravity.setter
-    def gravity(self, value: Any) -> None:
-        self._gravity = np.array(value, dtype=np.float64).reshape(2)
-        if self._n:
-            self.wake()
+        return _read_only(self._view("asleep").copy())
 
     @property
     def shapes(self) -> list[Shape]:
@@ -561,7 +632,7 @@ class World:
     @property
     def shape_id(self) -> np.ndarray:
         """(B,) int64, each body's index into ``shapes``."""
-        return self._view("shape_id").copy()
+        return _read_only(self._view("shape_id").copy())
 
     @property
     def names(self) -> list[str]:
@@ -570,27 +641,27 @@ class World:
     @property
     def mass(self) -> np.ndarray:
         """(B,) kg (inf for static and kinematic bodies)."""
-        return self._view("mass").copy()
+        return _read_only(self._view("mass").copy())
 
     @property
     def inertia(self) -> np.ndarray:
         """(B,) kg m^2 about the centre of mass (inf for static and kinematic bodies)."""
-        return self._view("inertia").copy()
+        return _read_only(self._view("inertia").copy())
 
     @property
     def kind(self) -> np.ndarray:
         """(B,) str: dynamic | static | kinematic."""
-        return np.array(KINDS)[self._view("kind")]
+        return _read_only(np.array(KINDS)[self._view("kind")])
 
     @property
     def friction(self) -> np.ndarray:
         """(B,) friction coefficients."""
-        return self._view("friction").copy()
+        return _read_only(self._view("friction").copy())
 
     @property
     def restitution(self) -> np.ndarray:
         """(B,) restitution coefficients."""
-        return self._view("restitution").copy()
+        return _read_only(self._view("restitution").copy())
 
     def kinetic_energy(self) -> float:
         """J: sum over dynamic bodies of m |v|^2 / 2 + I w^2 / 2."""

@@ -235,3 +235,26 @@ def test_rate_meter_counts_steps_per_second_over_its_window():
     assert meter.rate == pytest.approx(20.0)
     meter.add(0, 1.0)
     assert meter.rate == pytest.approx(6 / 0.4)   # the window now holds a paused frame
+
+
+def test_h_shows_and_hides_the_key_help(tmp_path, monkeypatch):
+    from sdfphys.play import KEYS
+
+    monkeypatch.chdir(tmp_path)
+    s, h, p = key(pygame.K_s), key(pygame.K_h), key(pygame.K_p)
+    plain, helped, hidden = shots(tmp_path, [[p, s], [h, s], [h, s]])
+    changed = np.any(helped != plain, axis=2)
+    assert changed[100:220, 60:180].mean() > 0.9                 # a panel over the centre
+    text = np.all(helped[100:220, 60:180] == np.array(Palette().text), axis=2)
+    assert text.sum() > 200                                      # with lines of text on it
+    np.testing.assert_array_equal(hidden[:, 30:], plain[:, 30:])
+    assert {k for k, _ in KEYS} >= {"P", "O", "R", "S", "C", "F", "B", "H", "Esc"}
+
+
+def test_overlays_in_play_have_a_legend(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    s = key(pygame.K_s)
+    plain, field = shots(tmp_path, [[s], [key(pygame.K_f), s]])
+    inside = np.all(field == np.array(Palette().field_inside), axis=2)   # the legend's swatch
+    assert np.any(inside[:, 160:]) and not np.any(np.all(plain == np.array(
+        Palette().field_inside), axis=2))

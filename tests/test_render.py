@@ -451,3 +451,116 @@ def test_real_polygon_is_placed_by_its_user_origin():
     np.testing.assert_allclose(painted_box(image, BLACK), expected, atol=1.0)
     notch = cam.world_to_screen([[0.0, 0.3]]).astype(int)[0]            # above the dent
     assert tuple(image[notch[0], notch[1]]) == BLACK
+
+
+# ------------------------------------------------------------------------------------------
+# Colours by state and material, the HUD, the legend, the field overlay's cache
+# ------------------------------------------------------------------------------------------
+
+def scene_colours(name):
+    """The fill colour of each body of scenes/<name>.toml, by body name."""
+    from sdfphys import read_scene
+    from sdfphys.render import body_colours
+
+    world = read_scene(f"{ROOT}/scenes/{name}.toml").build()
+    colours = body_colours(body_frames(world), Palette())
+    return dict(zip(world.names, map(tuple, colours.tolist())))
+
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def test_bodies_of_other_materials_differ_and_neighbours_too():
+    ramp = scene_colours("ramp_friction")
+    boxes = [ramp[f"box_mu_{mu}"] for mu in ("0.05", "0.3", "0.6")]
+    assert len({*boxes, ramp["ramp"], ramp["ground"]}) == 5    # three materials; two statics
+    pyramid = scene_colours("pyramid")
+    assert pyramid["box_0_0"] == Palette().dynamic                 # the first body: the hue
+    for row in range(19):
+        for i in range(19 - row):
+            here = pyramid[f"box_{row}_{i}"]
+            assert here != pyramid[f"box_{row}_{i + 1}"]            # beside
+            assert here != pyramid[f"box_{row + 1}_{i}"] or i == 19 - row - 1  # above
+    assert pyramid["ground"] == Palette().static
+
+
+def test_colours_follow_a_per_body_state():
+    """The colouring reads ``BodyFrames.state``, not the body kind: a state of its own
+    (asleep, once sleeping exists) needs one more entry in ``Palette.fills``."""
+    from sdfphys.render import STATIC, body_colours
+
+    box = box_shape(1.0, 1.0)
+    world = make_world([(box, (0.0, 0.0), 0.0, "dynamic"), (box, (2.0, 0.0), 0.0, "dynamic")])
+    frames = body_frames(world)
+    np.testing.assert_array_equal(frames.state, frames.motion)
+    frames.state = np.array([0, STATIC])
+    colours = body_colours(frames, Palette())
+    assert tuple(colours[0]) == Palette().dynamic and tuple(colours[1]) == Palette().static
+
+
+def test_hud_prints_time_and_step_in_the_top_left_corner():
+    cam = Camera((0.0, 0.0), 50.0, (320, 200))
+    world = make_world([(box_shape(1.0, 1.0), (0.0, 0.0), 0.0, "dynamic")])
+    world.time, world.step_count = 1.25, 75
+    plain = pygame.Surface(cam.size)
+    with_hud = pygame.Surface(cam.size)
+    Renderer(cam).draw(plain, world)
+    Renderer(cam).draw(with_hud, world, hud=True)
+    a, b = pygame.surfarray.array3d(plain), pygame.surfarray.array3d(with_hud)
+    changed = np.argwhere(np.any(a != b, axis=2))
+    assert len(changed) > 100 and changed[:, 0].max() < 160 and changed[:, 1].max() < 40
+    assert np.any(np.all(b == np.array(Palette().text), axis=2))
+
+
+def test_legend_names_the_overlays_shown():
+    cam = Camera((0.0, 0.0), 50.0, (400, 300))
+    world = make_world([(circle_shape(1.0), (0.0, 0.0), 0.0, "dynamic")])
+    without = render(world, cam, overlays=Overlays(contacts=True))
+    legend = render(world, cam, overlays=Overlays(contacts=True, legend=True))
+    changed = np.argwhere(np.any(without != legend, axis=2))
+    assert len(changed) > 100 and changed[:, 1].min() > 200 and changed[:, 0].min() < 20
+    swatch = np.all(legend == np.array(Palette().speculative), axis=2)
+    assert np.any(swatch[:, 200:]) and not np.any(swatch[:, :200])
+    nothing = render(world, cam, overlays=Overlays(legend=True))
+    np.testing.assert_array_equal(nothing, render(world, cam))    # no overlay: no legend
+
+
+def test_field_overlay_is_coarse_while_moving_exact_when_still_then_kept(monkeypatch):
+    import sdfphys.render as render_module
+    from sdfphys.render import FIELD_STEP
+
+    calls = []
+    original = render_module.distance_map
+
+    def counted(frames, xs, ys, body=None):
+        calls.append(len(xs))
+        return original(frames, xs, ys, body)
+
+    monkeypatch.setattr(render_module, "distance_map", counted)
+    cam = Camera((0.0, 0.0), 50.0, (200, 120))
+    world = make_world([(circle_shape(1.0), (0.0, 0.0), 0.0, "dynamic")])
+    renderer = Renderer(cam)
+    surface = pygame.Surface(cam.size)
+    overlays = Overlays(field=True)
+    for _ in range(4):
+        renderer.draw(surface, world, overlays)
+    assert calls == [200 // FIELD_STEP, 200]          # coarse, then every pixel, then kept
+    world.position[0] = (0.5, 0.0)
+    renderer.draw(surface, world, overlays)
+    assert calls[-1] == 200 // FIELD_STEP
+
+
+def test_field_colours_per_pixel_match_the_formula():
+    """The table lookup (``_shade``) gives the colours of ``_distance_colours`` to within
+    its 1/32 px steps, at every pixel; blocks interpolate a linear field exactly."""
+    from sdfphys.render import _distance_colours, _field_lut, _shade
+
+    pal, scale, spacing = Palette(), 50.0, 0.25
+    xs = (np.arange(300) + 0.5) / scale - 3.0
+    d = np.add.outer(xs, 0.37 * xs[:200]) * 1.3 + 0.01       # linear: the same slope everywhere
+    lut, q, far = _field_lut(pal, scale, spacing)
+    exact = _distance_colours(d, scale, spacing, pal).astype(int)
+    assert np.abs(_shade(d, 1, 300, 200, lut, q, far, spacing) - exact).max() <= 4
+    coarse = d[1::4, 1::4] + (d[1, 0] - d[0, 0]) * 0.5 + (d[0, 1] - d[0, 0]) * 0.5
+    assert np.abs(_shade(coarse, 4, 300, 200, lut, q, far, spacing)[4:-4, 4:-4]
+                  - exact[4:-4, 4:-4]).max() <= 6

@@ -117,6 +117,42 @@ def test_overrides_set_dotted_keys():
     assert scene.quality == "fast"
 
 
+def test_overrides_name_a_body_by_name_or_index():
+    """The issue: ``--set 'body[1].friction=0.1'`` could not override a body."""
+    for key in ("body.ball.friction", "body[1].friction", "body.1.friction"):
+        scene = read_scene(GOOD, [f"{key}=0.1", "body.blob.shape.field.k=0.3"])
+        assert [b.friction for b in scene.bodies] == [0.5, 0.1, 0.5], key
+    unnamed = copy.deepcopy(GOOD)
+    del unnamed["body"][1]["name"]
+    assert read_scene(unnamed, ["body.body1.restitution=0.5"]).bodies[1].restitution == 0.5
+    assert GOOD["body"][1].get("friction") is None                  # the dict is untouched
+    for key, message in [("body.bal.friction", ("--set body.bal: no body named 'bal' "
+                                                 "(did you mean 'ball'?)")),
+                         ("body[7].friction", "--set body[7]: no such body: the scene has 3"),
+                         ("body.ball", "body.ball: names a whole [[body]]"),
+                         ("body.ball.frction", ("body[1].frction: unknown key (did you mean "
+                                                "'friction'?)"))]:
+        with pytest.raises(SpecError) as err:
+            read_scene(GOOD, [f"{key}=0.1"])
+        assert str(err.value).startswith(f"<scene>: {message}"), str(err.value)
+
+
+@pytest.mark.parametrize("section, hint", [("simulation", "sim"), ("bodies", "body"),
+                                           ("rendering", "render"), ("World", "world")])
+def test_misspelt_sections_get_a_suggestion(section, hint):
+    with pytest.raises(SpecError) as err:
+        read_scene(mutated(section, {}))
+    assert str(err.value).startswith(f"<scene>: {section}: unknown key (did you mean "
+                                     f"'{hint}'?); a scene has version, [world], [sim]")
+
+
+def test_render_hud_is_a_flag():
+    assert read_scene(GOOD).render.hud is False
+    assert read_scene(mutated("render.hud", True)).render.hud is True
+    with pytest.raises(SpecError, match="render.hud: must be true or false"):
+        read_scene(mutated("render.hud", "yes"))
+
+
 def test_scene_file_errors_name_the_file(tmp_path):
     path = tmp_path / "broken.toml"
     path.write_text("version = 1\n[[body]]\nshape = { type = 'circle', radius = 0 }\n")

@@ -124,6 +124,15 @@ def test_unsupported_extension_is_one_clear_line(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_gif_reports_the_frames_and_rate_it_wrote(tmp_path):
+    sink = write(tmp_path / "out.gif", (16, 16), 60, 13)
+    assert (sink.frames, sink.frames_written, sink.fps_written) == (13, 7, 30)
+    frames, _ = imageio_ffmpeg.count_frames_and_secs(str(tmp_path / "out.gif"))
+    assert frames == 7
+    sink = write(tmp_path / "out.mp4", (16, 16), 60, 13)
+    assert (sink.frames_written, sink.fps_written) == (13, 60)
+
+
 def test_missing_parent_directory_is_reported(tmp_path):
     with pytest.raises(SpecError, match="no such directory"):
         open_sink(tmp_path / "nowhere" / "out.mp4", (10, 10), 30)

@@ -59,7 +59,7 @@ for row in range(n):
 scene("pyramid", """
 A pyramid of 210 boxes with a base of 20.
 Shows: many resting contacts solved together; the top box must stay put.
-""", bodies, sim={"duration": 10.0}, render={"center": [0.0, 9.0], "scale": 26.0})
+""", bodies, sim={"duration": 10.0}, render={"center": [0.0, 9.75], "scale": 24.0})
 
 # 3. circles into a box
 random.seed(7)
@@ -246,7 +246,7 @@ Every pair of body kinds (circle, box, concave polygon, SDF) dropped one on the
 other: ten columns, one per pair of kinds.
 Shows: the narrowphase dispatch table: circle-circle, circle-mesh, circle-sdf,
 mesh-mesh, mesh-sdf and sdf-sdf contacts.
-""", bodies, sim={"duration": 4.0}, render={"center": [0.0, 2.5], "scale": 55.0})
+""", bodies, sim={"duration": 4.0}, render={"center": [0.0, 2.5], "scale": 46.0})
 
 # 12. marble run over an SDF landscape
 run = {"op": "smooth_union", "k": 0.3, "of": [
@@ -312,5 +312,5 @@ scene("showcase", """
 Everything at once: a smooth-union terrain, a small pyramid of boxes, analytic
 SDF bodies, bouncing circles and concave polygons.
 Shows: every body kind and pair kind in one scene.
-""", bodies, sim={"duration": 8.0}, render={"center": [0.0, 5.0], "scale": 36.0})
+""", bodies, sim={"duration": 8.0}, render={"center": [0.0, 5.0], "scale": 36.0, "hud": True})
 

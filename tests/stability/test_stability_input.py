@@ -26,12 +26,15 @@ def test_degenerate_input_is_a_spec_error_naming_its_key(name):
 
 
 def test_advance_stops_at_the_first_non_finite_state():
-    """The checker every run relies on: a NaN velocity set after step 1 is reported at step 2."""
+    """The checker every run relies on: a NaN velocity set after step 1 is reported at step 2.
+    (``set_state`` refuses NaN, so the test writes it into the World's storage.)"""
     world = ground_world()
     ball = world.add_body({"type": "circle", "radius": 0.5}, position=(0.0, 2.0))
     steps = advance(world, 10)
     assert next(steps) == 1
-    world.set_state(ball, velocity=(np.nan, 0.0))
+    with pytest.raises(sdfphys.SpecError, match="velocity"):
+        world.set_state(ball, velocity=(np.nan, 0.0))
+    world._data["velocity"][ball] = (np.nan, 0.0)
     with pytest.raises(NonFiniteState, match="body 1"):
         next(steps)
 
