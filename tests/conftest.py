@@ -1,5 +1,12 @@
+import os
+
 import numpy as np
 import pytest
+
+# The first-run compile notice goes to stderr whenever a kernel compiles; which test
+# compiles what depends on the order, so the suite (and its subprocesses) runs quiet.
+# tests/test_numba_cache.py turns it back on where it tests it.
+os.environ["SDFPHYS_COMPILE_NOTICE"] = "0"
 
 
 def pytest_addoption(parser):
