@@ -1,7 +1,7 @@
 """Every accuracy knob in one place, with its unit, effect, default and valid range.
 
 The defaults are the ``balanced`` preset (Box2D v3's soft-step defaults, see
-SOLVER.md). A scene's ``[sim]`` table and ``--set`` override any knob by name;
+docs/solver.md). A scene's ``[sim]`` table and ``--set`` override any knob by name;
 ``Settings.check(name, value, path)`` validates one value and names the key path
 in its error, as the scene loader reports errors. ``Settings.table()`` lists every
 knob (the README and ``sdfphys bench`` print it).

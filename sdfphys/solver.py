@@ -1,4 +1,4 @@
-"""The soft-step contact solver: Box2D v3's design (SOLVER.md), one numba sweep per phase.
+"""The soft-step contact solver: Box2D v3's design (docs/solver.md), one numba sweep per phase.
 
 One step, as ``World.step`` runs it:
 
@@ -25,7 +25,7 @@ impulses are per substep (N s): the warm start applies them once per substep.
 
 The sweeps are sequential Gauss-Seidel loops over the contacts in their given order
 (sorted by (body_a, body_b, feature): deterministic), compiled with numba
-(``cache=True``); SOLVER.md measures why this beats coloured numpy batches. Static and
+(``cache=True``); docs/solver.md measures why this beats coloured numpy batches. Static and
 kinematic bodies take part through their zero inverse mass and inertia: impulses leave
 them unchanged.
 
@@ -40,11 +40,11 @@ impulse pair is then equal, opposite and collinear, so linear and angular moment
 conserved to round-off. Against a static or kinematic body (ma = 0) the movable body
 keeps Box2D's fixed anchor exactly (the immovable arm does no work); between two
 dynamic bodies the lighter keeps its anchor best. The effective masses stay those
-prepared from the first anchors (SOLVER.md: prepared once); the arms move by the
+prepared from the first anchors (docs/solver.md: prepared once); the arms move by the
 bodies' relative displacement within one step, which changes the iteration's step size
 a little and leaves every impulse pair, hence the momenta, exact.
 
-Separation. SOLVER.md re-measures s from anchors carried by the bodies' rotations and
+Separation. docs/solver.md re-measures s from anchors carried by the bodies' rotations and
 translations. Box2D turns the contact point (midway between the surfaces) with each
 body, which is exact while the gap is small (its speculative distance is 2 cm). Here a
 fast body's speculative contacts reach up to two bounding radii (``sdfphys.collide``),
@@ -104,7 +104,7 @@ __all__ = [
 # where 1 - mass_scale = a3 = impulse_scale. As in Box2D the position part is capped:
 #     bias = max(mass_scale bias_rate s, -max_push_out),
 #     d_lambda = -m (mass_scale vn + bias) - impulse_scale lambda_0.
-# Unit values (SOLVER.md): f=30, z=10, h=1/240 -> 9.069 /s, 0.9423, 0.0577.
+# Unit values (docs/solver.md): f=30, z=10, h=1/240 -> 9.069 /s, 0.9423, 0.0577.
 # --------------------------------------------------------------------------------------
 
 

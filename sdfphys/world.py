@@ -351,7 +351,7 @@ class World:
     # ----------------------------------------------------------------------------------
 
     def step(self) -> None:
-        """Advance the world by ``settings.dt`` (SOLVER.md, "One step").
+        """Advance the world by ``settings.dt`` (docs/solver.md, "One step").
 
         Stages: collide once; prepare the contact rows (warm start matched by feature
         key); the substeps (each: integrate velocities, warm start, solve, integrate

@@ -54,7 +54,7 @@ def resting_depth(settings):
 
     With the warm-started impulse l = m g h per substep, the biased solve leaves l
     unchanged when m mass_scale bias_rate (-s) = impulse_scale m g h, so
-    s = -impulse_scale g h / (mass_scale bias_rate) (SOLVER.md's soft step).
+    s = -impulse_scale g h / (mass_scale bias_rate) (docs/solver.md's soft step).
     """
     _, stiff = contact_softness(settings)
     h = settings.dt / settings.substeps

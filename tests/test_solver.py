@@ -65,7 +65,7 @@ def step(state: BodyState, contacts: Contacts, settings: Settings, gravity=G,
 
 
 # ---------------------------------------------------------------------------------------
-# Soft constraint coefficients (SOLVER.md unit values, given to 4 significant digits).
+# Soft constraint coefficients (docs/solver.md unit values, given to 4 significant digits).
 # ---------------------------------------------------------------------------------------
 
 

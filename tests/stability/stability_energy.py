@@ -36,7 +36,7 @@ from sdfphys.world import World
 #: Energy never rises above its start by more than this fraction.
 ENERGY_MARGIN = Bound(0.01, "", "1 % of the initial energy: a passive scene gains none")
 #: Overlap is removed no faster than the push-out cap.
-PUSH_OUT = Bound(SETTINGS.max_push_out, "m/s", "Settings.max_push_out (SOLVER.md: 3 m/s)")
+PUSH_OUT = Bound(SETTINGS.max_push_out, "m/s", "Settings.max_push_out (docs/solver.md: 3 m/s)")
 #: Once the overlap is gone the motion dies out.
 DECAYS = Bound(0.01, "", "kinetic energy over the last second below 1 % of its peak")
 #: A perfectly elastic ball never rises above where it was dropped.

@@ -55,7 +55,7 @@ def soft_sink(light: float, heavy: float, gravity: float = G) -> float:
     under the plain soft step (without load stiffening, which divides it by the light
     box's load ratio, (heavy + light) / light: solver.row_softness).
 
-    The soft step (solver.contact_softness, SOLVER.md) makes each contact point a
+    The soft step (solver.contact_softness, docs/solver.md) makes each contact point a
     spring of stiffness m_eff w^2, m_eff the point's effective mass along the normal and
     w = 2 pi f (f = contact_hertz, doubled against the static ground), whatever load it
     carries. A unit box's corner has lever arm 0.5 across the normal and inertia m / 6,
