@@ -86,9 +86,11 @@ class Settings:
         "or a loaded body (they stop once converged); 1: one pass, as elsewhere.",
         low=1, high=1024)
     rest_iterations: int = _knob(
-        64, "", "Solver passes per substep, at most, over loaded islands larger than "
+        16, "", "Solver passes per substep, at most, over loaded islands larger than "
         "stiff_island_limit that are at rest (rest_island_limit); after them the smaller "
-        "loaded islands go on alone up to stiff_iterations.", low=1, high=1024)
+        "loaded islands go on alone up to stiff_iterations. A base-20 pyramid: 16 moves "
+        "its top 4.08 mm in 5 s at 15.7 extra passes a step, 64 4.09 mm at 29.2.",
+        low=1, high=1024)
     stiff_island_limit: int = _knob(
         64, "", "Largest island (dynamic bodies in contact) that load stiffening and "
         "the extra passes treat (islands at rest: rest_island_limit); larger ones keep "
