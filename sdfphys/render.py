@@ -17,10 +17,11 @@ Frames and units:
   ``SPRITE_TOLERANCE`` px since the last frame (static bodies, bodies at rest) are
   reused.
 - Colours (``Palette``, ``body_colours``): by body state (``body_frames``: dynamic,
-  static, kinematic) and material. Dynamic bodies take a hue per material (friction,
-  restitution, density; in order of first appearance), static ones a grey and
-  kinematic ones an amber per material, and bodies of one colour alternate between
-  lighter and darker shades in scene order, so neighbours in a stack differ.
+  static, kinematic, asleep) and material. Dynamic bodies take a hue per material
+  (friction, restitution, density; in order of first appearance), asleep ones the same
+  hue faded toward grey, static ones a grey and kinematic ones an amber per material,
+  and bodies of one colour alternate between lighter and darker shades in scene order,
+  so neighbours in a stack differ.
 - Overlays (``Overlays``): contact points and normals, the SDF distance map
   with iso-lines at screen resolution (one body's field or the union of all; kept
   while no body moves), body bounds, and a legend of those shown. ``hud`` prints the
@@ -45,15 +46,15 @@ from .collide.broadphase import world_bounds
 from .sdf import compiled
 from .sdf.compiled import run, scratch
 
-__all__ = ["DYNAMIC", "KINEMATIC", "SPRITE_TOLERANCE", "STATIC", "BodyFrames", "Camera",
+__all__ = ["ASLEEP", "DYNAMIC", "KINEMATIC", "SPRITE_TOLERANCE", "STATIC", "BodyFrames", "Camera",
            "Overlays", "Palette", "Renderer", "body_colours", "body_frames", "draw_panel",
            "font"]
 
 Color = tuple[int, int, int]
 
 #: Body state codes used by the renderer (``BodyFrames.state``); the colours of each
-#: are ``Palette.fills[state]``.
-DYNAMIC, STATIC, KINEMATIC = 0, 1, 2
+#: are ``Palette.fills[state]``. ASLEEP: a dynamic body of a sleeping island.
+DYNAMIC, STATIC, KINEMATIC, ASLEEP = 0, 1, 2, 3
 _MOTION_NAMES = {"dynamic": DYNAMIC, "static": STATIC, "kinematic": KINEMATIC}
 #: Golden ratio conjugate: the shade of the k-th body of a colour is frac(k * this), so
 #: consecutive bodies (and most bodies a row apart) get clearly different shades.
@@ -117,14 +118,17 @@ class Palette:
 
     Bodies (``body_colours``): ``dynamic`` is the first material's hue, ``materials``
     the next ones; ``static`` and ``kinematic`` are lightened or darkened by
-    ``material_shade`` per further material; the k-th body of a colour is darkened by
-    ``shade`` times frac(k 0.618) (0 for the first).
+    ``material_shade`` per further material; an asleep body takes its material's dynamic
+    hue mixed ``asleep_fade`` of the way toward ``asleep``; the k-th body of a colour is
+    darkened by ``shade`` times frac(k 0.618) (0 for the first).
     """
 
     background: Color = (22, 24, 30)
     dynamic: Color = (88, 156, 226)
     static: Color = (128, 132, 140)
     kinematic: Color = (226, 172, 72)
+    asleep: Color = (104, 108, 120)
+    asleep_fade: float = 0.6
     materials: tuple[Color, ...] = ((222, 104, 118), (172, 126, 224), (86, 200, 200),
                                     (206, 196, 96), (226, 136, 196), (200, 160, 124),
                                     (120, 190, 110))
@@ -142,9 +146,11 @@ class Palette:
     panel: Color = (44, 48, 58)
 
     @cached_property
-    def fills(self) -> tuple[Color, Color, Color]:
-        """Base fill colours indexed by state (``DYNAMIC``, ``STATIC``, ``KINEMATIC``)."""
-        return self.dynamic, self.static, self.kinematic
+    def fills(self) -> tuple[Color, Color, Color, Color]:
+        """Base fill colours indexed by state (``DYNAMIC``, ``STATIC``, ``KINEMATIC``,
+        ``ASLEEP``: the first material's asleep colour)."""
+        return (self.dynamic, self.static, self.kinematic,
+                tuple(int(c) for c in self.material_fill(ASLEEP, 0)))
 
     @cached_property
     def edges(self) -> tuple[Color, ...]:
@@ -153,9 +159,12 @@ class Palette:
 
     def material_fill(self, state: int, material: int) -> np.ndarray:
         """(3,) float RGB of the first body of ``state`` with the ``material``-th material."""
-        if state == DYNAMIC:
+        if state in (DYNAMIC, ASLEEP):
             hues = (self.dynamic, *self.materials)
-            return np.array(hues[material % len(hues)], np.float64)
+            hue = np.array(hues[material % len(hues)], np.float64)
+            if state == DYNAMIC:
+                return hue
+            return hue + (np.array(self.asleep, np.float64) - hue) * self.asleep_fade
         base = np.array(self.fills[state], np.float64)
         if material == 0:
             return base
@@ -195,7 +204,7 @@ class BodyFrames:
     com: (B, 2) centre of mass, world m (the origin of the shape's body frame).
     angle: (B,) rad, counter-clockwise. motion: (B,) DYNAMIC | STATIC | KINEMATIC.
     shape_id: (B,) index into ``shapes``. state: (B,) the state a body is coloured by
-    (its motion; an asleep state is one more code, ``Palette.fills`` one more colour).
+    (its motion, or ASLEEP for a dynamic body of a sleeping island).
     material: (B,) index of the body's material (friction, restitution, density), in
     order of first appearance.
     """
@@ -284,7 +293,10 @@ def body_frames(world: Any) -> BodyFrames:
         motion = np.array([_MOTION_NAMES[str(k)] for k in kind], dtype=np.int64)
     else:
         motion = kind.astype(np.int64)
-    state = motion     # asleep bodies will take a code of their own here
+    state = motion.copy()
+    asleep = getattr(world, "asleep", None)
+    if asleep is not None:
+        state[np.asarray(asleep, bool).reshape(-1) & (motion == DYNAMIC)] = ASLEEP
     return BodyFrames(com, angle, motion, shape_id, shapes, state,
                       _materials(world, shape_id, shapes, state))
 

@@ -485,8 +485,7 @@ def test_bodies_of_other_materials_differ_and_neighbours_too():
 
 
 def test_colours_follow_a_per_body_state():
-    """The colouring reads ``BodyFrames.state``, not the body kind: a state of its own
-    (asleep, once sleeping exists) needs one more entry in ``Palette.fills``."""
+    """The colouring reads ``BodyFrames.state``, not the body kind."""
     from sdfphys.render import STATIC, body_colours
 
     box = box_shape(1.0, 1.0)
@@ -564,3 +563,27 @@ def test_field_colours_per_pixel_match_the_formula():
     coarse = d[1::4, 1::4] + (d[1, 0] - d[0, 0]) * 0.5 + (d[0, 1] - d[0, 0]) * 0.5
     assert np.abs(_shade(coarse, 4, 300, 200, lut, q, far, spacing)[4:-4, 4:-4]
                   - exact[4:-4, 4:-4]).max() <= 6
+
+
+def test_asleep_bodies_take_their_material_hue_faded():
+    """A World's sleeping bodies are drawn ASLEEP: their dynamic hue mixed toward the
+    palette's asleep grey; awake ones keep the hue (a real World, settled to sleep)."""
+    from sdfphys.render import ASLEEP, DYNAMIC, body_colours
+    from sdfphys.world import World
+
+    world = World()
+    world.add_body({"type": "box", "size": [20.0, 1.0]}, position=(0.0, -0.5), kind="static")
+    world.add_body({"type": "box", "size": [1.0, 1.0]}, position=(-2.0, 0.5))
+    world.add_body({"type": "box", "size": [1.0, 1.0]}, position=(2.0, 0.5))
+    for _ in range(60):
+        world.step()
+    assert world.asleep[1:].all()
+    world.set_state(2, velocity=(0.0, 0.0))             # wakes the second box only
+    frames = body_frames(world)
+    assert frames.state.tolist() == [1, ASLEEP, DYNAMIC]
+    pal = Palette()
+    colours = body_colours(frames, pal)
+    hue, grey = np.array(pal.dynamic, float), np.array(pal.asleep, float)
+    np.testing.assert_allclose(colours[1], hue + (grey - hue) * pal.asleep_fade, atol=0.5)
+    assert tuple(colours[2]) != tuple(colours[1])
+    assert pal.fills[ASLEEP] == tuple(int(c) for c in hue + (grey - hue) * pal.asleep_fade)
