@@ -57,7 +57,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..sdf import safe_normalize
+from ..sdf import compiled, safe_normalize
 from ..sdf.base import Field
 from ..sdf.operators import Scale, Transform
 from ..sdf.polygonal import HalfPlane
@@ -143,11 +143,12 @@ def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray
     circle), point = c - (d + r)/2 g (midway between b's surface point c - d g and
     the circle's surface point c - r g), in the world. Exact for exact fields;
     inside b, g is the direction to b's nearest boundary point, as pymunk's
-    circle-polygon (least-penetrating face).
+    circle-polygon (least-penetrating face). f_b runs as its compiled program
+    (``sdf.compiled.evaluate``; the numpy field where it does not compile).
     """
     r = circle_a.radius
     centre = _to_local(pose_a[:, :2], pose_b)
-    d, g = shape_b.field.evaluate(centre)
+    d, g = compiled.evaluate(shape_b.field, centre)
     depth = r - d
     keep = depth > -margin
     g_world = _rotate(safe_normalize(g[keep]), pose_b[keep, 2])
