@@ -16,7 +16,8 @@ except _metadata.PackageNotFoundError:              # a source tree that was nev
 _numba_cache.install()      # before any kernel is defined: caches follow the whole package
 
 from . import sdf  # noqa: E402
-from .collide import Contacts, collide  # noqa: E402
+from . import collide  # noqa: E402  (the subpackage, callable: collide.collide)
+from .collide import Contacts  # noqa: E402
 from .errors import SpecError  # noqa: E402
 from .scene import load_scene, read_scene  # noqa: E402
 from .settings import Settings, preset  # noqa: E402

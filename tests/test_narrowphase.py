@@ -548,3 +548,20 @@ def test_a_spike_tip_in_a_notch_is_found_at_its_exact_depth():
     deepest = -arrow.field.distance(inside).min()
     assert deepest > 0.04
     assert len(c) > 0 and c.depth.max() == pytest.approx(deepest, abs=1e-3)
+
+
+def test_sdfphys_collide_is_the_subpackage_and_callable():
+    """``import sdfphys.collide`` reaches the subpackage (no function shadows it), and
+    ``sdfphys.collide(...)`` is still the two-shape query of the API."""
+    import importlib
+    import types
+
+    import sdfphys
+
+    module = importlib.import_module("sdfphys.collide")
+    assert isinstance(module, types.ModuleType) and module is sdfphys.collide
+    assert module.find_contacts is find_contacts
+    c = sdfphys.collide(BALL, (0.0, 0.0, 0.0), BALL, (1.01, 0.0, 0.0), margin=0.1)
+    expected = collide(BALL, (0.0, 0.0, 0.0), BALL, (1.01, 0.0, 0.0), margin=0.1)
+    np.testing.assert_array_equal(c.depth, expected.depth)
+    np.testing.assert_array_equal(c.point, expected.point)

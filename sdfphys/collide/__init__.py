@@ -48,6 +48,8 @@ the speculative distance alone.
 
 from __future__ import annotations
 
+import sys
+import types
 from collections.abc import Sequence
 from typing import Any
 
@@ -301,3 +303,18 @@ def collide(shape_a: Any, pose_a: Sequence[float], shape_b: Any, pose_b: Sequenc
     distinct, canonical = _distinct(shapes)
     return _narrowphase(distinct, canonical, np.array([[0, 1]], np.int64), pose,
                         float(margin), np.zeros(2), settings)
+
+
+class _CollideModule(types.ModuleType):
+    """This subpackage, callable as ``collide``: ``sdfphys.collide(shape_a, pose_a, shape_b,
+    pose_b)`` is the documented API (DESIGN's contract), and ``import sdfphys.collide``,
+    ``from sdfphys.collide import find_contacts`` reach the subpackage, not a function
+    that shadows it."""
+
+    def __call__(self, shape_a: Any, pose_a: Sequence[float], shape_b: Any,
+                 pose_b: Sequence[float], margin: float = 0.0,
+                 settings: Settings | None = None) -> Contacts:
+        return collide(shape_a, pose_a, shape_b, pose_b, margin, settings)
+
+
+sys.modules[__name__].__class__ = _CollideModule
