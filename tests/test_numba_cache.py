@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 import sdfphys
-import sdfphys.solver as solver
+import sdfphys.solver.substeps as solver
 from sdfphys import _numba_cache
 
 
@@ -85,7 +85,7 @@ def test_functions_outside_the_package_keep_numba_s_locators():
 
 SCRIPT = """
 import numpy as np
-import sdfphys.solver as s
+import sdfphys.solver.substeps as s
 from sdfphys.collide import _compiled_descent as d
 s._any_below(np.zeros(1), 0.0)
 d.merge_minima(np.zeros((1, 2, 2)), 1e-6)

@@ -12,7 +12,6 @@ import pytest
 
 from sdfphys.collide.contacts import Contacts
 from sdfphys.settings import Settings
-from sdfphys.world import World
 from sdfphys.solver import (
     BodyState,
     ImpulseCache,
@@ -23,6 +22,7 @@ from sdfphys.solver import (
     solve_substeps,
     store_impulses,
 )
+from sdfphys.world import World
 
 G = np.array([0.0, -9.81])
 
@@ -512,7 +512,7 @@ def test_twenty_base_pyramid_stands_twenty_seconds_with_exact_contacts():
 
 def test_rotation_per_substep_is_capped_at_a_quarter_turn():
     """Box2D v3's cap: |w| h <= pi / 4 (a faster spin is clamped, slower ones untouched)."""
-    from sdfphys.solver import MAX_ROTATION, _integrate_positions
+    from sdfphys.solver.substeps import MAX_ROTATION, _integrate_positions
 
     h = 1.0 / 240.0
     com = np.zeros((3, 2))

@@ -1,0 +1,285 @@
+"""Soft contact rows and loaded islands: the coefficients each contact row is solved with.
+
+``soft_coefficients`` / ``contact_softness``: Box2D v3's soft step (Catto, "Soft
+Constraints", GDC 2011; ``b2MakeSoft``), derived below. ``row_softness``: the per-row
+coefficients with load stiffening, and which islands get converged passes ("Loaded
+islands" below).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numba import njit
+
+from ..islands import island_roots
+from ..settings import Settings
+
+if TYPE_CHECKING:
+    from .rows import ContactConstraints
+
+__all__ = ["CONVERGED", "LOADED", "MASS_RATIO", "REST_SPEED", "Softness", "contact_softness",
+           "row_softness", "soft_coefficients"]
+
+
+# --------------------------------------------------------------------------------------
+# Soft constraint coefficients (Catto, "Soft Constraints" GDC 2011; Box2D v3 b2MakeSoft).
+#
+# Treat a constraint C (here the separation s) as a spring-damper of the effective mass
+# m: stiffness k = m w^2, damping c = 2 m z w, w = 2 pi f. One implicit Euler substep h,
+# with C2 = C1 + h v2 and impulse lambda = m (v2 - v1):
+#     m (v2 - v1) = -h k (C1 + h v2) - h c v2.
+# Divide by m, write a1 = 2 z + h w and a2 = h w a1 = 2 h z w + h^2 w^2:
+#     (v2 - v1) (1 + a2) = -a2 v1 - h w^2 C1
+#     v2 - v1 = -(a2 / (1 + a2)) (v1 + (w / a1) C1).
+# So with bias_rate = w / a1, mass_scale = a2 a3 and a3 = 1 / (1 + a2):
+#     lambda = -m mass_scale (v1 + bias_rate C1).
+# In an iterative solver v is the velocity that already contains the accumulated
+# impulse lambda_0 of this row; the free velocity is v - lambda_0 / m, and the increment
+# that makes the total equal the formula above is
+#     d_lambda = -m mass_scale (vn + bias_rate C) - (1 - mass_scale) lambda_0,
+# where 1 - mass_scale = a3 = impulse_scale. As in Box2D the position part is capped:
+#     bias = max(mass_scale bias_rate s, -max_push_out),
+#     d_lambda = -m (mass_scale vn + bias) - impulse_scale lambda_0.
+# Unit values (docs/solver.md): f=30, z=10, h=1/240 -> 9.069 /s, 0.9423, 0.0577.
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Softness:
+    """Coefficients of a soft constraint for one substep (see the derivation above).
+
+    bias_rate: 1/s, the fraction of the separation removed per second of velocity bias.
+    mass_scale, impulse_scale: dimensionless, mass_scale + impulse_scale = 1.
+    """
+
+    bias_rate: float
+    mass_scale: float
+    impulse_scale: float
+
+
+def soft_coefficients(hertz: float, damping_ratio: float, h: float) -> Softness:
+    """The soft constraint of stiffness ``hertz`` (Hz) and ``damping_ratio`` for substep ``h`` (s).
+
+    ``hertz == 0`` gives a rigid constraint (no bias, mass_scale 1, impulse_scale 0).
+    """
+    if hertz == 0.0:
+        return Softness(0.0, 1.0, 0.0)
+    omega = 2.0 * math.pi * hertz
+    a1 = 2.0 * damping_ratio + h * omega
+    a2 = h * omega * a1
+    a3 = 1.0 / (1.0 + a2)
+    return Softness(omega / a1, a2 * a3, a3)
+
+
+def contact_softness(settings: Settings) -> tuple[Softness, Softness]:
+    """(between two movable bodies, against a static or kinematic body) for ``settings``.
+
+    The contact hertz is capped at 0.25 x the substep rate (a stiffer spring than the
+    substep can resolve would ring); contacts against an infinite mass use twice the
+    capped hertz, so that piles are not pushed into the ground (Box2D v3).
+    """
+    h = settings.dt / settings.substeps
+    hertz = min(settings.contact_hertz, 0.25 / h)
+    return (soft_coefficients(hertz, settings.contact_damping_ratio, h),
+            soft_coefficients(2.0 * hertz, settings.contact_damping_ratio, h))
+
+
+# --------------------------------------------------------------------------------------
+# Loaded islands: heavy loads on light bodies.
+#
+# The soft row above is a spring of stiffness m w^2 for the row's effective mass m, whatever
+# it carries, so a load F sinks F / (m w^2): a 1 kg unit box under a 100 kg one sags
+# 43.5 mm at rest (30 Hz), under 1000 kg it is crushed, and a 20-box stack, whose
+# interfaces are rotational springs of the same stiffness, buckles (Greenhill). Stiffer
+# rows alone do not help: Gauss-Seidel on a light body between a heavy one and the ground
+# removes only about m / M of the heavy body's error per pass, and stiff rows that are not
+# converged squeeze the light body out sideways (measured: 100:1 and the 300:1 pyramid
+# collapse with stiffened rows and one pass). So, only in islands that need it, both:
+#
+# 1. Load stiffening (``Settings.load_stiffening``). Body i's load P_i is the sum of the
+#    downward (along gravity) components of the normal impulses other dynamic bodies
+#    push it with, from the warm start (last step's accumulated impulses, per substep),
+#    and r_i = 1 + P_i / (m_i |g| h) the weights it carries (1: its own; the ground's
+#    reaction does not count, so a box that lands alone is not loaded by its impact).
+#    A row of a pair in a loaded island uses
+#    r = max(r_a, r_b) (dynamic bodies) and the spring and damper of effective mass r m:
+#    k' = r m w^2 and c' = 2 r m z w, that is the soft coefficients for w' = w sqrt(r)
+#    and z' = z sqrt(r) (divide the implicit update by m). Every loaded body then sags
+#    as much as under its own weight alone.
+# 2. Convergence (``Settings.stiff_iterations``): after the solve and after the relax
+#    passes of each substep, the pairs of loaded islands get more passes, until the
+#    largest normal impulse change of a pass is at most CONVERGED times the largest
+#    accumulated normal impulse.
+#
+# An island is the set of dynamic bodies connected by contacts between dynamic bodies
+# (``islands``: static, kinematic and sleeping bodies do not join). It is loaded if it
+# has at most ``Settings.stiff_island_limit`` dynamic bodies, or at most
+# ``Settings.rest_island_limit``
+# if none of its rows is deeper than ``Settings.soft_depth`` at the start of the step
+# (it is not pushing out overlap: ``substeps``, "Split push-out"), and two touching bodies whose masses
+# differ by MASS_RATIO or more, or (with load stiffening) a body carrying more than
+# LOADED times its weight. Larger islands (piles of thousands of circles) and large
+# islands pushing out overlap keep one pass per substep, so their cost does not grow,
+# and load stiffening counts at most ``Settings.large_island_load_cap`` weights there:
+# rows stiffer than that need the converged passes. Why two limits (measured, default
+# settings): a base-40 pyramid (820 boxes) with one pass sags under its 40 layers, the
+# top 6.3 cm in 2 s; converged it moves 8.7 mm, at the same step time (58 ms, most of it
+# collision). 625 circles packed 0.2 m deep (one island of split rows) converged are
+# pushed out at 6.6 m/s instead of 1.6, at 12 times the cost: stiffened, converged rows
+# in a jam store what the split push-out keeps out of the velocities. The cap, measured
+# (before rest_island_limit) on a base-20 pyramid of 210 unit boxes with exact box
+# contacts and one pass per substep (tests/test_solver.py), top box moved in 20 s:
+# 3.3 cm unstiffened, 1.8 cm with a cap of 2, 1.2 cm with 3, 8.3 cm and drifting with
+# 4; with sdfphys' own contacts 41 cm uncapped. The cap is 2, half the unstable value.
+# The 5,000-circle pile of tools/bench_vs_peers.py: deepest overlap 0.114 -> 0.050 m
+# with it. Bodies
+# carrying only their own weight keep contact_softness's coefficients, bit for bit,
+# and no extra pass runs.
+#
+# Measured (tools/stability_report.py, default settings): heavy box sink 100:1
+# 62 -> 1.3 mm, 1000:1 crushed -> 15 mm, 400 kg dropped on two 1 kg boxes 218 -> 1.7 mm,
+# base-5 pyramid under a 300 kg top box 113 -> 1.1 mm, a 20-box stack stands 30 s
+# (top 1.3 cm; it buckled before).
+# --------------------------------------------------------------------------------------
+
+#: Touching dynamic bodies whose masses differ by this factor make their island loaded.
+MASS_RATIO = 4.0
+#: A body carrying more than this many times its own weight makes its island loaded.
+LOADED = 1.25
+#: Extra passes stop when the largest impulse change is this fraction of the largest impulse.
+CONVERGED = 1e-4
+#: An island with a body faster than this (m/s; |v|^2 + |w r|^2 at the start of the step,
+#: r its bounding radius) is not at rest: rest_island_limit does not apply to it.
+REST_SPEED = 0.5
+
+
+@njit(cache=True)
+def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_impulse, stiff,
+                         up, weight_impulse, omega, zeta, h, base_bias_rate, base_mass_scale,
+                         base_impulse_scale, stiffen, limit, large_cap, bias_rate, mass_scale,
+                         impulse_scale, loaded_pairs, small, separation, soft_depth,
+                         rest_limit, moving):
+    """Fill the per-row coefficients (K,) and the loaded pairs; returns their count.
+
+    weight_impulse: |g| h, the impulse per substep that carries 1 kg (0: no gravity, no
+    load stiffening). omega: rad/s, the capped base stiffness (doubled for stiff rows).
+    base_*: (2,) contact_softness's coefficients, [movable, static], used where r = 1.
+    limit: largest loaded island (dynamic bodies); rest_limit: the same for islands with
+    no row deeper than soft_depth (m; separation (K,) at the start of the step);
+    large_cap: the most weights counted in larger islands, which get no extra pass.
+    small: (P,) bool, filled per loaded pair: its island has at most ``limit`` bodies
+    (the others are islands at rest up to rest_limit). moving: (B,) bool, bodies
+    faster than REST_SPEED (their islands are not at rest).
+    """
+    nb = inv_mass.shape[0]
+    n_pairs = pair_start.shape[0] - 1
+    ratio = np.ones(nb)
+    if stiffen and weight_impulse > 0.0:
+        for k in range(body_a.shape[0]):
+            a = body_a[k]
+            b = body_b[k]
+            # The impulse pushes b along +n and a along -n; count the push down, from a
+            # dynamic body only (the ground's reaction is not a load).
+            lift = normal_impulse[k] * (normal[k, 0] * up[0] + normal[k, 1] * up[1])
+            if lift < 0.0 and inv_mass[a] > 0.0:
+                ratio[b] -= lift * inv_mass[b] / weight_impulse
+            elif lift > 0.0 and inv_mass[b] > 0.0:
+                ratio[a] += lift * inv_mass[a] / weight_impulse
+    root = island_roots(inv_mass, body_a, body_b)
+    size = np.zeros(nb, np.int64)
+    hot = np.zeros(nb, np.bool_)
+    for i in range(nb):
+        if inv_mass[i] > 0.0:
+            size[root[i]] += 1
+            if ratio[i] > LOADED:
+                hot[root[i]] = True
+    # An island pushing out overlap deeper than soft_depth (split rows), or with a body
+    # faster than REST_SPEED, is not at rest.
+    largest = np.full(nb, max(limit, rest_limit), np.int64)
+    for i in range(nb):
+        if inv_mass[i] > 0.0 and moving[i]:
+            largest[root[i]] = limit
+    for k in range(body_a.shape[0]):
+        if separation[k] < -soft_depth:
+            for i in (body_a[k], body_b[k]):
+                if inv_mass[i] > 0.0:
+                    largest[root[i]] = limit
+    for p in range(n_pairs):
+        a = body_a[pair_start[p]]
+        b = body_b[pair_start[p]]
+        ma = inv_mass[a]
+        mb = inv_mass[b]
+        if ma > 0.0 and mb > 0.0 and (ma >= MASS_RATIO * mb or mb >= MASS_RATIO * ma):
+            hot[root[a]] = True
+    count = 0
+    for p in range(n_pairs):
+        first = pair_start[p]
+        a = body_a[first]
+        b = body_b[first]
+        hot_a = inv_mass[a] > 0.0 and hot[root[a]] and size[root[a]] <= largest[root[a]]
+        hot_b = inv_mass[b] > 0.0 and hot[root[b]] and size[root[b]] <= largest[root[b]]
+        r = 1.0
+        if inv_mass[a] > 0.0:
+            r = ratio[a] if hot_a else min(ratio[a], large_cap)
+        if inv_mass[b] > 0.0:
+            r = max(r, ratio[b] if hot_b else min(ratio[b], large_cap))
+        if hot_a or hot_b:
+            loaded_pairs[count] = p
+            small[count] = ((not hot_a or size[root[a]] <= limit)
+                            and (not hot_b or size[root[b]] <= limit))
+            count += 1
+        for k in range(first, pair_start[p + 1]):
+            j = stiff[k]
+            if r == 1.0:
+                bias_rate[k] = base_bias_rate[j]
+                mass_scale[k] = base_mass_scale[j]
+                impulse_scale[k] = base_impulse_scale[j]
+            else:
+                root_r = math.sqrt(r)
+                w = omega * (2.0 if j else 1.0) * root_r
+                a1 = 2.0 * zeta * root_r + h * w
+                a2 = h * w * a1
+                a3 = 1.0 / (1.0 + a2)
+                bias_rate[k] = w / a1
+                mass_scale[k] = a2 * a3
+                impulse_scale[k] = a3
+    return count
+
+
+def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity: np.ndarray,
+                 settings: Settings, moving: np.ndarray | None = None
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per-row soft coefficients and the loaded islands' pairs (see the section above).
+
+    inv_mass: (B,) 1/kg. Returns bias_rate (K,) 1/s, mass_scale (K,), impulse_scale (K,),
+    loaded_pairs (L,) int64, indices into ``constraints.pair_start`` in order, and
+    small (L,) bool: the pair's loaded island has at most ``stiff_island_limit``
+    bodies (else it is at rest, up to ``rest_island_limit``). moving: (B,) bool, the
+    bodies faster than REST_SPEED at the start of the step (None: none).
+    """
+    c = constraints
+    k = len(c.feature)
+    soft, stiff = contact_softness(settings)
+    h = settings.dt / settings.substeps
+    g = float(np.hypot(gravity[0], gravity[1]))
+    up = -gravity / g if g > 0.0 else np.zeros(2)
+    bias_rate, mass_scale, impulse_scale = np.empty(k), np.empty(k), np.empty(k)
+    loaded_pairs = np.empty(max(len(c.pair_start) - 1, 0), np.int64)
+    small = np.empty(len(loaded_pairs), np.bool_)
+    count = _row_softness_kernel(
+        inv_mass, c.body_a, c.body_b, c.pair_start, c.normal, c.normal_impulse, c.stiff, up,
+        g * h, 2.0 * math.pi * min(settings.contact_hertz, 0.25 / h),
+        settings.contact_damping_ratio, h,
+        np.array([soft.bias_rate, stiff.bias_rate]), np.array([soft.mass_scale, stiff.mass_scale]),
+        np.array([soft.impulse_scale, stiff.impulse_scale]), settings.load_stiffening,
+        settings.stiff_island_limit, settings.large_island_load_cap, bias_rate, mass_scale,
+        impulse_scale, loaded_pairs, small, c.separation, settings.soft_depth,
+        settings.rest_island_limit, np.zeros(len(inv_mass), np.bool_) if moving is None
+        else moving)
+    return bias_rate, mass_scale, impulse_scale, loaded_pairs[:count], small[:count]
+
+

@@ -1,0 +1,571 @@
+"""Substeps: integration, warm start, the solve and relax sweeps, restitution.
+
+``solve_substeps`` runs every substep of a step in one compiled call
+(``_substeps_kernel``): integrate velocities, warm start, solve with soft bias (the
+loaded islands' converged passes, the split push-out), integrate positions, re-measure
+the separations, relax. ``apply_restitution`` runs the restitution passes after them.
+
+Anchors. Box2D v3 keeps each contact's anchors ra, rb (the contact point relative to
+each centre of mass, in world orientation) fixed over the step, which is right for the
+body the contact point travels with (a circle rolling on the ground keeps its contact
+under its centre) but lets an impulse pair act at two world points that drift apart by
+the bodies' relative displacement D = dp_b - dp_a, changing the total angular momentum
+by D x P per impulse. Here, after each position update, the anchors are re-based to
+one common world point, p = x_a + ra0 + mb / (ma + mb) D (ma, mb inverse masses): every
+impulse pair is then equal, opposite and collinear, so linear and angular momentum are
+conserved to round-off. Against a static or kinematic body (ma = 0) the movable body
+keeps Box2D's fixed anchor exactly (the immovable arm does no work); between two
+dynamic bodies the lighter keeps its anchor best. The effective masses stay those
+prepared from the first anchors (docs/solver.md: prepared once); the arms move by the
+bodies' relative displacement within one step, which changes the iteration's step size
+a little and leaves every impulse pair, hence the momenta, exact.
+
+Separation. docs/solver.md re-measures s from anchors carried by the bodies' rotations and
+translations. Box2D turns the contact point (midway between the surfaces) with each
+body, which is exact while the gap is small (its speculative distance is 2 cm). Here a
+fast body's speculative contacts reach up to two bounding radii (``sdfphys.collide``),
+and a point half a metre outside a spinning body does not move as the body's surface
+does. So each body carries its own surface point, p_a = point - n s0 / 2 and
+p_b = point + n s0 / 2 (s0 = -depth), and s = n.(p_b - p_a) as they turn and move:
+exact for a material point (a corner), whatever the gap. Measured on 1 x 0.02 m planks
+falling at 100 m/s and spinning up to 85 rad/s as their near end strikes: the lowest
+far end ended a step 13 cm under the ground with the midpoint, 6 cm with surface
+points. The lever arms stay at the contact point: arms at the surface points gave a
+heavy box on a light one 2 to 4 times more rocking, through the friction rows' torque.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..settings import Settings
+from .rows import BodyState, ContactConstraints
+from .softness import CONVERGED, REST_SPEED, row_softness
+
+__all__ = ["MAX_ROTATION", "apply_restitution", "solve_substeps"]
+
+
+# --------------------------------------------------------------------------------------
+# Substeps (one compiled call per step).
+# --------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
+                          angular_damping, gravity, h):
+    """v <- v / (1 + h c) + h g for dynamic bodies (Box2D v3 order); others untouched."""
+    for i in range(inv_mass.shape[0]):
+        if inv_mass[i] == 0.0:
+            continue
+        lin = 1.0 / (1.0 + h * linear_damping[i])
+        velocity[i, 0] = velocity[i, 0] * lin + h * gravity[0]
+        velocity[i, 1] = velocity[i, 1] * lin + h * gravity[1]
+        angular_velocity[i] = angular_velocity[i] / (1.0 + h * angular_damping[i])
+
+
+#: Largest rotation of a body in one substep, rad (Box2D v3's B2_MAX_ROTATION).
+MAX_ROTATION = 0.25 * math.pi
+
+
+@njit(cache=True)
+def _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h):
+    """x <- x + h v, angle <- angle + h w (semi-implicit Euler); |v| clamped to max_speed,
+    |w| h clamped to MAX_ROTATION (Box2D v3's cap: a contact's anchors are turned by each
+    substep's rotation, which stops meaning anything when a body spins by a large
+    fraction of a turn in one substep; a 2 cm circle spun up by friction at 300 m/s
+    reached 27 rad per substep and slipped through a thin wall)."""
+    limit = max_speed * max_speed
+    max_w = MAX_ROTATION / h
+    for i in range(angle.shape[0]):
+        if angular_velocity[i] > max_w:
+            angular_velocity[i] = max_w
+        elif angular_velocity[i] < -max_w:
+            angular_velocity[i] = -max_w
+        vx = velocity[i, 0]
+        vy = velocity[i, 1]
+        speed2 = vx * vx + vy * vy
+        if speed2 > limit:
+            scale = max_speed / math.sqrt(speed2)
+            vx *= scale
+            vy *= scale
+            velocity[i, 0] = vx
+            velocity[i, 1] = vy
+        com[i, 0] += h * vx
+        com[i, 1] += h * vy
+        angle[i] += h * angular_velocity[i]
+
+
+@njit(cache=True)
+def _any_below(values, limit):
+    """Whether some value is below limit (no temporary array)."""
+    for v in values:
+        if v < limit:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _integrate_pseudo(com, angle, pseudo_velocity, pseudo_angular, pseudo_impulse, h):
+    """x <- x + h v', angle <- angle + h w' (v', w': the pseudo-velocities the split rows
+    gave this substep); then v', w' and the pseudo-impulses are reset to 0."""
+    for i in range(angle.shape[0]):
+        com[i, 0] += h * pseudo_velocity[i, 0]
+        com[i, 1] += h * pseudo_velocity[i, 1]
+        angle[i] += h * pseudo_angular[i]
+        pseudo_velocity[i, 0] = 0.0
+        pseudo_velocity[i, 1] = 0.0
+        pseudo_angular[i] = 0.0
+    pseudo_impulse[:] = 0.0
+
+
+@njit(cache=True)
+def _update_anchors(com, com0, angle, angle0, round_body, cos_d, sin_d, inv_mass, body_a,
+                    body_b, normal, anchor_a0, anchor_b0, base_separation, arm_a0, arm_b0,
+                    anchor_a, anchor_b, separation):
+    """Re-measure every separation from the accumulated moves; re-base the anchors.
+
+    s = base + n.(dp_b + R(dq_b) sb0 - dp_a - R(dq_a) sa0), no collision query, sa0, sb0
+    the bodies' surface points (anchor_a0, anchor_b0).
+    Lever arms: with D = dp_b - dp_a and inverse masses ma, mb, ra = ra0 + mb / (ma + mb) D
+    and rb = rb0 - ma / (ma + mb) D (ra0, rb0: arm_a0, arm_b0, the arms to the contact
+    point at the start of the step), so x_a + ra = x_b + rb (one common point; module
+    docstring). Against a static or kinematic body the movable body keeps its anchor.
+    cos_d, sin_d: (B,) scratch for the rotation of each body since the start of the step.
+    A circle's anchor is not turned (round_body): its surface is the same in every
+    orientation, so its rotation moves no surface point along the normal; turning the
+    anchor would lift it by r (1 - cos dq) and let a rolling circle sink and bounce
+    (measured before: a 0.3 m ball rolling at 1.3 m/s reported -0.054 m/s vertically).
+    """
+    for i in range(angle.shape[0]):
+        if round_body[i]:
+            cos_d[i] = 1.0
+            sin_d[i] = 0.0
+        else:
+            cos_d[i] = math.cos(angle[i] - angle0[i])
+            sin_d[i] = math.sin(angle[i] - angle0[i])
+    for k in range(body_a.shape[0]):
+        a = body_a[k]
+        b = body_b[k]
+        ra0x = anchor_a0[k, 0]
+        ra0y = anchor_a0[k, 1]
+        rb0x = anchor_b0[k, 0]
+        rb0y = anchor_b0[k, 1]
+        rax = cos_d[a] * ra0x - sin_d[a] * ra0y
+        ray = sin_d[a] * ra0x + cos_d[a] * ra0y
+        rbx = cos_d[b] * rb0x - sin_d[b] * rb0y
+        rby = sin_d[b] * rb0x + cos_d[b] * rb0y
+        nx = normal[k, 0]
+        ny = normal[k, 1]
+        dx = (com[b, 0] - com0[b, 0]) - (com[a, 0] - com0[a, 0])
+        dy = (com[b, 1] - com0[b, 1]) - (com[a, 1] - com0[a, 1])
+        separation[k] = base_separation[k] + (dx + rbx - rax) * nx + (dy + rby - ray) * ny
+        ma = inv_mass[a]
+        mb = inv_mass[b]
+        share_b = mb / (ma + mb)
+        share_a = 1.0 - share_b
+        anchor_a[k, 0] = arm_a0[k, 0] + share_b * dx
+        anchor_a[k, 1] = arm_a0[k, 1] + share_b * dy
+        anchor_b[k, 0] = arm_b0[k, 0] - share_a * dx
+        anchor_b[k, 1] = arm_b0[k, 1] - share_a * dy
+
+
+@njit(cache=True)
+def _load(velocity, angular_velocity, a, b):
+    """(vax, vay, wa, vbx, vby, wb): the velocities of a pair's two bodies."""
+    return (velocity[a, 0], velocity[a, 1], angular_velocity[a],
+            velocity[b, 0], velocity[b, 1], angular_velocity[b])
+
+
+@njit(cache=True)
+def _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb):
+    """Write a pair's velocities back (``_load``'s inverse)."""
+    velocity[a, 0] = vax
+    velocity[a, 1] = vay
+    angular_velocity[a] = wa
+    velocity[b, 0] = vbx
+    velocity[b, 1] = vby
+    angular_velocity[b] = wb
+
+
+@njit(cache=True)
+def _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby):
+    """(dvx, dvy) = v_b + w_b x rb - v_a - w_a x ra: b's point against a's, m/s."""
+    return vbx - wb * rby - vax + wa * ray, vby + wb * rbx - vay - wa * rax
+
+
+@njit(cache=True)
+def _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib, rax, ray, rbx, rby, px, py):
+    """The two bodies' velocities after the impulse P = (px, py) (N s) on b at arm rb and
+    -P on a at arm ra (ma, mb inverse masses; ia, ib inverse inertias)."""
+    return (vax - ma * px, vay - ma * py, wa - ia * (rax * py - ray * px),
+            vbx + mb * px, vby + mb * py, wb + ib * (rbx * py - rby * px))
+
+
+@njit(cache=True)
+def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pair_start,
+                normal, anchor_a, anchor_b, normal_impulse, tangent_impulse, total_normal_impulse):
+    """Apply the accumulated impulses P = l_n n + l_t t at the current anchors."""
+    for p in range(pair_start.shape[0] - 1):
+        first = pair_start[p]
+        a = body_a[first]
+        b = body_b[first]
+        ma = inv_mass[a]
+        mb = inv_mass[b]
+        ia = inv_inertia[a]
+        ib = inv_inertia[b]
+        vax, vay, wa, vbx, vby, wb = _load(velocity, angular_velocity, a, b)
+        for k in range(first, pair_start[p + 1]):
+            nx = normal[k, 0]
+            ny = normal[k, 1]
+            px = normal_impulse[k] * nx + tangent_impulse[k] * ny
+            py = normal_impulse[k] * ny - tangent_impulse[k] * nx
+            total_normal_impulse[k] += normal_impulse[k]
+            vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
+                                               anchor_a[k, 0], anchor_a[k, 1],
+                                               anchor_b[k, 0], anchor_b[k, 1], px, py)
+        _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
+
+
+# --------------------------------------------------------------------------------------
+# Split push-out: deep overlap leaves without entering the velocities.
+#
+# The soft row pushes an overlap out through the velocities, and the relax pass is meant
+# to take that bias velocity back out (Box2D v3's soft step). Two cases defeat it:
+# - a column: each contact of a column of N overlapping bodies separates at up to
+#   max_push_out, so the top body is pushed at N times that; one relax pass undoes it
+#   only near the bottom of the column (Gauss-Seidel spreads a correction one contact
+#   per pass). 25 circles r 0.5 overlapping by 0.2 m in a 1.02 m wide shaft: they left
+#   at up to 22 m/s (tests/test_split_push_out.py).
+# - a jam: bodies that overlap and cannot move apart (25 circles side by side in a
+#   20 m box) keep vn = 0, so the soft row's impulse grows to m_n bias / impulse_scale
+#   (the spring's force at its capped bias: 4.9 kN between two 0.79 kg circles at
+#   3 m/s), the relax cannot see it (vn is already 0) and the warm start carries it
+#   over; the first body that slips out of line takes that force as velocity. 625 such
+#   circles: 41 m/s, 41 kJ after ten steps.
+# So a row whose overlap exceeds ``Settings.soft_depth`` is split (Catto's split
+# impulses; Chipmunk's bias velocities, which pymunk runs):
+# - in the velocities it is rigid (bias 0, mass_scale 1, impulse_scale 0): it stops
+#   the approach and holds the load, its accumulated impulse warm-starts as any other;
+# - its push-out bias = max(mass_scale bias_rate s, -max_push_out), the soft row's
+#   own, is a target for the pair's pseudo-velocities v' (per body, zero at the start
+#   of every substep): d_p = -m_n (n.(v'_b - v'_a at the contact) + bias), p >= 0;
+# - the positions move by h (v + v') and v' is then dropped: the overlap goes at the
+#   soft row's rate, no faster than max_push_out per contact, and no kinetic energy is
+#   made. A jam's push-out impulses are bounded by the passes of one substep and never
+#   stored.
+# Shallower rows stay soft: resting contacts sag by a fraction of a millimetre
+# (impulse_scale g h / (mass_scale bias_rate) = 0.07 mm for a body on the ground at
+# the defaults; a body under n others about n times that, less with load stiffening),
+# so stacks, piles and the loaded islands keep the soft step's behaviour; the split
+# only takes over where overlap is deeper than 5 mm (pushed into place, dropped into a
+# pile, squeezed). Each pseudo impulse pair is equal and opposite, so the
+# mass-weighted centre of a free pair does not move.
+# Measured (tests/stability, tools/stability_report.py), 625 circles packed 0.2 m deep
+# in a 20 m box: separation 23 -> 1.62 m/s, fastest body 41 -> 0.54 m/s, kinetic
+# energy over the last second / peak 0.21 -> 0.00035 (pymunk: 1.17, 0.87, 0.00082).
+# soft_depth from 1 to 10 mm gives decay 0.00015-0.0054 there; 20 mm lets the jammed
+# springs store enough to keep the pile churning (decay 0.26); 0 (every overlap split,
+# as pymunk) lets a 20-box stack lean 12.8 cm in 30 s (1.3 cm at 5 mm).
+# --------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _pseudo_push(pseudo_velocity, pseudo_angular, pseudo_impulse, k, a, b, ma, ia, mb, ib,
+                 nx, ny, rax, ray, rbx, rby, normal_mass, bias):
+    """Split row k: the impulse that makes the pair's pseudo-velocities separate at -bias
+    (m/s, bias <= 0) along n, accumulated >= 0 in pseudo_impulse[k], applied to the
+    pseudo-velocities (rigid: the pseudo-velocities start from 0 every substep)."""
+    qax, qay, qa, qbx, qby, qb = _load(pseudo_velocity, pseudo_angular, a, b)
+    dvx, dvy = _point_velocity(qax, qay, qa, qbx, qby, qb, rax, ray, rbx, rby)
+    impulse = -normal_mass * (dvx * nx + dvy * ny + bias)
+    accumulated = max(pseudo_impulse[k] + impulse, 0.0)
+    impulse = accumulated - pseudo_impulse[k]
+    pseudo_impulse[k] = accumulated
+    qax, qay, qa, qbx, qby, qb = _push(qax, qay, qa, qbx, qby, qb, ma, ia, mb, ib, rax, ray,
+                                       rbx, rby, impulse * nx, impulse * ny)
+    _store(pseudo_velocity, pseudo_angular, a, b, qax, qay, qa, qbx, qby, qb)
+
+
+@njit(cache=True)
+def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, use_bias,
+           use_friction):
+    """One Gauss-Seidel pass over the pairs ``pairs`` (indices into pair_start, in order):
+    normal rows of the pair, then its friction rows.
+
+    bodies: (velocity, angular_velocity, inv_mass, inv_inertia); rows: the contact rows
+    (``_substeps_kernel``'s tuple, ContactConstraints' arrays plus the row coefficients of
+    ``row_softness``); pseudo: (pseudo_velocity, pseudo_angular, pseudo_impulse).
+
+    Normal row k: s > 0 (speculative): bias = s / h, rigid (the gap may close, no more);
+    else with ``use_bias`` soft, with row k's coefficients (``row_softness``):
+    bias = max(mass_scale bias_rate s, -max_push_out),
+    d_l = -m_n (mass_scale vn + bias) - impulse_scale l; without it rigid, bias 0.
+    Accumulated l_n >= 0. Friction row: d_l = -m_t vt, accumulated |l_t| <= mu l_n.
+    A row deeper than ``soft_depth`` (s < -soft_depth, see "Split push-out") is rigid in
+    the velocities and, with ``use_bias``, pushes its pair apart in the pseudo-velocities
+    instead:
+    d_p = -m_n (vn' + bias) on the pair's pseudo-velocities vn', accumulated p >= 0
+    (``pseudo_impulse``, reset every substep).
+
+    Returns (largest |d_l_n|, largest accumulated l_n) over the pass, N s: how far the
+    pass was from converged (``_sweeps``' extra passes stop on their ratio).
+    """
+    velocity, angular_velocity, inv_mass, inv_inertia = bodies
+    (body_a, body_b, pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
+     tangent_mass, friction, bias_rate, mass_scale, impulse_scale, normal_impulse,
+     tangent_impulse, total_normal_impulse) = rows
+    pseudo_velocity, pseudo_angular, pseudo_impulse = pseudo
+    largest_change = 0.0
+    largest_impulse = 0.0
+    for p in pairs:
+        first = pair_start[p]
+        last = pair_start[p + 1]
+        a = body_a[first]
+        b = body_b[first]
+        ma = inv_mass[a]
+        mb = inv_mass[b]
+        ia = inv_inertia[a]
+        ib = inv_inertia[b]
+        vax, vay, wa, vbx, vby, wb = _load(velocity, angular_velocity, a, b)
+        for k in range(first, last):
+            nx = normal[k, 0]
+            ny = normal[k, 1]
+            s = separation[k]
+            bias = 0.0
+            m_scale = 1.0
+            i_scale = 0.0
+            rax = anchor_a[k, 0]
+            ray = anchor_a[k, 1]
+            rbx = anchor_b[k, 0]
+            rby = anchor_b[k, 1]
+            if s > 0.0:
+                bias = s * inv_h
+            elif use_bias and s < -soft_depth:
+                _pseudo_push(pseudo_velocity, pseudo_angular, pseudo_impulse, k, a, b, ma, ia,
+                             mb, ib, nx, ny, rax, ray, rbx, rby, normal_mass[k],
+                             max(mass_scale[k] * bias_rate[k] * s, -max_push_out))
+            elif use_bias:
+                bias = max(mass_scale[k] * bias_rate[k] * s, -max_push_out)
+                m_scale = mass_scale[k]
+                i_scale = impulse_scale[k]
+            dvx, dvy = _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby)
+            vn = dvx * nx + dvy * ny
+            impulse = -normal_mass[k] * (m_scale * vn + bias) - i_scale * normal_impulse[k]
+            accumulated = max(normal_impulse[k] + impulse, 0.0)
+            impulse = accumulated - normal_impulse[k]
+            normal_impulse[k] = accumulated
+            total_normal_impulse[k] += impulse
+            largest_change = max(largest_change, abs(impulse))
+            largest_impulse = max(largest_impulse, accumulated)
+            px = impulse * nx
+            py = impulse * ny
+            vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
+                                               rax, ray, rbx, rby, px, py)
+        if use_friction:
+            for k in range(first, last):
+                mu = friction[k]
+                if mu == 0.0:
+                    continue
+                tx = normal[k, 1]
+                ty = -normal[k, 0]
+                rax = anchor_a[k, 0]
+                ray = anchor_a[k, 1]
+                rbx = anchor_b[k, 0]
+                rby = anchor_b[k, 1]
+                dvx, dvy = _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby)
+                vt = dvx * tx + dvy * ty
+                limit = mu * normal_impulse[k]
+                accumulated = min(max(tangent_impulse[k] - tangent_mass[k] * vt, -limit), limit)
+                impulse = accumulated - tangent_impulse[k]
+                tangent_impulse[k] = accumulated
+                px = impulse * tx
+                py = impulse * ty
+                vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
+                                                   rax, ray, rbx, rby, px, py)
+        _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
+    return largest_change, largest_impulse
+
+
+@njit(cache=True)
+def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_depth,
+            use_bias, use_friction, passes, extra_passes, rest_passes):
+    """One phase of a substep: ``passes`` ``_solve`` passes over every pair, then, if any
+    ran, up to ``extra_passes`` more over the loaded islands' pairs, stopping after a
+    pass whose largest normal impulse change is at most CONVERGED times the largest
+    accumulated normal impulse. loaded: (every loaded pair, the small islands' ones);
+    islands at rest over the small limit take part in the first ``rest_passes`` extra
+    passes only. Returns the number of extra passes run."""
+    loaded_pairs, small_pairs = loaded
+    for _ in range(passes):
+        _solve(bodies, rows, pseudo, all_pairs, inv_h, max_push_out, soft_depth, use_bias,
+               use_friction)
+    if passes == 0 or loaded_pairs.shape[0] == 0:
+        return 0
+    for n in range(extra_passes):
+        pairs = loaded_pairs if n < rest_passes else small_pairs
+        if pairs.shape[0] == 0:
+            return n
+        change, impulse = _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out,
+                                 soft_depth, use_bias, use_friction)
+        if change <= CONVERGED * impulse:
+            return n + 1
+    return extra_passes
+
+
+@njit(cache=True)
+def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
+                     linear_damping, angular_damping, round_body, gravity, body_a, body_b,
+                     pair_start, loaded, normal, anchor_a0, anchor_b0, anchor_a, anchor_b,
+                     base_separation, separation, normal_mass, tangent_mass, friction,
+                     bias_rate, mass_scale, impulse_scale, normal_impulse, tangent_impulse,
+                     total_normal_impulse, h, substeps, relax_passes, max_push_out, max_speed,
+                     use_friction, extra_passes, rest_passes, soft_depth):
+    """All substeps of one step: integrate v, warm start, solve, integrate x, relax.
+
+    After the solve and after the relax passes, the pairs of loaded islands
+    (``loaded_pairs``) get up to ``extra_passes`` more passes each (``_sweeps``).
+    Rows deeper than ``soft_depth`` (m) are split: their overlap moves the positions
+    through pseudo-velocities, integrated after the velocities and then discarded
+    (``_integrate_pseudo``; see "Split push-out").
+    Returns (the number of those extra passes run, the number of substeps that had a
+    split row).
+    """
+    com0 = com.copy()
+    angle0 = angle.copy()
+    arm_a0 = anchor_a.copy()
+    arm_b0 = anchor_b.copy()
+    cos_d = np.empty_like(angle)
+    sin_d = np.empty_like(angle)
+    inv_h = 1.0 / h
+    has_contacts = body_a.shape[0] > 0
+    all_pairs = np.arange(pair_start.shape[0] - 1)
+    pseudo_velocity = np.zeros_like(velocity)
+    pseudo_angular = np.zeros_like(angular_velocity)
+    pseudo_impulse = np.zeros_like(separation)
+    bodies = (velocity, angular_velocity, inv_mass, inv_inertia)
+    rows = (body_a, body_b, pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
+            tangent_mass, friction, bias_rate, mass_scale, impulse_scale, normal_impulse,
+            tangent_impulse, total_normal_impulse)
+    pseudo = (pseudo_velocity, pseudo_angular, pseudo_impulse)
+    passes_run = 0
+    push_outs = 0
+    for _ in range(substeps):
+        split = has_contacts and _any_below(separation, -soft_depth)
+        push_outs += split
+        _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
+                              angular_damping, gravity, h)
+        if has_contacts:
+            _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
+                        pair_start, normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
+                        total_normal_impulse)
+            passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
+                                  max_push_out, soft_depth, True, use_friction, 1, extra_passes,
+                                  rest_passes)
+        _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h)
+        if split:
+            _integrate_pseudo(com, angle, pseudo_velocity, pseudo_angular, pseudo_impulse, h)
+        if has_contacts:
+            _update_anchors(com, com0, angle, angle0, round_body, cos_d, sin_d, inv_mass,
+                            body_a, body_b, normal, anchor_a0, anchor_b0, base_separation,
+                            arm_a0, arm_b0, anchor_a, anchor_b, separation)
+            passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
+                                  max_push_out, soft_depth, False, use_friction, relax_passes,
+                                  extra_passes, rest_passes)
+    return passes_run, push_outs
+
+
+def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: np.ndarray,
+                   settings: Settings, use_friction: bool) -> tuple[int, int]:
+    """Run every substep of one step in place (one compiled call).
+
+    gravity: (2,) m/s^2, applied to dynamic bodies. ``use_friction`` False skips the
+    friction rows (the caller passes False when every contact's friction is 0).
+    Returns (the number of extra passes run over loaded islands, ``row_softness``; the
+    number of substeps with a row deeper than ``soft_depth``, "Split push-out").
+    """
+    c = constraints
+    h = settings.dt / settings.substeps
+    gravity = np.asarray(gravity, dtype=np.float64)
+    v, w = bodies.velocity, bodies.angular_velocity
+    spin = 0.0 if bodies.radius is None else w * np.where(bodies.inv_mass > 0.0,
+                                                          bodies.radius, 0.0)
+    moving = v[:, 0] ** 2 + v[:, 1] ** 2 + spin * spin > REST_SPEED ** 2
+    bias_rate, mass_scale, impulse_scale, loaded_pairs, small = row_softness(
+        bodies.inv_mass, c, gravity, settings, moving)
+    passes, push_outs = _substeps_kernel(
+        bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
+        bodies.inv_inertia, bodies.linear_damping, bodies.angular_damping, bodies.round_body,
+        gravity, c.body_a, c.body_b, c.pair_start, (loaded_pairs, loaded_pairs[small]),
+        c.normal,
+        c.anchor_a0, c.anchor_b0, c.anchor_a, c.anchor_b, c.base_separation, c.separation,
+        c.normal_mass, c.tangent_mass, c.friction, bias_rate, mass_scale, impulse_scale,
+        c.normal_impulse, c.tangent_impulse, c.total_normal_impulse,
+        h, settings.substeps, settings.relax_passes, settings.max_push_out,
+        settings.max_linear_speed, use_friction, settings.stiff_iterations - 1,
+        settings.rest_iterations - 1, settings.soft_depth)
+    return int(passes), int(push_outs)
+
+
+# --------------------------------------------------------------------------------------
+# Restitution (after the substeps) and storage.
+# --------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _restitution_kernel(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
+                        pair_start, normal, anchor_a, anchor_b, normal_mass, restitution,
+                        relative_velocity, normal_impulse, total_normal_impulse, threshold,
+                        passes):
+    """Velocity passes toward vn' = -e vn0 for points that approached and carried impulse.
+
+    A point takes part if it approached faster than ``threshold`` at the start of the
+    step (vn0 < -threshold) and received normal impulse during the step (a speculative
+    point that never touched did not collide). d_l = -m_n (vn + e vn0), l_n >= 0.
+    """
+    for _ in range(passes):
+        for p in range(pair_start.shape[0] - 1):
+            first = pair_start[p]
+            last = pair_start[p + 1]
+            a = body_a[first]
+            b = body_b[first]
+            ma = inv_mass[a]
+            mb = inv_mass[b]
+            ia = inv_inertia[a]
+            ib = inv_inertia[b]
+            vax, vay, wa, vbx, vby, wb = _load(velocity, angular_velocity, a, b)
+            for k in range(first, last):
+                e = restitution[k]
+                if e == 0.0 or relative_velocity[k] > -threshold or total_normal_impulse[k] == 0.0:
+                    continue
+                nx = normal[k, 0]
+                ny = normal[k, 1]
+                rax = anchor_a[k, 0]
+                ray = anchor_a[k, 1]
+                rbx = anchor_b[k, 0]
+                rby = anchor_b[k, 1]
+                dvx, dvy = _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby)
+                vn = dvx * nx + dvy * ny
+                impulse = -normal_mass[k] * (vn + e * relative_velocity[k])
+                accumulated = max(normal_impulse[k] + impulse, 0.0)
+                impulse = accumulated - normal_impulse[k]
+                normal_impulse[k] = accumulated
+                total_normal_impulse[k] += impulse
+                px = impulse * nx
+                py = impulse * ny
+                vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
+                                                   rax, ray, rbx, rby, px, py)
+            _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
+
+
+def apply_restitution(bodies: BodyState, constraints: ContactConstraints,
+                      settings: Settings) -> None:
+    """``settings.restitution_passes`` restitution passes in place (one compiled call)."""
+    c = constraints
+    _restitution_kernel(
+        bodies.velocity, bodies.angular_velocity, bodies.inv_mass, bodies.inv_inertia,
+        c.body_a, c.body_b, c.pair_start, c.normal, c.anchor_a, c.anchor_b, c.normal_mass,
+        c.restitution, c.relative_velocity, c.normal_impulse, c.total_normal_impulse,
+        settings.restitution_threshold, settings.restitution_passes)
