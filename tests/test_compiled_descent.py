@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from test_descent import CIRCLE, FIELDS, UNION, random_triangles
 
-from sdfphys.collide import descent
+from sdfphys.collide import descent, field_pairs
 from sdfphys.sdf import Field, compiled, field
 
 CASES = dict(FIELDS, plain_circle=CIRCLE, union_again=UNION,
@@ -100,7 +100,7 @@ def test_compiled_field_field_descent_equals_the_python_loop(name, monkeypatch):
                                poses[:, :2] + rng.uniform(0.3, 1.0, (count, 2))])
     regions[::7, 2] = regions[::7, 0] - 1.0                          # empty
     pair_of = np.repeat(np.arange(count), 5)
-    problem = descent._PairProblem(a, b, descent._rotations(poses[:, 2]), poses[:, :2], pair_of)
+    problem = field_pairs._PairProblem(a, b, field_pairs._rotations(poses[:, 2]), poses[:, :2], pair_of)
     starts = np.repeat(poses[:, :2], 5, axis=0) + rng.uniform(-0.8, 0.8, (5 * count, 2))
     sigma = rng.uniform(0.1, 1.0, 5 * count)
     tol = 1e-12 * np.repeat(rng.uniform(0.5, 3.0, count), 5)
@@ -113,9 +113,9 @@ def test_compiled_field_field_descent_equals_the_python_loop(name, monkeypatch):
             np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-12)
     for margin in (0.0, 0.05):
         monkeypatch.setattr(descent, "USE_COMPILED", True)
-        fast = descent.field_field_contacts(a, b, poses, regions, margin=margin)
+        fast = field_pairs.field_field_contacts(a, b, poses, regions, margin=margin)
         monkeypatch.setattr(descent, "USE_COMPILED", False)
-        slow = descent.field_field_contacts(a, b, poses, regions, margin=margin)
+        slow = field_pairs.field_field_contacts(a, b, poses, regions, margin=margin)
         for x, y in zip(fast, slow):
             assert x.shape == y.shape
             np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-12)
@@ -131,7 +131,7 @@ def test_compiled_field_field_descent_in_blocks_equals_the_python_loop(monkeypat
     count = _compiled_descent._BLOCK // 5 + 300
     poses = np.column_stack([rng.uniform(-1.5, 1.5, (count, 2)), rng.uniform(0.0, 6.0, count)])
     pair_of = np.repeat(np.arange(count), 5)
-    problem = descent._PairProblem(a, b, descent._rotations(poses[:, 2]), poses[:, :2], pair_of)
+    problem = field_pairs._PairProblem(a, b, field_pairs._rotations(poses[:, 2]), poses[:, :2], pair_of)
     starts = np.repeat(poses[:, :2], 5, axis=0) + rng.uniform(-0.8, 0.8, (5 * count, 2))
     sigma = rng.uniform(0.1, 1.0, 5 * count)
     tol = 1e-12 * np.repeat(rng.uniform(0.5, 3.0, count), 5)

@@ -3,7 +3,7 @@
 ``mesh_contacts.mesh_in_field`` and ``mesh_sdf.sdf_in_mesh`` run their stages in
 compiled kernels when the fields compile and in numpy otherwise (each module's
 ``USE_COMPILED = False``, the reference), as does the tail of
-``descent.field_field_contacts`` (``_compiled_descent.field_contacts``). The bench
+``field_pairs.field_field_contacts`` (``_compiled_descent.field_contacts``). The bench
 scene's pair kinds (boxes on boxes, walls and a half-plane ground, a ring and a
 smooth union) and concave meshes, at random poses and margins, must give the same
 rows (pair, point, normal, depth, keys) in the same order, with the same bits.
@@ -101,7 +101,7 @@ def test_field_field_contacts_compiled_tail_equals_numpy(monkeypatch):
     """The merge, patch ends and second merge after the descent (``_compiled_descent.
     field_contacts``) against the numpy tail (fields hidden from the compiler, which
     also runs the Python-driven descent: the same bits on these fields)."""
-    from sdfphys.collide import descent
+    from sdfphys.collide import field_pairs
     from sdfphys.sdf import field
 
     rng = np.random.default_rng(2027)
@@ -121,10 +121,10 @@ def test_field_field_contacts_compiled_tail_equals_numpy(monkeypatch):
                                    rng.uniform(0.2, 0.8, (n, 2))])
         margin = float(rng.choice([0.0, 0.01, 0.05]))
         args = (field_a, field_b, poses, regions, 16, 16, margin)
-        got = descent.field_field_contacts(*args)
+        got = field_pairs.field_field_contacts(*args)
         with monkeypatch.context() as patch:
-            patch.setattr(descent._PairProblem, "programs", lambda self: None)
-            reference = descent.field_field_contacts(*args)
+            patch.setattr(field_pairs._PairProblem, "programs", lambda self: None)
+            reference = field_pairs.field_field_contacts(*args)
         assert _same(reference, got)
         contacts += len(reference[0])
         patch_ends += int(np.sum(reference[4] >= 16))

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sdfphys.collide import descent
+from sdfphys.collide import descent, field_pairs
 from sdfphys.sdf import field
 
 CIRCLE = {"type": "circle", "radius": 1.0}
@@ -273,7 +273,7 @@ def region_of(fa, fb, pose, grow: float = 0.0) -> np.ndarray:
 
 def contacts(fa, fb, pose, margin: float = 0.0):
     pose = np.asarray(pose, dtype=np.float64)
-    return descent.field_field_contacts_single(fa, fb, pose, region_of(fa, fb, pose, margin),
+    return field_pairs.field_field_contacts_single(fa, fb, pose, region_of(fa, fb, pose, margin),
                                                margin=margin)
 
 
@@ -399,19 +399,19 @@ def test_field_field_batch_equals_single_calls():
         margin = 0.05
         regions = np.array([region_of(fa, fb, pose, margin) for pose in poses])
         regions[3] = [1.0, 1.0, 0.0, 0.0]                     # empty: no contact
-        pair, point, depth, normal, start = descent.field_field_contacts(
+        pair, point, depth, normal, start = field_pairs.field_field_contacts(
             fa, fb, poses, regions, margin=margin)
         assert np.all(np.diff(pair) >= 0) and 3 not in pair
         assert len(np.unique(pair)) > n // 2
         for k in range(n):
-            expected = descent.field_field_contacts_single(fa, fb, poses[k], regions[k],
+            expected = field_pairs.field_field_contacts_single(fa, fb, poses[k], regions[k],
                                                            margin=margin)
             mine = pair == k
             for got, want in zip((point[mine], depth[mine], normal[mine], start[mine]),
                                  expected, strict=True):
                 np.testing.assert_array_equal(got, want)
     with pytest.raises(ValueError):
-        descent.field_field_contacts(base, top, np.zeros((2, 3)), np.zeros((3, 4)))
+        field_pairs.field_field_contacts(base, top, np.zeros((2, 3)), np.zeros((3, 4)))
 
 
 def test_field_field_is_deterministic_and_rejects_infinite_regions():
@@ -424,6 +424,6 @@ def test_field_field_is_deterministic_and_rejects_infinite_regions():
     for x, y in zip(first, second):
         np.testing.assert_array_equal(x, y)
     with pytest.raises(ValueError):
-        descent.field_field_contacts_single(fa, fb, pose, [-np.inf, 0.0, 1.0, 1.0])
-    empty = descent.field_field_contacts_single(fa, fb, pose, [1.0, 1.0, 0.0, 0.0])
+        field_pairs.field_field_contacts_single(fa, fb, pose, [-np.inf, 0.0, 1.0, 1.0])
+    empty = field_pairs.field_field_contacts_single(fa, fb, pose, [1.0, 1.0, 0.0, 0.0])
     assert all(len(x) == 0 for x in empty)

@@ -262,16 +262,16 @@ def test_sdf_box_overhanging_the_mesh_plank_end():
 
 def test_field_descent_knobs_reach_mesh_sdf_pairs(monkeypatch):
     """The reverse direction's field-field descent takes the field_descent knobs."""
-    from sdfphys.collide import descent
+    from sdfphys.collide import field_pairs
 
     seen = []
-    real = descent.field_field_contacts
+    real = field_pairs.field_field_contacts
 
     def spy(*args, **kwargs):
         seen.append((kwargs["n_starts"], kwargs["iterations"]))
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(descent, "field_field_contacts", spy)
+    monkeypatch.setattr(field_pairs, "field_field_contacts", spy)
     settings = Settings(field_descent_starts=3, field_descent_iterations=5)
     collide(PLANK, (0.0, 0.0, 0.0), SDF_BOX, (0.3, 0.34, 0.0), settings=settings)
     assert seen == [(3, 5)]

@@ -21,8 +21,8 @@ from sdfphys.render import (
     Palette,
     Renderer,
     body_frames,
-    distance_map,
 )
+from sdfphys.render_field import distance_map
 
 BLACK = (0, 0, 0)
 WHITE = (255, 255, 255)
@@ -552,7 +552,7 @@ def test_field_overlay_is_coarse_while_moving_exact_when_still_then_kept(monkeyp
 def test_field_colours_per_pixel_match_the_formula():
     """The table lookup (``_shade``) gives the colours of ``_distance_colours`` to within
     its 1/32 px steps, at every pixel; blocks interpolate a linear field exactly."""
-    from sdfphys.render import _distance_colours, _field_lut, _shade
+    from sdfphys.render_field import _distance_colours, _field_lut, _shade
 
     pal, scale, spacing = Palette(), 50.0, 0.25
     xs = (np.arange(300) + 0.5) / scale - 3.0

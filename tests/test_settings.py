@@ -153,16 +153,16 @@ def test_field_knobs_reach_the_world_contacts():
 
 
 def test_field_descent_knobs_reach_sdf_pairs(monkeypatch):
-    from sdfphys.collide import descent
+    from sdfphys.collide import field_pairs
 
     seen = []
-    real = descent.field_field_contacts
+    real = field_pairs.field_field_contacts
 
     def spy(*args, **kwargs):
         seen.append((kwargs["n_starts"], kwargs["iterations"]))
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(descent, "field_field_contacts", spy)
+    monkeypatch.setattr(field_pairs, "field_field_contacts", spy)
     settings = Settings(field_descent_starts=3, field_descent_iterations=5,
                         descent_starts=7, descent_iterations=16)
     collide(SDF_BOX, (0.0, 0.0, 0.0), SDF_BOX, (0.0, 0.99, 0.0), margin=0.02,

@@ -8,7 +8,7 @@ corner's depth (by 1 - cos 45 deg = 29 % for a square corner pressed straight in
 and whose normal follows the corner's side. ``sdf_in_mesh`` finds the sdf body's
 points deepest in the mesh instead, for all n pairs of a group:
 
-1. ``descent.field_field_contacts`` on the sdf's field and the mesh's exact polygon
+1. ``field_pairs.field_field_contacts`` on the sdf's field and the mesh's exact polygon
    field (``mesh.field``), solved in the sdf's frame (so an unbounded sdf, a
    half-plane ground, works: the overlap region is bounded by the mesh), over the
    overlap of the two bounds grown by the margin, as ``narrowphase.collide_sdfs``.
@@ -64,7 +64,7 @@ from numba import njit
 from ..sdf import Field, compiled, safe_normalize
 from ..settings import Settings
 from ..shapes import Shape
-from . import descent
+from . import field_pairs
 from .mesh_contacts import _evaluate, _unit
 
 __all__ = ["FAR_END", "REFINE_ROUNDS", "SDF_CALLS", "sdf_in_mesh"]
@@ -280,7 +280,7 @@ def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.nda
     angle = pose_mesh[:, 2] - pose_sdf[:, 2]
     co, so = np.cos(pose_sdf[:, 2]), np.sin(pose_sdf[:, 2])
     offset = _rotate(pose_mesh[:, :2] - pose_sdf[:, :2], co, -so)      # mesh in sdf frame
-    pair, point, depth, _, start = descent.field_field_contacts(
+    pair, point, depth, _, start = field_pairs.field_field_contacts(
         sdf.field, mesh.field, np.column_stack([offset, angle]), region,
         n_starts=settings.field_descent_starts, iterations=settings.field_descent_iterations,
         margin=margin)

@@ -34,7 +34,7 @@ Feature key layout (int64): ``source << 56 | element << 8 | start``
              255 (``VERTEX_START``): mesh vertex ``element``, whichever triangle or
              route found it, so a vertex contact keeps its key;
              254 (``EDGE_START``): midpoint of outline edge ``element``;
-             sources 3 and 4: a field-field start id (``descent.field_field_contacts``:
+             sources 3 and 4: a field-field start id (``field_pairs.field_field_contacts``:
              Halton start k < field_descent_starts, or n + 2k, n + 2k + 1 for the two
              ends of start k's flat patch)
     element  < 2^48
@@ -208,7 +208,7 @@ def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b
        vertices and edge midpoints in the sdf's field (source 1). Exact for a mesh
        vertex or edge pressing on the sdf, and for faces resting on faces.
     2. ``mesh_sdf.sdf_in_mesh``: where the sdf body is inside the mesh
-       (``descent.field_field_contacts`` on the sdf's field and the mesh's exact
+       (``field_pairs.field_field_contacts`` on the sdf's field and the mesh's exact
        polygon field, over the overlap of the bounds in the sdf's frame), each point
        then moved to the sdf body's deepest point along the mesh face's inward
        normal (source 4), plus the far end of the sdf face leaving it toward the
@@ -265,7 +265,7 @@ def _overlap_region(bounds_a: np.ndarray, bounds_b: np.ndarray, angle: np.ndarra
 def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
                  pose_a: np.ndarray, pose_b: np.ndarray, margin: float,
                  settings: Settings) -> Contacts:
-    """Sdf-sdf: ``descent.field_field_contacts`` (Liu et al. 2024; MuJoCo's SDF-SDF).
+    """Sdf-sdf: ``field_pairs.field_field_contacts`` (Liu et al. 2024; MuJoCo's SDF-SDF).
 
     Each pair is solved in a's body frame: b placed by the relative pose (angle
     a_b - a_a, offset R_a^T (x_b - x_a)), ``settings.field_descent_starts`` Halton
@@ -282,7 +282,7 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     descent iteration is one evaluation of each field over the points of all
     pairs.
     """
-    from .descent import field_field_contacts
+    from .field_pairs import field_field_contacts
 
     if not np.all(np.isfinite(sdf_b.bounds())) and np.all(np.isfinite(sdf_a.bounds())):
         # The descent's region is b's bounds placed in a's frame: solve with the
