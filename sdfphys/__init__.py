@@ -6,7 +6,7 @@ window live in ``sdfphys.render``, ``sdfphys.video`` and ``sdfphys.play``.
 
 from importlib import metadata as _metadata
 
-from . import _numba_cache
+from . import _numba_cache, _numba_literals
 
 try:
     __version__ = _metadata.version("sdfphys")      # pyproject.toml's, once installed
@@ -14,6 +14,7 @@ except _metadata.PackageNotFoundError:              # a source tree that was nev
     __version__ = "0+unknown"
 
 _numba_cache.install()      # before any kernel is defined: caches follow the whole package
+_numba_literals.install()   # one compilation per kernel and types, constants or not
 
 from . import sdf  # noqa: E402
 from . import collide  # noqa: E402  (the subpackage, callable: collide.collide)
