@@ -520,7 +520,7 @@ def _clusters(group: np.ndarray, point: np.ndarray, key: np.ndarray, score: np.n
     return head[:count], best[:count]
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _safe_unit(x: float, y: float) -> tuple[float, float]:
     """``sdf.safe_normalize`` of one row ((1, 0) for a zero vector)."""
     length = math.hypot(x, y)

@@ -135,20 +135,20 @@ AT_CORNER = -2
 # the same values, but a ufunc on a scalar compiles numba's ufunc machinery,
 # seconds at a cold start.
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _max(a, b):
     """The builtin max(a, b) (b if b > a else a: the first of a tie or of a NaN),
     inlined: numba calls its overload of max as a function."""
     return b if b > a else a  # noqa: FURB136 (max() would be a call)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _min(a, b):
     """The builtin min(a, b) (b if b < a else a), inlined."""
     return b if b < a else a  # noqa: FURB136 (min() would be a call)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _sign(x: float) -> float:
     """np.sign of a float: -1, 0 or +1 (NaN stays NaN)."""
     if x > 0.0:
@@ -158,7 +158,7 @@ def _sign(x: float) -> float:
     return x if math.isnan(x) else 0.0
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _proximal_step(f1: float, f2: float, g1x: float, g1y: float, g2x: float, g2y: float,
                    tau: float) -> tuple[float, float, float, float]:
     """delta(tau) and d delta / d tau (m, m per path unit) of the proximal min-max path."""
@@ -195,7 +195,7 @@ def _proximal_step(f1: float, f2: float, g1x: float, g1y: float, g2x: float, g2y
 # are returned exactly. A degenerate (collinear) triangle has no inside and is
 # searched as its three edges (the closest clamped foot, the first on ties).
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _on_edge(px: float, py: float, ex: float, ey: float, t: float, ux: float, uy: float
              ) -> tuple[float, float, float, float]:
     """p + t e and the component of u along e."""
@@ -226,7 +226,7 @@ def _project_edges(v: tuple, x: float, y: float, ux: float, uy: float
     return qx, qy, dqx, dqy
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _vertices(tri: np.ndarray, t: int) -> tuple[float, float, float, float, float, float]:
     """Triangle tri[t] (tri: (T, 3, 2)) as the tuple (ax, ay, bx, by, cx, cy).
 
@@ -236,7 +236,7 @@ def _vertices(tri: np.ndarray, t: int) -> tuple[float, float, float, float, floa
     return tri[t, 0, 0], tri[t, 0, 1], tri[t, 1, 0], tri[t, 1, 1], tri[t, 2, 0], tri[t, 2, 1]
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def project(v: tuple, x: float, y: float, ux: float, uy: float
             ) -> tuple[float, float, float, float]:
     """Closest point q of triangle v (``_vertices``) to (x, y) and dq = D Proj_T(x) u."""
@@ -276,7 +276,7 @@ def project(v: tuple, x: float, y: float, ux: float, uy: float
 # the ray ends in that edge's slab instead, once it crosses the edge's line, at
 # s = -(b - v) . u / |u|^2, arriving with dq/ds = u.
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _ray_end(v: tuple, bx: float, by: float, ux: float, uy: float
              ) -> tuple[float, float, float]:
     """Step s >= 0 from which Proj_T(b + s u) no longer moves (triangle v), and
@@ -305,7 +305,7 @@ def _ray_end(v: tuple, bx: float, by: float, ux: float, uy: float
     return end, dx, dy
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _path(kind: int, v: tuple, p: tuple, s: float) -> tuple[float, float, float, float]:
     """Point and dq/ds at step s of the path with parameters p (8 floats: origin,
     the two models' values and gradients), projected onto triangle v (TRIANGLE)."""
@@ -315,12 +315,12 @@ def _path(kind: int, v: tuple, p: tuple, s: float) -> tuple[float, float, float,
     return p[0] + dx, p[1] + dy, ddx, ddy
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _norm(x: float, y: float) -> float:
     return math.sqrt(x * x + y * y)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _unit(x: float, y: float) -> tuple[float, float]:
     norm = _norm(x, y)
     if norm > TINY:
@@ -328,7 +328,7 @@ def _unit(x: float, y: float) -> tuple[float, float]:
     return 0.0, 0.0
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _bundle_free(v: tuple, p: tuple, probe: float) -> bool:
     """The bundle path p (8 parameters) enters triangle v: its first direction (-g1) or its ridge
     direction (-m, the min-norm element of the two gradients' hull) is not cut by
@@ -353,7 +353,7 @@ def _bundle_free(v: tuple, p: tuple, probe: float) -> bool:
     return False
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _steep_path(kind: int, state: np.ndarray, data: np.ndarray, i: int) -> tuple:
     """The steepest path from b (8 floats, see ``_path``): the linearisation at b
     twice (TRIANGLE), or the two planes whose max is phi (PAIR: phi = max(A, B)
@@ -368,7 +368,7 @@ def _steep_path(kind: int, state: np.ndarray, data: np.ndarray, i: int) -> tuple
             low * data[i, 2] + high * data[i, 4], low * data[i, 3] + high * data[i, 5])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _bundle_path(state: np.ndarray, i: int) -> tuple:
     """The bundle path from b (8 floats): b's linearisation and the second plane,
     capped at phi(b)."""
@@ -378,7 +378,7 @@ def _bundle_path(state: np.ndarray, i: int) -> tuple:
             state[i, GRAD + 1], state[i, ALT + 3], state[i, ALT + 4])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _store_path(state: np.ndarray, i: int, p: tuple) -> None:
     """Keep path p (8 floats) as start i's line-search path (``PATH`` columns)."""
     state[i, PATH], state[i, PATH + 1], state[i, PATH + 2], state[i, PATH + 3] = \
@@ -387,14 +387,14 @@ def _store_path(state: np.ndarray, i: int, p: tuple) -> None:
         p[4], p[5], p[6], p[7]
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _stored_path(state: np.ndarray, i: int) -> tuple:
     """Start i's line-search path (8 floats)."""
     return (state[i, PATH], state[i, PATH + 1], state[i, PATH + 2], state[i, PATH + 3],
             state[i, PATH + 4], state[i, PATH + 5], state[i, PATH + 6], state[i, PATH + 7])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _stationarity(kind: int, data: np.ndarray, i: int) -> float:
     """PAIR: |f_a - f_b| plus the length of the min-norm element of the gradients'
     hull at data[i]; both vanish at a balanced minimum (antiparallel gradients),
@@ -431,7 +431,7 @@ def stationarity(kind: int, data: np.ndarray) -> np.ndarray:
 #     pieces (a polygon's medial axis, a circle's centre along a ray through it).
 # Both are kept GUARD w away from the ends; invalid models fall back to the midpoint.
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _model_steps(sl: float, pl: float, dl: float, sr: float, pr: float, dr: float
                  ) -> tuple[float, float]:
     """The two model steps (ascending) in a bracket: s, value and slope at its ends."""
@@ -462,7 +462,7 @@ def _model_steps(sl: float, pl: float, dl: float, sr: float, pr: float, dr: floa
 # One round
 # --------------------------------------------------------------------------------------
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _code(kind: int, shape: np.ndarray, t: int, state: np.ndarray, i: int) -> int:
     """What is known of f around start i: its triangle's shape code, except that a
     start no longer on its triangle's plane (another gradient at b: the plane was
@@ -473,7 +473,7 @@ def _code(kind: int, shape: np.ndarray, t: int, state: np.ndarray, i: int) -> in
                        state[i, GRAD + 1])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _shape_code(code: float, plane_x: float, plane_y: float, gx: float, gy: float) -> int:
     """``_code`` of a triangle start from its shape row (code, plane gradient) and the
     gradient at b."""
@@ -482,7 +482,7 @@ def _shape_code(code: float, plane_x: float, plane_y: float, gx: float, gy: floa
     return int(code)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _moving(kind: int, v: tuple, steep: tuple, sigma: float) -> tuple[bool, float, float]:
     """Whether the steepest path ``steep`` leaves b (a projected gradient that does
     not vanish), and its dq/ds there (read at s = PROBE sigma, past any corner)."""
@@ -490,7 +490,7 @@ def _moving(kind: int, v: tuple, steep: tuple, sigma: float) -> tuple[bool, floa
     return _norm(dqx, dqy) > STATIONARY, dqx, dqy
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _most_candidates(kind: int, owner: np.ndarray, shape: np.ndarray, state: np.ndarray,
                      flags: np.ndarray, i: int) -> int:
     """Most candidates ``propose`` can write for start i next round."""
@@ -991,7 +991,7 @@ def triangle_starts(tri: np.ndarray, weights: np.ndarray
 #   above f, in concave pieces or past the end of a polygon's edge, and the
 #   check proves nothing.)
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _model_value(planes: np.ndarray, m: int, x: float, y: float) -> float:
     """max of the planes (m, 3) (value at the origin, gradient) at (x, y)."""
     top = -np.inf

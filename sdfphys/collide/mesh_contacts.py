@@ -330,7 +330,7 @@ def _evaluate(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int,
     return value, grad
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _unit(x: float, y: float) -> tuple[float, float]:
     """``sdf.safe_normalize`` of one row: (x, y) / |(x, y)|, (1, 0) for a zero vector."""
     length = math.hypot(x, y)

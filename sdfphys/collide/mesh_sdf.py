@@ -368,7 +368,7 @@ def _project_compiled(code: np.ndarray, consts: np.ndarray, depth: int, nesting:
     return z, g
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _to_mesh(x: float, y: float, k: int, cos: np.ndarray, sin: np.ndarray,
              offset: np.ndarray) -> tuple[float, float]:
     """``_MeshInSdfFrame.to_mesh`` of one point of pair k."""
