@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from test_descent import brute_minimum, closest_on_triangle
 
-from sdfphys.collide import _descent_kernels as kernels
+from sdfphys.collide import _descent_paths as paths
+from sdfphys.collide import _descent_starts as start_kernels
 from sdfphys.collide import descent
 from sdfphys.sdf import field
 
@@ -43,7 +44,7 @@ def test_projection_is_the_closest_point_with_its_derivative():
     for t in range(len(tri)):
         for x in rng.uniform(-2.0, 2.0, (10, 2)):
             u = rng.normal(size=2)
-            q = np.array(kernels.project(kernels._vertices(tri, t), x[0], x[1], u[0], u[1]))
+            q = np.array(paths.project(paths._vertices(tri, t), x[0], x[1], u[0], u[1]))
             expected = closest_point(tri[t], x)
             np.testing.assert_allclose(q[:2], expected, atol=1e-12)
             ahead = closest_point(tri[t], x + h * u)
@@ -58,7 +59,7 @@ def test_projection_returns_vertices_exactly():
     for v in range(3):
         outward = tri[0, v] - tri[0].mean(axis=0)
         x = tri[0, v] + 3.0 * outward
-        q = kernels.project(kernels._vertices(tri, 0), x[0], x[1], 1.0, 0.0)
+        q = paths.project(paths._vertices(tri, 0), x[0], x[1], 1.0, 0.0)
         assert (q[0], q[1]) == (tri[0, v, 0], tri[0, v, 1])
         assert (q[2], q[3]) == (0.0, 0.0)
 
@@ -72,16 +73,16 @@ def test_the_projected_ray_stops_at_its_computed_end():
         w = rng.dirichlet(np.ones(3))
         b = w @ tri[t]
         u = rng.normal(size=2)
-        end, dx, dy = kernels._ray_end(kernels._vertices(tri, t), b[0], b[1], u[0], u[1])
-        at_end = np.array(kernels.project(kernels._vertices(tri, t), *(b + end * u), *u))
+        end, dx, dy = paths._ray_end(paths._vertices(tri, t), b[0], b[1], u[0], u[1])
+        at_end = np.array(paths.project(paths._vertices(tri, t), *(b + end * u), *u))
         np.testing.assert_allclose(at_end[:2], closest_point(tri[t], b + end * u), atol=1e-12)
         for later in (1.5, 4.0, 100.0):
-            after = kernels.project(kernels._vertices(tri, t), *(b + later * end * u), *u)
+            after = paths.project(paths._vertices(tri, t), *(b + later * end * u), *u)
             np.testing.assert_allclose(after[:2], at_end[:2], atol=1e-12)
         if end > 1e-6:
             # Just before the end the path still moves, with dq/ds as returned.
             s = end * (1.0 - 1e-6)
-            before = np.array(kernels.project(kernels._vertices(tri, t), *(b + s * u), *u))
+            before = np.array(paths.project(paths._vertices(tri, t), *(b + s * u), *u))
             np.testing.assert_allclose((at_end[:2] - before[:2]) / (end - s), [dx, dy],
                                        atol=1e-6)
             np.testing.assert_allclose(before[2:], [dx, dy], atol=1e-12)
@@ -90,9 +91,9 @@ def test_the_projected_ray_stops_at_its_computed_end():
 def known(spec: dict, tri: np.ndarray) -> np.ndarray:
     f = field(spec)
     weights = descent.START_BARYCENTRIC
-    points, _, _, at_vertex = kernels.triangle_starts(tri, weights)
+    points, _, _, at_vertex = start_kernels.triangle_starts(tri, weights)
     d, g = f.evaluate(points)
-    _, shape = kernels.triangle_known(tri, at_vertex, points, d, np.ascontiguousarray(g),
+    _, shape = start_kernels.triangle_known(tri, at_vertex, points, d, np.ascontiguousarray(g),
                                       len(weights), True, descent._convex(f.spec), 1e-12)
     return shape
 
@@ -104,20 +105,20 @@ def test_what_the_starts_show():
     # Above the long face of the box: one plane. Beyond a corner: a cone.
     face = np.array([[[-0.2, 0.8], [0.3, 0.8], [0.0, 1.1]]])
     face = face @ np.array([[np.cos(0.3), np.sin(0.3)], [-np.sin(0.3), np.cos(0.3)]])
-    assert known(BOX, face)[0, 0] == kernels.PLANE
+    assert known(BOX, face)[0, 0] == paths.PLANE
     corner = np.array([[[1.3, 0.7], [1.6, 0.9], [1.4, 1.2]]])
     shape = known({"type": "box", "size": [2.0, 1.0]}, corner)
-    assert shape[0, 0] == kernels.CONE
+    assert shape[0, 0] == paths.CONE
     np.testing.assert_allclose(shape[0, 1:3], [1.3, 0.7], atol=1e-12)   # nearest the corner
     circle = np.array([[[1.0, 0.2], [1.6, -0.3], [1.4, 0.6]]])
     shape = known({"type": "circle", "radius": 0.8}, circle)
-    assert shape[0, 0] == kernels.CONE
+    assert shape[0, 0] == paths.CONE
     np.testing.assert_allclose(shape[0, 3], field({"type": "circle", "radius": 0.8}).distance(
         shape[0, 1:3][None])[0], atol=1e-12)
     # Inside the box across its medial axis: cuts, whose minimum is exact.
     inside = np.array([[[0.3, -0.3], [0.9, 0.1], [0.6, 0.35]]])
     shape = known({"type": "box", "size": [2.0, 1.0]}, inside)
-    assert shape[0, 0] == kernels.CUTS
+    assert shape[0, 0] == paths.CUTS
     f = field({"type": "box", "size": [2.0, 1.0]})
     assert f.distance(shape[0, 1:3][None])[0] == pytest.approx(shape[0, 3], abs=1e-12)
     assert shape[0, 3] == pytest.approx(brute_minimum(f, inside[0]), abs=1e-9)
@@ -127,7 +128,7 @@ def test_no_cutting_planes_for_fields_not_known_convex():
     inside = np.array([[[0.3, -0.3], [0.9, 0.1], [0.6, 0.35]]])
     union = {"op": "union", "of": [{"type": "box", "size": [2.0, 1.0]},
                                    {"type": "circle", "radius": 0.1, "offset": [5.0, 5.0]}]}
-    assert known(union, inside)[0, 0] == kernels.GENERAL
+    assert known(union, inside)[0, 0] == paths.GENERAL
     assert descent._convex(field(BOX).spec)
     assert descent._convex(field({"op": "round", "r": 0.1, "of": BOX}).spec)
     assert descent._convex(field({"type": "polygon",

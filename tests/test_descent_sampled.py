@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from test_descent import CIRCLE, FIELDS, UNION, brute_minimum, in_triangle, random_triangles
 
-from sdfphys.collide import _descent_kernels as kernels
+from sdfphys.collide import _descent_starts as start_kernels
 from sdfphys.collide import descent, mesh_contacts
 from sdfphys.errors import SpecError
 from sdfphys.sdf import field
@@ -129,7 +129,7 @@ def test_hidden_dips_find_the_minimum_of_a_cubic_exactly(coefficients):
     / (3 c3), to round-off."""
     c = np.array(coefficients)
     points, phi, grad = _cubic_samples(c)
-    dips = kernels.hidden_dips(points, phi, grad, 2, np.array([[0, 1]]), 1)
+    dips = start_kernels.hidden_dips(points, phi, grad, 2, np.array([[0, 1]]), 1)
     x = (-c[2] + np.sqrt(c[2] ** 2 - 3.0 * c[1] * c[3])) / (3.0 * c[3])
     assert 0.0 < x < 1.0 and 2.0 * c[2] + 6.0 * c[3] * x > 0.0     # a minimum inside
     np.testing.assert_allclose(dips[0, 0], [x, 0.0], rtol=0, atol=1e-14)
@@ -143,7 +143,7 @@ def test_hidden_dips_find_the_minimum_of_a_cubic_exactly(coefficients):
 ])
 def test_no_hidden_dip_where_the_samples_show_everything(coefficients):
     points, phi, grad = _cubic_samples(np.array(coefficients))
-    dips = kernels.hidden_dips(points, phi, grad, 2, np.array([[0, 1]]), 1)
+    dips = start_kernels.hidden_dips(points, phi, grad, 2, np.array([[0, 1]]), 1)
     assert np.all(np.isnan(dips))
 
 
@@ -164,9 +164,9 @@ def test_hidden_dips_keep_the_lowest_predictions_in_order():
     order = np.argsort(depths)
     assert len(set(order.tolist())) == 3 and np.ptp(depths) > 0.1
     edges = np.array([[0, 1], [2, 3], [4, 5]])
-    two = kernels.hidden_dips(points, phi, grad, 6, edges, 2)[0]
+    two = start_kernels.hidden_dips(points, phi, grad, 6, edges, 2)[0]
     np.testing.assert_allclose(two, np.array(dips)[order[:2]], rtol=0, atol=1e-14)
-    four = kernels.hidden_dips(points, phi, grad, 6, edges, 4)[0]
+    four = start_kernels.hidden_dips(points, phi, grad, 6, edges, 4)[0]
     np.testing.assert_allclose(four[:3], np.array(dips)[order], rtol=0, atol=1e-14)
     assert np.all(np.isnan(four[3]))
 
@@ -186,10 +186,10 @@ def test_ranks_follow_the_samples():
     of another; then the other samples; then the rest."""
     weights, neighbours = descent._lattice(2)       # v0, m01, m02, v1, m12, v2
     tri = np.array([[[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]]])
-    points, _, sigma, _ = kernels.triangle_starts(tri, weights)
+    points, _, sigma, _ = start_kernels.triangle_starts(tri, weights)
 
     def pick(phi, k):
-        return kernels.pick_starts(np.array(phi, dtype=np.float64), points, sigma, 6,
+        return start_kernels.pick_starts(np.array(phi, dtype=np.float64), points, sigma, 6,
                                    neighbours, 0.5, k, 6)[0].tolist()
 
     phi = [0.0, 1.0, 2.0, -1.0, 3.0, 0.5]                # local minima v1, v0, v2

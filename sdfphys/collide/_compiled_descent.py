@@ -36,6 +36,11 @@ from numba import njit
 
 from ..sdf.compiled import run, scratch
 from ._descent_kernels import (
+    accept,
+    bound,
+    propose,
+)
+from ._descent_paths import (
     AT_BEST,
     BEST,
     COUNT,
@@ -45,14 +50,13 @@ from ._descent_kernels import (
     PAIR,
     TRIANGLE,
     _stationarity,
-    accept,
-    bound,
+)
+from ._descent_starts import (
     gather_starts,
     hidden_dips,
     initialize,
     pick_starts,
     present_dips,
-    propose,
     results,
     triangle_known,
     triangle_starts,

@@ -33,7 +33,7 @@ The descent (shared by the triangle and the field-field problems)
 Both minimise a piecewise smooth, 1-Lipschitz function phi: f over a triangle,
 or a balance of f_a and f_b over the plane (see ``_PairProblem``). From the
 current best point b, a *path* q(s), s >= 0, leaves b downhill. It is the
-proximal path of two linear models (``_descent_kernels._proximal_step``): while
+proximal path of two linear models (``_descent_paths._proximal_step``): while
 one model is clearly larger, steepest descent of it; from where they balance
 on, along the line where they are equal. With the linearisation of phi at b as
 both models it is plain steepest descent. For a triangle the path is projected
@@ -88,7 +88,7 @@ increases: whatever the budget, the returned point is the best one seen.
 What the starts of a triangle tell
 ----------------------------------
 All starts of a triangle are evaluated before the first round; when they span
-it (``_descent_kernels.triangle_known``):
+it (``_descent_starts.triangle_known``):
 
 - all on one plane (same gradient, values on it): f is taken as linear over the
   triangle, and each start's first rounds evaluate only the end of its steepest
@@ -137,6 +137,8 @@ from ..sdf import Field
 from ..sdf.compiled import Program, compile_field
 from ..sdf.compiled import distance as compiled_distance
 from . import _descent_kernels as kernels
+from . import _descent_paths as paths
+from . import _descent_starts as start_kernels
 from ._compiled_descent import (
     descend,
     descend_sampled,
@@ -165,7 +167,7 @@ START_BARYCENTRIC = np.array([
     [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
 ])
 
-#: Tolerance of the plane and cone fits of ``_descent_kernels.triangle_known``
+#: Tolerance of the plane and cone fits of ``_descent_starts.triangle_known``
 #: (unit gradients; values relative to the coordinates' and values' size).
 _SHAPE_TOL = 1e-12
 #: Run the descent with the fields compiled in (``_compiled_descent``) when they
@@ -279,7 +281,7 @@ class _TriangleProblem:
     ``convex``: f is convex by construction (``_convex`` of its spec).
     """
 
-    kind = kernels.TRIANGLE
+    kind = paths.TRIANGLE
     barzilai_borwein = False
     per_start = False
 
@@ -312,12 +314,12 @@ class _TriangleProblem:
         there. shape (T, 4): with starts spanning the triangle (``spanning``),
         whether f is a plane or a cone over it, or (for a field known convex) the
         minimum of its cutting-plane model, and the model's minimiser (see
-        ``_descent_kernels.triangle_known``). On a plane the steepest path needs no
+        ``_descent_starts.triangle_known``). On a plane the steepest path needs no
         ladder: it runs straight to its end (the minimising vertex, or the foot on
         an edge normal to the gradient), where f is lowest. On a cone every start
         first tries the point closest to its apex.
         """
-        return kernels.triangle_known(self.triangles, self.at_vertex, points, phi, grad,
+        return start_kernels.triangle_known(self.triangles, self.at_vertex, points, phi, grad,
                                       self.n_start, self.spanning, self.convex, _SHAPE_TOL)
 
 
@@ -357,8 +359,8 @@ _WORK = _Workspace()
 def _scratch(n_points: int) -> tuple:
     """The compiled descents' work arrays for ``n_points`` starts (this thread's, reused
     between calls): state, flags, running, and the candidate buffers cand, cand_i, points."""
-    return (_WORK.rows("state", n_points, kernels.N_STATE),
-            _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64),
+    return (_WORK.rows("state", n_points, paths.N_STATE),
+            _WORK.rows("flags", n_points, paths.N_FLAGS, np.int64),
             _WORK.rows("running", n_points, 1, np.int64)[:, 0],
             _WORK.whole("cand", 5), _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2))
 
@@ -378,7 +380,7 @@ def _point_starts(cand_i: np.ndarray, flags: np.ndarray, proposing: np.ndarray, 
     after the other (``flags[i, COUNT]`` each); cand_i (C, 2): a candidate whose
     source is >= 0 added that row of the n_eval points.
     """
-    owner = np.repeat(proposing, flags[proposing, kernels.COUNT])
+    owner = np.repeat(proposing, flags[proposing, paths.COUNT])
     source = cand_i[:n, 1]
     added = source >= 0
     start = np.empty(n_eval, dtype=np.int64)
@@ -411,9 +413,9 @@ def _descend(problem: _TriangleProblem | field_pairs._PairProblem, points: np.nd
     phi, grad, data = problem.evaluate(points, np.arange(n_points))
     phi, grad = np.ascontiguousarray(phi, np.float64), np.ascontiguousarray(grad, np.float64)
     data = np.array(data, dtype=np.float64, order="C")              # updated in place
-    state = _WORK.rows("state", n_points, kernels.N_STATE)
-    flags = _WORK.rows("flags", n_points, kernels.N_FLAGS, np.int64)
-    kernels.initialize(points, phi, grad, np.ascontiguousarray(sigma, dtype=np.float64),
+    state = _WORK.rows("state", n_points, paths.N_STATE)
+    flags = _WORK.rows("flags", n_points, paths.N_FLAGS, np.int64)
+    start_kernels.initialize(points, phi, grad, np.ascontiguousarray(sigma, dtype=np.float64),
                        state, flags)
     corner, shape = problem.known(points, phi, grad)
     running = _WORK.rows("running", n_points, 1, np.int64)[:, 0]
@@ -435,22 +437,22 @@ def _descend(problem: _TriangleProblem | field_pairs._PairProblem, points: np.nd
                  if problem.per_start else None)
         value, gradient, cand_data = (np.ascontiguousarray(a, dtype=np.float64)
                                       for a in problem.evaluate(candidates[:n_eval], start))
-        before = state[:, kernels.BEST:kernels.BEST + 2].copy() if uneven else None
+        before = state[:, paths.BEST:paths.BEST + 2].copy() if uneven else None
         n_running, size = kernels.accept(problem.kind, problem.triangles, problem.owner, corner,
                                          state, flags, data, cand, cand_i, value, gradient,
                                          cand_data, least, running[:n_running], shape, _SHAPE_TOL)
         if uneven:
             kept = running[:n_running]
-            step = state[kept, kernels.BEST:kernels.BEST + 2] - before[kept]
+            step = state[kept, paths.BEST:paths.BEST + 2] - before[kept]
             moved = np.sqrt(step[:, 0] * step[:, 0] + step[:, 1] * step[:, 1])
-            stop = (flags[kept, kernels.HAS_PREVIOUS] != 0) & (moved < tol[kept])
+            stop = (flags[kept, paths.HAS_PREVIOUS] != 0) & (moved < tol[kept])
             if stop.any():
                 kept = kept[~stop]
                 n_running = len(kept)
                 running[:n_running] = kept
                 size = kernels.bound(problem.kind, problem.owner, shape, state, flags,
                                      running[:n_running])
-    best, phi, rounds = kernels.results(state, flags)
+    best, phi, rounds = start_kernels.results(state, flags)
     return best, phi, data, rounds
 
 
@@ -466,7 +468,7 @@ def _descend_compiled(problem: _TriangleProblem | field_pairs._PairProblem,
     arguments and results, the problem's fields given by their ``programs`` (a, b)."""
     n_points = len(points)
     a, b = programs
-    pair = problem.kind == kernels.PAIR
+    pair = problem.kind == paths.PAIR
     best, phi, data, rounds, _, cand, cand_i, candidates = descend(
         problem.kind, problem.barzilai_borwein, 6 if pair else 2,
         a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth, b.nesting,
@@ -500,7 +502,7 @@ def _triangle_minima(field: Field, triangles: np.ndarray, iterations: int,
     if n_tri == 0:
         return np.zeros((0, n_start, 2)), np.zeros((0, n_start)), np.zeros((0, n_start), int)
     tri = np.ascontiguousarray(tri)
-    points, owner, sigma, at_vertex = kernels.triangle_starts(tri, np.ascontiguousarray(weights))
+    points, owner, sigma, at_vertex = start_kernels.triangle_starts(tri, np.ascontiguousarray(weights))
     problem = _TriangleProblem(field, tri, owner, at_vertex, n_start, _spanning(weights))
     best, value, _, rounds = _descend(problem, points, iterations, sigma, tol)
     return (best.reshape(n_tri, n_start, 2), value.reshape(n_tri, n_start),
@@ -565,7 +567,7 @@ def _lattice(degree: int) -> tuple[np.ndarray, np.ndarray]:
     return _LATTICES[degree]
 
 
-#: Hidden dips (``_descent_kernels.hidden_dips``: a local minimum between two lattice
+#: Hidden dips (``_descent_starts.hidden_dips``: a local minimum between two lattice
 #: samples that neither shows) evaluated per triangle as extra start candidates.
 HIDDEN_DIPS = 2
 
@@ -596,16 +598,16 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
     barycentric lattice of ``degree`` (>= 1; its vertices included), then at up
     to HIDDEN_DIPS hidden dips: places between two neighbouring samples where the
     cubic through their values and slopes has a local minimum that neither sample
-    shows (``_descent_kernels.hidden_dips``; a vertex that is a local minimum with
+    shows (``_descent_starts.hidden_dips``; a vertex that is a local minimum with
     a deeper dip 10 % along an edge). The starts are K = min(n_starts, N) samples
     or dips taken by increasing value, skipping those within one lattice spacing
     (longest edge / degree) of one already taken: first the discrete local minima
     (no lattice neighbour lower: one per separate dip) and the hidden dips, then
     the other samples, then, when too few are left, the lowest of the rest
-    (``_descent_kernels.pick_starts``). Start rank k = column k
+    (``_descent_starts.pick_starts``). Start rank k = column k
     (rank 0: the lowest sample of all; ``merge_minima`` keeps the lowest rank of a
     cluster). What the samples tell of f over the triangle (vertex values, a
-    plane, a cone, see ``_descent_kernels.triangle_known``) is read from all N
+    plane, a cone, see ``_descent_starts.triangle_known``) is read from all N
     samples; not a convex field's cutting-plane model (O(N^3) over N samples:
     costlier than the descents it saves). Each start
     then descends as in ``triangle_deepest`` (iterations, tol the same). Costs N
@@ -635,22 +637,22 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
             *_scratch(n_points))
         _keep(cand, cand_i, candidates)
         return best.reshape(n_tri, k, 2), value.reshape(n_tri, k)
-    spoints, _, ssigma, sat = kernels.triangle_starts(tri, weights)
+    spoints, _, ssigma, sat = start_kernels.triangle_starts(tri, weights)
     sphi, sgrad = field.evaluate(spoints)
     sphi = np.ascontiguousarray(sphi, dtype=np.float64)
     sgrad = np.ascontiguousarray(sgrad, dtype=np.float64)
-    known = kernels.triangle_known(tri, sat, spoints, sphi, sgrad, n_sample, True, False,
+    known = start_kernels.triangle_known(tri, sat, spoints, sphi, sgrad, n_sample, True, False,
                                    _SHAPE_TOL)
-    dip_points, dip_place = kernels.present_dips(kernels.hidden_dips(
+    dip_points, dip_place = start_kernels.present_dips(start_kernels.hidden_dips(
         spoints, sphi, sgrad, n_sample, edges, HIDDEN_DIPS))
     dip_phi, dip_grad = field.evaluate(dip_points)
-    spoints, sphi, sgrad, ssigma = kernels.with_dips(
+    spoints, sphi, sgrad, ssigma = start_kernels.with_dips(
         spoints, sphi, sgrad, ssigma, n_sample, HIDDEN_DIPS, dip_points, dip_place,
         np.ascontiguousarray(dip_phi, dtype=np.float64),
         np.ascontiguousarray(dip_grad, dtype=np.float64))
-    chosen = kernels.pick_starts(sphi, spoints, ssigma, n_sample + HIDDEN_DIPS, with_slots,
+    chosen = start_kernels.pick_starts(sphi, spoints, ssigma, n_sample + HIDDEN_DIPS, with_slots,
                                  1.0 / degree, k, n_sample)
-    points, _, _, sigma, owner = kernels.gather_starts(n_sample + HIDDEN_DIPS, chosen, spoints,
+    points, _, _, sigma, owner = start_kernels.gather_starts(n_sample + HIDDEN_DIPS, chosen, spoints,
                                                        sphi, sgrad, ssigma)
     problem = _TriangleProblem(field, tri, owner, _no_vertex_starts(n_tri), k, False)
     problem.known = lambda *_: known                          # read from the samples

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..sdf import Field, safe_normalize
 from ..sdf.compiled import Program, compile_field
-from . import _descent_kernels as kernels
+from . import _descent_paths as paths
 from . import descent
 from ._compiled_descent import field_contacts, patch_ends
 
@@ -62,13 +62,13 @@ class _PairProblem:
     for every pair, so one round evaluates each field once on the points of all
     pairs. Point data: f_a, f_b, grad f_a, grad f_b (6 columns, a's frame). Path
     parameters: origin and its data; the path is the proximal min-max path of
-    the two fields' linearisations (``_descent_kernels._proximal_step``): steepest descent of the
+    the two fields' linearisations (``_descent_paths._proximal_step``): steepest descent of the
     larger field until the linear models balance, then along the line where they
     are equal, down the min-norm element of {grad f_a, grad f_b} - the contact's
     tangent, where the sum f_a + f_b (minus the depth) decreases.
     """
 
-    kind = kernels.PAIR
+    kind = paths.PAIR
     barzilai_borwein = True
     per_start = True
 
@@ -103,13 +103,13 @@ class _PairProblem:
         data = self.values(points, self.pair_of[start])
         fa, fb, ga, gb = data[:, 0], data[:, 1], data[:, 2:4], data[:, 4:6]
         sign = np.where(fa >= fb, 1.0, -1.0)
-        phi = 0.5 * (fa + fb) + kernels.IMBALANCE * np.abs(fa - fb)
-        grad = 0.5 * (ga + gb) + (kernels.IMBALANCE * sign)[:, None] * (ga - gb)
+        phi = 0.5 * (fa + fb) + paths.IMBALANCE * np.abs(fa - fb)
+        grad = 0.5 * (ga + gb) + (paths.IMBALANCE * sign)[:, None] * (ga - gb)
         return phi, grad, data
 
     def stationarity(self, data: np.ndarray) -> np.ndarray:
         """(N,) >= 0 at data (N, 6): zero at a balanced minimum (see the kernels)."""
-        return kernels.stationarity(kernels.PAIR, data)
+        return paths.stationarity(paths.PAIR, data)
 
 
 _STARTS: dict[int, np.ndarray] = {}
@@ -167,7 +167,7 @@ def _clusters(group: np.ndarray, point: np.ndarray, key: np.ndarray, score: np.n
     is_head = valid & (leader == slot)
     member = (leader[:, None, :] == slot[None, :, None]) & valid[:, None, :]   # (G, W, W)
     lowest = np.min(np.where(member, score[at][:, None, :], np.inf), axis=2, keepdims=True)
-    rounding = 4.0 * kernels.EPS * np.maximum(1.0, np.abs(lowest))
+    rounding = 4.0 * paths.EPS * np.maximum(1.0, np.abs(lowest))
     member &= score[at][:, None, :] <= lowest + rounding
     best = np.argmin(np.where(member, tiebreak[at][:, None, :], np.inf), axis=2)
     g, h = np.nonzero(is_head)
