@@ -264,10 +264,16 @@ def near_boundary_points(outline, rng: np.random.Generator, per_edge: int = 20) 
 # Registry
 # --------------------------------------------------------------------------------------
 
+#: The primitives evaluated on one folded edge (``sdf.folded``); the others of
+#: NEW_PRIMITIVES and box live in ``sdf.polygonal``.
+FOLDED = {"pentagon", "hexagon", "octagon", "hexagram", "star", "cross", "rounded_cross"}
+
+
 def test_all_primitives_are_registered():
     assert NEW_PRIMITIVES | {"box"} <= set(PRIMITIVES)
-    modules = {PRIMITIVES[name].__module__ for name in NEW_PRIMITIVES | {"box"}}
-    assert modules == {"sdfphys.sdf.polygonal"}
+    for name in NEW_PRIMITIVES | {"box"}:
+        module = "folded" if name in FOLDED else "polygonal"
+        assert PRIMITIVES[name].__module__ == f"sdfphys.sdf.{module}", name
 
 
 # --------------------------------------------------------------------------------------

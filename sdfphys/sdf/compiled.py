@@ -29,11 +29,11 @@ What compiles: every registered primitive and operator. The primitives circle,
 box, rounded_box, polygon (mesh shapes' exact fields), half_plane, segment and
 capsule have their own loops in :func:`run`, and so has the ellipse (its solver
 steps interleave the points); the others go through ``_shape``, one point at a
-time: arc, ring, pie, cut_disk, horseshoe, vesica, moon, egg, heart,
-uneven_capsule, quadratic_bezier (curved.py), star, oriented_box, rhombus,
-trapezoid, parallelogram and triangle (one CONVEX opcode), equilateral_triangle
-and isosceles_triangle (SYM_TRIANGLE), pentagon, hexagon, octagon and hexagram
-(MIRRORED), cross, rounded_cross (polygonal.py) and baked grids (``bake``,
+time: arc, ring, pie, cut_disk, horseshoe, uneven_capsule (curved.py), vesica, moon,
+egg, heart, quadratic_bezier (conics.py), oriented_box, rhombus, trapezoid,
+parallelogram and triangle (one CONVEX opcode), equilateral_triangle and
+isosceles_triangle (SYM_TRIANGLE) (polygonal.py), star, pentagon, hexagon, octagon and
+hexagram (MIRRORED), cross, rounded_cross (folded.py) and baked grids (``bake``,
 grid.py: the node values, decoded if quantized, are consts). The operators:
 transform / translate / rotate, scale, union, intersection, difference, xor,
 smooth_union / smooth_intersection / smooth_difference (all four blends), round
@@ -68,7 +68,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from . import curved, grid, operators, polygonal
+from . import conics, curved, folded, grid, operators, polygonal
 from .base import Field, safe_normalize
 from .opcodes import (
     _TINY,
@@ -188,7 +188,7 @@ def _emit(f: Field, out: _Builder) -> None:
         radius = f.radius if kind is curved.Capsule else 0.0
         out.emit(SEGMENT, [f.a[0], f.a[1], ba[0], ba[1], float(ba @ ba), left[0], left[1],
                            radius], push=1)
-    elif kind is curved.Ellipse:
+    elif kind is conics.Ellipse:
         out.emit(ELLIPSE, [f.a, f.b], a=int(f.swap), push=1)
     elif kind is curved.Arc:
         out.emit(ARC, [f.c[0], f.c[1], f.radius, f.half_width], push=1)
@@ -201,22 +201,22 @@ def _emit(f: Field, out: _Builder) -> None:
     elif kind is curved.Horseshoe:
         out.emit(HORSESHOE, [f.radius, f.half_width, f.length, f.n[0], f.n[1], f.d[0],
                              f.d[1]], push=1)
-    elif kind is curved.Vesica:
+    elif kind is conics.Vesica:
         out.emit(VESICA, [f.radius, f.centre_distance, f.half_height], push=1)
-    elif kind is curved.Moon:
+    elif kind is conics.Moon:
         unit = f.horn / f.radius
         out.emit(MOON, [f.radius, f.bite_radius, f.centre_distance, f.horn[0], f.horn[1],
                         unit[0], unit[1]], push=1)
-    elif kind is curved.Egg:
+    elif kind is conics.Egg:
         r = f.core
         out.emit(EGG, [r, math.sqrt(3.0) * r, 2.0 * r, f.top_radius, math.sqrt(3.0)], push=1)
-    elif kind is curved.Heart:
+    elif kind is conics.Heart:
         out.emit(HEART, [f.scale, f._LOBE_CENTRE[0], f._LOBE_CENTRE[1], f._LOBE_RADIUS,
                          f._EDGE_NORMAL[0], f._EDGE_NORMAL[1]], push=1)
     elif kind is curved.UnevenCapsule:
         out.emit(UNEVEN_CAPSULE, [f.r1, f.r2, f.height, f.sin_t, f.cos_t,
                                   f.cos_t * f.height], push=1)
-    elif kind is polygonal.Star:
+    elif kind is folded.Star:
         out.emit(STAR, [f._an, 2.0 * f._an, f._eps, f._edge[0].b[0], f._edge[0].b[1]]
                  + _edge_consts(f._edge), push=1)
     elif kind is polygonal.OrientedBox:
@@ -235,22 +235,22 @@ def _emit(f: Field, out: _Builder) -> None:
         side = f._side
         out.emit(SYM_TRIANGLE, [f.y_base, f._eps, side.a[0], side.a[1], side.normal[0],
                                 side.normal[1]] + _edge_consts(f._edges), push=1)
-    elif kind in (polygonal.Pentagon, polygonal.Hexagon, polygonal.Octagon,
-                  polygonal.Hexagram):
+    elif kind in (folded.Pentagon, folded.Hexagon, folded.Octagon,
+                  folded.Hexagram):
         mirrors = [float(c) for n in kind._mirrors for c in n]
         out.emit(MIRRORED, [f.radius, f._eps] + mirrors + _edge_consts(f._edge),
                  a=len(kind._mirrors), b=int(kind._abs_y), push=1)
-    elif kind is polygonal.Cross:
+    elif kind is folded.Cross:
         out.emit(CROSS, [f.half[0], f.half[1], f.rounding, f._eps] + _edge_consts(f._edges),
                  a=len(f._edges), push=1)
-    elif kind is polygonal.RoundedCross:
+    elif kind is folded.RoundedCross:
         out.emit(ROUNDED_CROSS, [f.h, f._k, f.radius, f._k - f.h], push=1)
     elif kind is grid.GridField:
         band = math.inf if f.band is None else f.band
         out.emit(GRID, np.concatenate([[f.origin[0], f.origin[1], f.cell, f.margin, band],
                                        np.asarray(f.values, dtype=np.float64).ravel()]),
                  a=f.shape[0], b=f.shape[1], push=1)
-    elif kind is curved.QuadraticBezier:
+    elif kind is conics.QuadraticBezier:
         A, B = f.A, f.B
         out.emit(QUADRATIC_BEZIER, [f.a[0], f.a[1], A[0], A[1], B[0], B[1], B @ B,
                                     3.0 * (A @ B), 2.0 * (A @ A), f.radius, f.cross,

@@ -130,7 +130,7 @@ def _segment(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, f
 
 # --------------------------------------------------------------------------------------
 # The primitives that ``_shape`` evaluates point by point. Each repeats its numpy
-# evaluate (curved.py, polygonal.py, grid.py) operation for operation: the folds
+# evaluate (curved.py, conics.py, polygonal.py, folded.py, grid.py) operation for operation: the folds
 # as ``_fold_x`` (sign(0) = +1), ``_unit`` / ``_unit_or`` with their fallbacks,
 # ``np.where`` choices as if/else on the same comparisons. Where the numpy code
 # uses a BLAS product (``q @ c``) the products are written out: BLAS may round a
@@ -201,7 +201,7 @@ def _ellipse_terms(a: float, b: float, swap: int, px: float, py: float
 
 @njit(cache=True, error_model="numpy")
 def _ellipse(a: float, b: float, swap: int, cur: np.ndarray, n: int, out: np.ndarray) -> None:
-    """curved.Ellipse.evaluate at cur[:n] into out: Eberly's closest point, 12
+    """conics.Ellipse.evaluate at cur[:n] into out: Eberly's closest point, 12
     bisections, 6 Newton steps. Each step runs over all the points before the next
     (as numpy does): the points' dependency chains of divisions and square roots
     then overlap, 3.5x faster than one point at a time. out[:, 0] and out[:, 1]
@@ -356,7 +356,7 @@ def _horseshoe(consts: np.ndarray, o: int, px: float, py: float
 
 @njit(cache=True, error_model="numpy")
 def _moon(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
-    """curved.Moon.evaluate."""
+    """conics.Moon.evaluate."""
     ra, rb, dc = consts[o], consts[o + 1], consts[o + 2]
     ka, kb = consts[o + 3], consts[o + 4]
     sy = _sign(py)
@@ -386,7 +386,7 @@ def _moon(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, floa
 
 @njit(cache=True, error_model="numpy")
 def _heart(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
-    """curved.Heart.evaluate (unit heart at p / scale, value times scale)."""
+    """conics.Heart.evaluate (unit heart at p / scale, value times scale)."""
     scale = consts[o]
     px, py = px / scale, py / scale
     sx = _sign(px)
@@ -414,7 +414,7 @@ def _heart(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, flo
 
 @njit(cache=True, error_model="numpy")
 def _star(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
-    """polygonal.Star.evaluate: polar reduction to one sector and back."""
+    """folded.Star.evaluate: polar reduction to one sector and back."""
     an, period, eps = consts[o], consts[o + 1], consts[o + 2]
     x, y = abs(px), py
     theta = math.atan2(x, y)
@@ -437,7 +437,7 @@ def _star(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, floa
 @njit(cache=True, error_model="numpy")
 def _mirrored(consts: np.ndarray, o: int, k: int, abs_y: int, px: float, py: float
               ) -> tuple[float, float, float]:
-    """polygonal._MirrorFolded.evaluate: |p|, k mirrors, one edge on y = radius."""
+    """folded._MirrorFolded.evaluate: |p|, k mirrors, one edge on y = radius."""
     sx = _sign(px)
     sy = _sign(py) if abs_y else 1.0
     qx, qy = px * sx, py * sy
@@ -686,7 +686,7 @@ def _polish(t: float, k3: float, k2: float, k1: float, k0: float) -> float:
 
 @njit(cache=True, error_model="numpy")
 def _bezier(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
-    """curved.QuadraticBezier.evaluate: candidates (Cardano / Viete roots, the linear
+    """conics.QuadraticBezier.evaluate: candidates (Cardano / Viete roots, the linear
     root, polished; the ends), the nearest wins (the first of a tie)."""
     ax, ay, cax, cay, cbx, cby = (consts[o], consts[o + 1], consts[o + 2], consts[o + 3],
                                   consts[o + 4], consts[o + 5])
