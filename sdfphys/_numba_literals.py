@@ -4,10 +4,9 @@ When an njit function calls another with a constant argument (``run(..., 0, ...)
 ``_solve(..., True)``), numba types that argument as a literal (``Literal[int](0)``,
 ``Literal[bool](True)``) and compiles the callee once for it, apart from the compilation
 for a variable of the same type: every constant a kernel is called with from compiled
-code is one more full compilation of that kernel and of whatever it calls in turn.
-Here the field program's evaluator ``sdf.compiled.run``, ``polygons.clip_pair`` and the
-solver's ``_solve`` and ``_sweeps`` were each compiled twice, ``reduce._novelty`` four
-times (the cold-start figures are in docs/performance.md).
+code is one more full compilation of that kernel and of whatever it calls in turn (the
+field program's evaluator ``sdf.compiled.run`` is called with ``0`` by some kernels and
+with a variable by others; the solver's ``_solve`` with ``True`` and ``False``).
 
 ``install`` makes a call from compiled code to a function of this package compile for
 the arguments' plain types (``numba.types.unliteral``): the call with a constant then
