@@ -42,6 +42,7 @@ import numpy as np
 from numba import njit
 
 from ..settings import Settings
+from .joints import RELAX, SOLVE, WARM, JointRows, joint_softness, solve_joints, spring_softness
 from .rows import BodyState, ContactConstraints
 from .softness import CONVERGED, REST_SPEED, row_softness
 
@@ -422,8 +423,11 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
                      base_separation, separation, normal_mass, tangent_mass, friction,
                      bias_rate, mass_scale, impulse_scale, normal_impulse, tangent_impulse,
                      total_normal_impulse, h, substeps, relax_passes, max_push_out, max_speed,
-                     use_friction, extra_passes, rest_passes, soft_depth):
+                     use_friction, extra_passes, rest_passes, soft_depth, joints):
     """All substeps of one step: integrate v, warm start, solve, integrate x, relax.
+
+    joints: (JointRows, joint softness (3,), spring softness (J, 3)); the joint rows are
+    warm started, solved and relaxed before the contacts in each phase (Box2D v3's order).
 
     After the solve and after the relax passes, the pairs of loaded islands
     (``loaded_pairs``) get up to ``extra_passes`` more passes each (``_sweeps``).
@@ -450,6 +454,10 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             tangent_mass, friction, bias_rate, mass_scale, impulse_scale, normal_impulse,
             tangent_impulse, total_normal_impulse)
     pseudo = (pseudo_velocity, pseudo_angular, pseudo_impulse)
+    joint_rows, joint_soft, joint_spring = joints
+    has_joints = joint_rows.kind.shape[0] > 0
+    no_force = np.empty((0, 2))
+    no_torque = np.empty(0)
     passes_run = 0
     push_outs = 0
     for _ in range(substeps):
@@ -457,10 +465,17 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
         push_outs += split
         _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
                               angular_damping, gravity, h)
+        if has_joints:
+            solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
+                         joint_rows, WARM, joint_soft, joint_spring, inv_h, no_force, no_torque)
         if has_contacts:
             _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
                         pair_start, normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
                         total_normal_impulse)
+        if has_joints:
+            solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
+                         joint_rows, SOLVE, joint_soft, joint_spring, inv_h, no_force, no_torque)
+        if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
                                   max_push_out, soft_depth, True, use_friction, 1, extra_passes,
                                   rest_passes)
@@ -471,6 +486,11 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             _update_anchors(com, com0, angle, angle0, round_body, cos_d, sin_d, inv_mass,
                             body_a, body_b, normal, anchor_a0, anchor_b0, base_separation,
                             arm_a0, arm_b0, anchor_a, anchor_b, separation)
+        for _ in range(relax_passes if has_joints else 0):
+            solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
+                         joint_rows, RELAX, joint_soft, joint_spring, inv_h, no_force,
+                         no_torque)
+        if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
                                   max_push_out, soft_depth, False, use_friction, relax_passes,
                                   extra_passes, rest_passes)
@@ -478,8 +498,12 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
 
 
 def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: np.ndarray,
-                   settings: Settings, use_friction: bool) -> tuple[int, int]:
+                   settings: Settings, use_friction: bool,
+                   joints: JointRows | None = None) -> tuple[int, int]:
     """Run every substep of one step in place (one compiled call).
+
+    joints: the joint rows (``solver.joints``), solved with the contacts; their
+    accumulated impulses are updated in place (None: no joints).
 
     gravity: (2,) m/s^2, applied to dynamic bodies. ``use_friction`` False skips the
     friction rows (the caller passes False when every contact's friction is 0).
@@ -489,6 +513,7 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     c = constraints
     h = settings.dt / settings.substeps
     gravity = np.asarray(gravity, dtype=np.float64)
+    joints = JointRows.empty() if joints is None else joints
     v, w = bodies.velocity, bodies.angular_velocity
     spin = 0.0 if bodies.radius is None else w * np.where(bodies.inv_mass > 0.0,
                                                           bodies.radius, 0.0)
@@ -505,7 +530,8 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         c.normal_impulse, c.tangent_impulse, c.total_normal_impulse,
         h, settings.substeps, settings.relax_passes, settings.max_push_out,
         settings.max_linear_speed, use_friction, settings.stiff_iterations - 1,
-        settings.rest_iterations - 1, settings.soft_depth)
+        settings.rest_iterations - 1, settings.soft_depth,
+        (joints, joint_softness(settings, h), spring_softness(joints, h)))
     return int(passes), int(push_outs)
 
 

@@ -1,0 +1,475 @@
+"""Joint rows of the soft-step solver: Box2D v3's joints, as numba loops over arrays.
+
+Every joint is a few constraint rows solved with the contacts in each substep (``substeps``):
+warm started with last step's accumulated impulses, solved with soft bias, relaxed
+without it (E. Catto, Box2D v3 ``joint.c``, ``revolute_joint.c``, ``prismatic_joint.c``,
+``distance_joint.c``, ``weld_joint.c``, ``wheel_joint.c``, ``motor_joint.c``,
+``mouse_joint.c``; "Soft Constraints", GDC 2011). Limits and motors are extra rows.
+
+Frames. Internally body a is the joint's second body (the base) and body b its first
+(the part that moves relative to it), as Box2D's bodyA and bodyB; a = -1 is the world
+(at the origin, angle 0, no mass). ``local_a``, ``local_b``: the anchors relative to
+each centre of mass in the body's frame; the arms rA = R(qa) local_a, rB = R(qb) local_b
+and the separation d = (xb + rB) - (xa + rA) are measured afresh from the bodies'
+positions at every row (no stored delta: positions are float64).
+
+Rows. A row has a Jacobian (u, a1, a2): its velocity is Cdot = u.(vb - va) + a2 wb - a1 wa
+and its impulse l pushes b by l u (torque l a2) and a by -l u (torque -l a1); its
+effective mass is 1 / (ma + mb |u|^2 + ia a1^2 + ib a2^2) (|u| = 1 or 0). One update, as
+the contact rows' (``softness``):
+    d_l = -m (mass_scale Cdot + bias) - impulse_scale l,   l clamped to [lo, hi].
+- equality rows (a shared point, an axis, a weld's angle, a rod's length) use the joint
+  softness (``joint_softness``) with bias = mass_scale bias_rate C while solving, and
+  are rigid (bias 0, mass_scale 1, impulse_scale 0) while relaxing;
+- limits are one-sided (l >= 0): speculative while open (C > 0: bias = C / h, rigid),
+  soft as an equality row while violated;
+- springs use their own softness (hertz, damping ratio) in both passes: they are the
+  physical spring, an implicit spring-damper, not a correction;
+- motors: bias = -speed, rigid, |l| <= max force (torque) x h.
+A point (revolute, weld, motor joint, mouse) is solved as one 2x2 block,
+K = [[ma + mb + ia ry_a^2 + ib ry_b^2, -ia rx_a ry_a - ib rx_b ry_b], [., ma + mb + ia rx_a^2
++ ib rx_b^2]], as Box2D does. Accumulated impulses are per substep (N s), as the
+contacts': ``joint_reactions`` divides by h.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from .softness import soft_coefficients
+
+__all__ = ["JOINT_DAMPING_RATIO", "MOTOR_CORRECTION", "JointRows", "joint_reactions",
+           "joint_softness", "solve_joints", "spring_softness"]
+
+REVOLUTE, PRISMATIC, DISTANCE, WELD, WHEEL, MOTOR, MOUSE = range(7)
+#: Damping ratio of rigid joint rows (Box2D v3's ``jointDampingRatio``); their hertz is
+#: twice the capped contact hertz (Box2D v3: ``2 * contactHertz``, 60 Hz by default).
+JOINT_DAMPING_RATIO = 2.0
+#: Fraction of a motor joint's pose error corrected per substep (Box2D v3's
+#: ``correctionFactor`` default).
+MOTOR_CORRECTION = 0.3
+#: Row phases: apply the stored impulse, solve with bias, relax, sum the reaction.
+WARM, SOLVE, RELAX, REACTION = range(4)
+#: A distance limit beyond this is no limit (joints.py's _FAR).
+_NO_LIMIT = 2.0 ** 17
+
+
+class JointRows(NamedTuple):
+    """The joints as the solver sees them (J rows, in ``World.joints`` order).
+
+    kind: (J,) int64, REVOLUTE .. MOUSE. body_a, body_b: (J,) int64, second and first
+    body (-1: the world). local_a, local_b: (J, 2) m, anchors in the bodies' frames
+    (relative to the centre of mass; for the world, a world point: a mouse's target).
+    local_axis: (J, 2) unit, in a's frame. reference_angle: (J,) rad, qb - qa at creation.
+    length, min_length, max_length: (J,) m (distance). lower, upper: (J,) rad or m;
+    has_limit, has_motor, has_spring, collide_connected: (J,) bool. motor_speed: (J,)
+    rad/s or m/s. max_motor: (J,) N m or N, the motor's bound (a motor joint's force).
+    max_torque: (J,) N m (motor joint). max_force: (J,) N (mouse; inf: none).
+    spring_hertz, spring_damping: (J,) Hz and ratio.
+    Accumulated impulses, N s per substep (warm started, updated in place):
+    linear_impulse (J, 2) world frame, on b (the point block); angular_impulse (J,);
+    perp_impulse (J,) (prismatic, wheel); axial_impulse (J,) (rod, rigid wheel axis);
+    spring_impulse, motor_impulse, lower_impulse, upper_impulse (J,).
+    """
+
+    kind: np.ndarray
+    body_a: np.ndarray
+    body_b: np.ndarray
+    local_a: np.ndarray
+    local_b: np.ndarray
+    local_axis: np.ndarray
+    reference_angle: np.ndarray
+    length: np.ndarray
+    min_length: np.ndarray
+    max_length: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    has_limit: np.ndarray
+    has_motor: np.ndarray
+    has_spring: np.ndarray
+    collide_connected: np.ndarray
+    motor_speed: np.ndarray
+    max_motor: np.ndarray
+    max_torque: np.ndarray
+    max_force: np.ndarray
+    spring_hertz: np.ndarray
+    spring_damping: np.ndarray
+    linear_impulse: np.ndarray
+    angular_impulse: np.ndarray
+    perp_impulse: np.ndarray
+    axial_impulse: np.ndarray
+    spring_impulse: np.ndarray
+    motor_impulse: np.ndarray
+    lower_impulse: np.ndarray
+    upper_impulse: np.ndarray
+
+    @classmethod
+    def empty(cls) -> JointRows:
+        return cls(*(np.zeros((0,) + shape, dtype) for shape, dtype in _FIELDS.values()))
+
+    def __len__(self) -> int:  # type: ignore[override]
+        return len(self.kind)
+
+    @classmethod
+    def from_spec(cls, spec, com: np.ndarray, angle: np.ndarray) -> JointRows:
+        """One row from a validated ``joints.JointSpec`` and the bodies' com (B, 2) m and
+        angle (B,) rad now."""
+        from ..joints import JOINT_TYPES
+
+        second, first = spec.bodies[1], spec.bodies[0]
+        pose = {i: ((0.0, 0.0), 0.0) if i < 0 else (tuple(com[i]), float(angle[i]))
+                for i in (first, second)}
+
+        def local(i, point):
+            (cx, cy), q = pose[i]
+            c, s = math.cos(q), math.sin(q)
+            x, y = point[0] - cx, point[1] - cy
+            return c * x + s * y, -s * x + c * y
+
+        kind = JOINT_TYPES.index(spec.kind)
+        if kind == DISTANCE:
+            la, lb = local(second, spec.anchors[1]), local(first, spec.anchors[0])
+        elif kind == MOTOR:
+            la, lb = local(second, pose[first][0]), (0.0, 0.0)
+        else:
+            la, lb = local(second, spec.anchor), local(first, spec.anchor)
+        qa = pose[second][1]
+        c, s = math.cos(qa), math.sin(qa)
+        axis = (c * spec.axis[0] + s * spec.axis[1], -s * spec.axis[0] + c * spec.axis[1])
+        limits = spec.limits or (0.0, 0.0)
+        motor = spec.motor or (0.0, 0.0)
+        spring = spec.spring or (0.0, 0.0)
+        values = dict(
+            kind=kind, body_a=second, body_b=first, local_a=la, local_b=lb, local_axis=axis,
+            reference_angle=pose[first][1] - qa, length=spec.length,
+            min_length=spec.min_length, max_length=spec.max_length, lower=limits[0],
+            upper=limits[1], has_limit=spec.limits is not None,
+            has_motor=spec.motor is not None and kind != MOTOR,
+            has_spring=spec.spring is not None and spring[0] > 0.0,
+            collide_connected=spec.collide_connected,
+            motor_speed=0.0 if kind == MOTOR else motor[0],
+            max_motor=motor[0] if kind == MOTOR else motor[1],
+            max_torque=motor[1] if kind == MOTOR else 0.0, max_force=spec.max_force,
+            spring_hertz=spring[0], spring_damping=spring[1])
+        return cls(*(np.full((1,) + shape, values.get(name, 0.0), dtype)
+                     for name, (shape, dtype) in _FIELDS.items()))
+
+    @classmethod
+    def concatenate(cls, first: JointRows, second: JointRows) -> JointRows:
+        return cls(*(np.concatenate([x, y]) for x, y in zip(first, second)))
+
+    def take(self, index: np.ndarray) -> JointRows:
+        return JointRows(*(np.ascontiguousarray(x[index]) for x in self))
+
+    def renumbered(self, removed: int) -> JointRows:
+        """The rows after body ``removed`` is gone: later bodies' indices down by one."""
+        return self._replace(body_a=self.body_a - (self.body_a > removed),
+                             body_b=self.body_b - (self.body_b > removed))
+
+
+#: JointRows' fields: name -> (trailing shape, dtype).
+_FIELDS = {name: ((2,) if name in ("local_a", "local_b", "local_axis", "linear_impulse")
+                  else (), np.int64 if name in ("kind", "body_a", "body_b")
+                  else np.bool_ if name.startswith("has_") or name == "collide_connected"
+                  else np.float64)
+           for name in JointRows._fields}
+
+
+def joint_softness(settings, h: float) -> np.ndarray:
+    """(3,) bias_rate 1/s, mass_scale, impulse_scale of rigid joint rows for substep h (s):
+    2 x the capped contact hertz (``contact_softness``), JOINT_DAMPING_RATIO."""
+    soft = soft_coefficients(2.0 * min(settings.contact_hertz, 0.25 / h), JOINT_DAMPING_RATIO, h)
+    return np.array([soft.bias_rate, soft.mass_scale, soft.impulse_scale])
+
+
+def spring_softness(rows: JointRows, h: float) -> np.ndarray:
+    """(J, 3) the springs' bias_rate, mass_scale, impulse_scale for substep h (s): one
+    ``soft_coefficients`` per distinct (hertz, damping ratio)."""
+    out = np.zeros((len(rows), 3))
+    out[:, 1] = 1.0
+    springs = np.column_stack([rows.spring_hertz, rows.spring_damping])
+    distinct, which = np.unique(springs, axis=0, return_inverse=True)
+    for k, (hertz, zeta) in enumerate(distinct):
+        soft = soft_coefficients(float(hertz), float(zeta), h)
+        out[which.reshape(-1) == k] = (soft.bias_rate, soft.mass_scale, soft.impulse_scale)
+    return out
+
+
+# --------------------------------------------------------------------------------------
+# Rows (one function per shape of row, shared by every kind and phase).
+# --------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _apply(v, m, ux, uy, a1, a2, impulse):
+    """Velocities (vax, vay, wa, vbx, vby, wb) after the row impulse (module docstring)."""
+    vax, vay, wa, vbx, vby, wb = v
+    ma, ia, mb, ib = m
+    return (vax - ma * impulse * ux, vay - ma * impulse * uy, wa - ia * impulse * a1,
+            vbx + mb * impulse * ux, vby + mb * impulse * uy, wb + ib * impulse * a2)
+
+
+@njit(cache=True)
+def _row(v, m, ux, uy, a1, a2, acc, j, phase, bias, m_scale, i_scale, lo, hi, out_f, out_t):
+    """One row with Jacobian (u, a1, a2) and accumulated impulse acc[j] (module docstring).
+
+    phase WARM applies acc[j]; SOLVE and RELAX update it with the given bias (m/s or
+    rad/s), mass_scale, impulse_scale, clamped to [lo, hi]; REACTION adds its linear
+    impulse on b to out_f[j] and, for an angular row (u = 0), its torque to out_t[j].
+    """
+    if phase == WARM:
+        return _apply(v, m, ux, uy, a1, a2, acc[j])
+    if phase == REACTION:
+        out_f[j, 0] += acc[j] * ux
+        out_f[j, 1] += acc[j] * uy
+        if ux == 0.0 and uy == 0.0:
+            out_t[j] += acc[j] * a2
+        return v
+    vax, vay, wa, vbx, vby, wb = v
+    ma, ia, mb, ib = m
+    k = (ma + mb) * (ux * ux + uy * uy) + ia * a1 * a1 + ib * a2 * a2
+    if k <= 0.0:
+        return v
+    cdot = ux * (vbx - vax) + uy * (vby - vay) + a2 * wb - a1 * wa
+    impulse = -(m_scale * cdot + bias) / k - i_scale * acc[j]
+    total = min(max(acc[j] + impulse, lo), hi)
+    impulse = total - acc[j]
+    acc[j] = total
+    return _apply(v, m, ux, uy, a1, a2, impulse)
+
+
+@njit(cache=True)
+def _point(v, m, rax, ray, rbx, rby, acc, j, phase, bx, by, m_scale, i_scale, largest, out_f):
+    """The 2x2 block of a shared point, accumulated impulse acc[j] (2,) on b, |acc| <=
+    largest (N s). bias (bx, by) m/s as in ``_row``; REACTION adds acc[j] to out_f[j]."""
+    vax, vay, wa, vbx, vby, wb = v
+    ma, ia, mb, ib = m
+    if phase == REACTION:
+        out_f[j, 0] += acc[j, 0]
+        out_f[j, 1] += acc[j, 1]
+        return v
+    if phase == WARM:
+        px, py = acc[j, 0], acc[j, 1]
+    else:
+        k11 = ma + mb + ia * ray * ray + ib * rby * rby
+        k12 = -ia * rax * ray - ib * rbx * rby
+        k22 = ma + mb + ia * rax * rax + ib * rbx * rbx
+        det = k11 * k22 - k12 * k12
+        if det <= 0.0:
+            return v
+        cx = m_scale * (vbx - wb * rby - vax + wa * ray) + bx
+        cy = m_scale * (vby + wb * rbx - vay - wa * rax) + by
+        ox, oy = acc[j, 0], acc[j, 1]
+        tx = ox - (k22 * cx - k12 * cy) / det - i_scale * ox
+        ty = oy - (k11 * cy - k12 * cx) / det - i_scale * oy
+        size = math.hypot(tx, ty)
+        if size > largest:
+            tx *= largest / size
+            ty *= largest / size
+        acc[j, 0], acc[j, 1] = tx, ty
+        px, py = tx - ox, ty - oy
+    return (vax - ma * px, vay - ma * py, wa - ia * (rax * py - ray * px),
+            vbx + mb * px, vby + mb * py, wb + ib * (rbx * py - rby * px))
+
+
+@njit(cache=True)
+def _equality(c, soft, phase):
+    """(bias, mass_scale, impulse_scale) of an equality row at error c: soft with the joint
+    softness while solving, rigid while relaxing."""
+    if phase == SOLVE:
+        return soft[1] * soft[0] * c, soft[1], soft[2]
+    return 0.0, 1.0, 0.0
+
+
+@njit(cache=True)
+def _limit(c, soft, phase, inv_h):
+    """(bias, mass_scale, impulse_scale) of a one-sided row at error c (>= 0 allowed)."""
+    if c > 0.0:
+        return c * inv_h, 1.0, 0.0
+    return _equality(c, soft, phase)
+
+
+@njit(cache=True)
+def _spring(c, spring):
+    """(bias, mass_scale, impulse_scale) of a spring row at stretch c (both passes)."""
+    return spring[1] * spring[0] * c, spring[1], spring[2]
+
+
+@njit(cache=True)
+def _limits(v, m, r, j, phase, value, ux, uy, a1, a2, soft, inv_h, out_f, out_t):
+    """The lower and upper rows of a limited coordinate ``value`` (rad or m)."""
+    if not r.has_limit[j]:
+        return v
+    bias, ms, isc = _limit(value - r.lower[j], soft, phase, inv_h)
+    v = _row(v, m, ux, uy, a1, a2, r.lower_impulse, j, phase, bias, ms, isc, 0.0, np.inf,
+             out_f, out_t)
+    bias, ms, isc = _limit(r.upper[j] - value, soft, phase, inv_h)
+    return _row(v, m, -ux, -uy, -a1, -a2, r.upper_impulse, j, phase, bias, ms, isc, 0.0,
+                np.inf, out_f, out_t)
+
+
+@njit(cache=True)
+def _motor(v, m, r, j, phase, ux, uy, a1, a2, h, out_f, out_t):
+    """A motor row driving Cdot toward motor_speed, |impulse| <= max_motor h."""
+    if not r.has_motor[j]:
+        return v
+    bound = r.max_motor[j] * h
+    return _row(v, m, ux, uy, a1, a2, r.motor_impulse, j, phase, -r.motor_speed[j], 1.0, 0.0,
+                -bound, bound, out_f, out_t)
+
+
+# --------------------------------------------------------------------------------------
+# One joint, every kind.
+# --------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out_f, out_t):
+    """Joint j's rows in Box2D v3's order (springs, motors, limits, then the rigid rows).
+
+    g: (rax, ray, rbx, rby, dx, dy, qa, qb) the arms, the separation d = pB - pA (m) and
+    the angles (rad) now. Returns the new velocities."""
+    rax, ray, rbx, rby, dx, dy, qa, qb = g
+    kind = r.kind[j]
+    h = 1.0 / inv_h
+    angle = qb - qa - r.reference_angle[j]
+    if kind == REVOLUTE or kind == WELD or kind == MOTOR:
+        if kind == REVOLUTE:
+            v = _motor(v, m, r, j, phase, 0.0, 0.0, 1.0, 1.0, h, out_f, out_t)
+            v = _limits(v, m, r, j, phase, angle, 0.0, 0.0, 1.0, 1.0, soft, inv_h, out_f, out_t)
+            bias, ms, isc = _equality(1.0, soft, phase)
+            largest = np.inf
+        elif kind == WELD:
+            if r.has_spring[j]:
+                bias, ms, isc = _spring(angle, spring[j])
+            else:
+                bias, ms, isc = _equality(angle, soft, phase)
+            v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase, bias, ms, isc,
+                     -np.inf, np.inf, out_f, out_t)
+            bias, ms, isc = _spring(1.0, spring[j]) if r.has_spring[j] else _equality(
+                1.0, soft, phase)
+            largest = np.inf
+        else:
+            bound = r.max_torque[j] * h
+            v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase,
+                     MOTOR_CORRECTION * inv_h * angle, 1.0, 0.0, -bound, bound, out_f, out_t)
+            bias, ms, isc = MOTOR_CORRECTION * inv_h, 1.0, 0.0
+            largest = r.max_motor[j] * h
+        # bias above is per metre of separation: the point's bias is (bias dx, bias dy).
+        return _point(v, m, rax, ray, rbx, rby, r.linear_impulse, j, phase, bias * dx,
+                      bias * dy, ms, isc, largest, out_f)
+    if kind == MOUSE:
+        spring_j = spring[j]
+        return _point(v, m, rax, ray, rbx, rby, r.linear_impulse, j, phase,
+                      spring_j[1] * spring_j[0] * dx, spring_j[1] * spring_j[0] * dy,
+                      spring_j[1], spring_j[2], r.max_force[j] * h, out_f)
+    if kind == DISTANCE:
+        length = math.hypot(dx, dy)
+        if length < 1e-9:
+            return v
+        ux, uy = dx / length, dy / length
+        a1 = rax * uy - ray * ux
+        a2 = rbx * uy - rby * ux
+        if r.min_length[j] == r.max_length[j]:
+            bias, ms, isc = _equality(length - r.length[j], soft, phase)
+            return _row(v, m, ux, uy, a1, a2, r.axial_impulse, j, phase, bias, ms, isc,
+                        -np.inf, np.inf, out_f, out_t)
+        if r.has_spring[j]:
+            bias, ms, isc = _spring(length - r.length[j], spring[j])
+            v = _row(v, m, ux, uy, a1, a2, r.spring_impulse, j, phase, bias, ms, isc,
+                     -np.inf, np.inf, out_f, out_t)
+        if r.min_length[j] > 0.0:
+            bias, ms, isc = _limit(length - r.min_length[j], soft, phase, inv_h)
+            v = _row(v, m, ux, uy, a1, a2, r.lower_impulse, j, phase, bias, ms, isc, 0.0,
+                     np.inf, out_f, out_t)
+        if r.max_length[j] < _NO_LIMIT:
+            bias, ms, isc = _limit(r.max_length[j] - length, soft, phase, inv_h)
+            v = _row(v, m, -ux, -uy, -a1, -a2, r.upper_impulse, j, phase, bias, ms, isc, 0.0,
+                     np.inf, out_f, out_t)
+        return v
+    # PRISMATIC and WHEEL: an axis carried by a, along which b slides.
+    ca, sa = math.cos(qa), math.sin(qa)
+    ux = ca * r.local_axis[j, 0] - sa * r.local_axis[j, 1]
+    uy = sa * r.local_axis[j, 0] + ca * r.local_axis[j, 1]
+    translation = ux * dx + uy * dy
+    a1 = (dx + rax) * uy - (dy + ray) * ux
+    a2 = rbx * uy - rby * ux
+    if kind == PRISMATIC:
+        v = _motor(v, m, r, j, phase, ux, uy, a1, a2, h, out_f, out_t)
+    else:
+        v = _motor(v, m, r, j, phase, 0.0, 0.0, 1.0, 1.0, h, out_f, out_t)
+        if r.has_spring[j]:
+            bias, ms, isc = _spring(translation, spring[j])
+            v = _row(v, m, ux, uy, a1, a2, r.spring_impulse, j, phase, bias, ms, isc,
+                     -np.inf, np.inf, out_f, out_t)
+        else:
+            bias, ms, isc = _equality(translation, soft, phase)
+            v = _row(v, m, ux, uy, a1, a2, r.axial_impulse, j, phase, bias, ms, isc,
+                     -np.inf, np.inf, out_f, out_t)
+    v = _limits(v, m, r, j, phase, translation, ux, uy, a1, a2, soft, inv_h, out_f, out_t)
+    px, py = -uy, ux
+    bias, ms, isc = _equality(px * dx + py * dy, soft, phase)
+    v = _row(v, m, px, py, (dx + rax) * py - (dy + ray) * px, rbx * py - rby * px,
+             r.perp_impulse, j, phase, bias, ms, isc, -np.inf, np.inf, out_f, out_t)
+    if kind == PRISMATIC:
+        bias, ms, isc = _equality(angle, soft, phase)
+        v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase, bias, ms, isc,
+                 -np.inf, np.inf, out_f, out_t)
+    return v
+
+
+@njit(cache=True)
+def solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows, phase,
+                 soft, spring, inv_h, out_f, out_t):
+    """One pass of ``phase`` (WARM, SOLVE, RELAX, REACTION) over every joint, in order.
+
+    com (B, 2) m, angle (B,) rad: the bodies now; velocity, angular_velocity updated in
+    place; inv_mass, inv_inertia: (B,) (0: static, kinematic, asleep). rows: JointRows.
+    soft: (3,) ``joint_softness``; spring: (J, 3) ``spring_softness``; inv_h: 1/s.
+    out_f (J, 2), out_t (J,): what REACTION adds to (N s on b; other phases leave them).
+    """
+    for j in range(rows.kind.shape[0]):
+        a = rows.body_a[j]
+        b = rows.body_b[j]
+        cax = cay = qa = vax = vay = wa = ma = ia = 0.0
+        cbx = cby = qb = vbx = vby = wb = mb = ib = 0.0
+        if a >= 0:
+            cax, cay, qa = com[a, 0], com[a, 1], angle[a]
+            vax, vay, wa = velocity[a, 0], velocity[a, 1], angular_velocity[a]
+            ma, ia = inv_mass[a], inv_inertia[a]
+        if b >= 0:
+            cbx, cby, qb = com[b, 0], com[b, 1], angle[b]
+            vbx, vby, wb = velocity[b, 0], velocity[b, 1], angular_velocity[b]
+            mb, ib = inv_mass[b], inv_inertia[b]
+        if ma == 0.0 and ia == 0.0 and mb == 0.0 and ib == 0.0 and phase != REACTION:
+            continue
+        c, s = math.cos(qa), math.sin(qa)
+        rax = c * rows.local_a[j, 0] - s * rows.local_a[j, 1]
+        ray = s * rows.local_a[j, 0] + c * rows.local_a[j, 1]
+        c, s = math.cos(qb), math.sin(qb)
+        rbx = c * rows.local_b[j, 0] - s * rows.local_b[j, 1]
+        rby = s * rows.local_b[j, 0] + c * rows.local_b[j, 1]
+        g = (rax, ray, rbx, rby, cbx + rbx - cax - rax, cby + rby - cay - ray, qa, qb)
+        v = _joint((vax, vay, wa, vbx, vby, wb), (ma, ia, mb, ib), g, rows, j, phase, soft,
+                   spring, inv_h, out_f, out_t)
+        if a >= 0:
+            velocity[a, 0], velocity[a, 1], angular_velocity[a] = v[0], v[1], v[2]
+        if b >= 0:
+            velocity[b, 0], velocity[b, 1], angular_velocity[b] = v[3], v[4], v[5]
+
+
+def joint_reactions(com: np.ndarray, angle: np.ndarray, rows: JointRows,
+                    h: float) -> tuple[np.ndarray, np.ndarray]:
+    """(force (J, 2) N, torque (J,) N m): what each joint's rows applied to its first body
+    over the last substep's accumulated impulses / h. The torque counts the angular rows
+    only (motor, limits, a weld's or prismatic's angle), as Box2D's constraint torque."""
+    force, torque = np.zeros((len(rows), 2)), np.zeros(len(rows))
+    if len(rows):
+        zero = np.zeros(len(angle))
+        solve_joints(com, angle, np.zeros_like(com), zero, zero, zero, rows, REACTION,
+                     np.zeros(3), np.zeros((len(rows), 3)), 1.0 / h, force, torque)
+    return force / h, torque / h
