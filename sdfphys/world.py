@@ -569,7 +569,8 @@ class World(WorldJoints):
         fraction = step_fractions([shape.field for shape in self._shapes],
                                   [getattr(shape, "vertices", None) for shape in self._shapes],
                                   self._view("shape_id"), start_com, bodies.com, start_angle,
-                                  bodies.angle, radius, core, fast, s.linear_slop)
+                                  bodies.angle, radius, core, fast, s.linear_slop,
+                                  self._joints.excluded_pairs(self._n))
         t = fraction[:, None]
         bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])
         bodies.angle[fast] = start_angle[fast] + fraction * (bodies.angle[fast]

@@ -19,7 +19,7 @@ effective mass is 1 / (ma + mb |u|^2 + ia a1^2 + ib a2^2) (|u| = 1 or 0). One up
 the contact rows' (``softness``):
     d_l = -m (mass_scale Cdot + bias) - impulse_scale l,   l clamped to [lo, hi].
 - equality rows (a shared point, an axis, a weld's angle, a rod's length) use the joint
-  softness (``joint_softness``) with bias = mass_scale bias_rate C while solving, and
+  softness (``stiffened_softness``) with bias = mass_scale bias_rate C while solving, and
   are rigid (bias 0, mass_scale 1, impulse_scale 0) while relaxing;
 - limits are one-sided (l >= 0): speculative while open (C > 0: bias = C / h, rigid),
   soft as an equality row while violated;
@@ -40,10 +40,10 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .softness import soft_coefficients
+from .softness import CONVERGED, soft_coefficients
 
-__all__ = ["JOINT_DAMPING_RATIO", "MOTOR_CORRECTION", "JointRows", "joint_reactions",
-           "joint_softness", "solve_joints", "spring_softness"]
+__all__ = ["JOINT_DAMPING_RATIO", "MOTOR_CORRECTION", "JointRows", "Output", "joint_passes",
+           "joint_reactions", "spring_softness", "stiffen", "stiffened_softness"]
 
 REVOLUTE, PRISMATIC, DISTANCE, WELD, WHEEL, MOTOR, MOUSE = range(7)
 #: Damping ratio of rigid joint rows (Box2D v3's ``jointDampingRatio``); their hertz is
@@ -179,11 +179,77 @@ _FIELDS = {name: ((2,) if name in ("local_a", "local_b", "local_axis", "linear_i
            for name in JointRows._fields}
 
 
-def joint_softness(settings, h: float) -> np.ndarray:
-    """(3,) bias_rate 1/s, mass_scale, impulse_scale of rigid joint rows for substep h (s):
-    2 x the capped contact hertz (``contact_softness``), JOINT_DAMPING_RATIO."""
-    soft = soft_coefficients(2.0 * min(settings.contact_hertz, 0.25 / h), JOINT_DAMPING_RATIO, h)
-    return np.array([soft.bias_rate, soft.mass_scale, soft.impulse_scale])
+def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: JointRows,
+                       settings, gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(soft (J, 2, 3), params (4,)): bias_rate 1/s, mass_scale, impulse_scale of each
+    joint's rigid rows, linear [:, 0] and angular [:, 1] ("Loaded joints" below), from
+    the accumulated impulses now; ``joint_passes`` refills them every substep from
+    params = (omega rad/s, damping ratio, h s, |g| h m/s).
+
+    inv_mass, inv_inertia: (B,); gravity: (2,) m/s^2 (zero, or
+    ``settings.load_stiffening`` false: no stiffening).
+    """
+    h = settings.dt / settings.substeps
+    g = float(np.hypot(gravity[0], gravity[1])) if settings.load_stiffening else 0.0
+    params = np.array([2.0 * math.pi * 2.0 * min(settings.contact_hertz, 0.25 / h),
+                       JOINT_DAMPING_RATIO, h, g * h])
+    soft = np.empty((len(rows), 2, 3))
+    stiffen(inv_mass, inv_inertia, rows, params, soft)
+    return soft, params
+
+
+# --------------------------------------------------------------------------------------
+# Loaded joints: a 100 kg weight on a chain of 1 kg links.
+#
+# A rigid joint row is soft with the joint softness: a spring of stiffness m w^2 for the
+# row's effective mass m (``softness``), so a load F opens it by F / (m w^2): 4.5 mm
+# per joint for a 1 kg pair (m = 0.5 kg) under a 100 kg weight at rest at 60 Hz, and
+# several times that while it swings (Box2D v3 at its defaults: 56 mm). As the contacts'
+# load stiffening (``softness``, "Loaded islands"), a row that carried r - 1 times the
+# weight of its effective mass in the last step (its accumulated impulse |l| against
+# m |g| h; for angular rows m is the angular effective mass and the weight is taken at
+# an arm of 1 m) uses the spring and damper of mass r m: w' = w sqrt(r), z' = z sqrt(r),
+# and so opens under its load as under its own weight, g / w^2 (0.07 mm at 60 Hz).
+# r is taken afresh every substep, after the warm start: a whipping chain's tension
+# grows twentyfold within one step, and rows stiffened for last step's load open by
+# F / (r m w^2) under it (tens of centimetres).
+# Rows that stiff need converged passes: the joints get up to ``stiff_iterations``
+# passes in each phase of a substep, stopping after a pass whose largest impulse change
+# is at most CONVERGED times the largest accumulated impulse (one pass when nothing
+# is loaded, a joint against the world converges in one).
+# --------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def stiffen(inv_mass, inv_inertia, rows, params, out):
+    """Fill out (J, 2, 3) (``stiffened_softness``); params: omega rad/s and zeta of the
+    joint softness, h s, weight_impulse |g| h m/s (0: no stiffening)."""
+    omega, zeta, h, weight_impulse = params[0], params[1], params[2], params[3]
+    for j in range(rows.kind.shape[0]):
+        a = rows.body_a[j]
+        b = rows.body_b[j]
+        m_lin = (inv_mass[a] if a >= 0 else 0.0) + (inv_mass[b] if b >= 0 else 0.0)
+        m_ang = (inv_inertia[a] if a >= 0 else 0.0) + (inv_inertia[b] if b >= 0 else 0.0)
+        limit = max(rows.lower_impulse[j], rows.upper_impulse[j])
+        angular = abs(rows.angular_impulse[j])
+        linear = max(math.hypot(rows.linear_impulse[j, 0], rows.linear_impulse[j, 1]),
+                     abs(rows.perp_impulse[j]), abs(rows.axial_impulse[j]))
+        if rows.kind[j] == REVOLUTE:
+            angular = max(angular, limit)
+        else:
+            linear = max(linear, limit)
+        for k, (load, inverse) in enumerate(((linear, m_lin), (angular, m_ang))):
+            r = 1.0
+            if weight_impulse > 0.0:
+                r = 1.0 + load * inverse / weight_impulse
+            root = math.sqrt(r)
+            w = omega * root
+            a1 = 2.0 * zeta * root + h * w
+            a2 = h * w * a1
+            a3 = 1.0 / (1.0 + a2)
+            out[j, k, 0] = w / a1
+            out[j, k, 1] = a2 * a3
+            out[j, k, 2] = a3
 
 
 def spring_softness(rows: JointRows, h: float) -> np.ndarray:
@@ -204,6 +270,22 @@ def spring_softness(rows: JointRows, h: float) -> np.ndarray:
 # --------------------------------------------------------------------------------------
 
 
+class Output(NamedTuple):
+    """What a pass reports. force (J, 2), torque (J,): REACTION's sums (N s on b);
+    progress (2,): the largest |impulse change| and |accumulated impulse| (N s or
+    N m s) of a SOLVE or RELAX pass."""
+
+    force: np.ndarray
+    torque: np.ndarray
+    progress: np.ndarray
+
+
+@njit(cache=True)
+def _progress(progress, change, total):
+    progress[0] = max(progress[0], change)
+    progress[1] = max(progress[1], total)
+
+
 @njit(cache=True)
 def _apply(v, m, ux, uy, a1, a2, impulse):
     """Velocities (vax, vay, wa, vbx, vby, wb) after the row impulse (module docstring)."""
@@ -214,20 +296,21 @@ def _apply(v, m, ux, uy, a1, a2, impulse):
 
 
 @njit(cache=True)
-def _row(v, m, ux, uy, a1, a2, acc, j, phase, bias, m_scale, i_scale, lo, hi, out_f, out_t):
+def _row(v, m, ux, uy, a1, a2, acc, j, phase, bias, m_scale, i_scale, lo, hi, out):
     """One row with Jacobian (u, a1, a2) and accumulated impulse acc[j] (module docstring).
 
     phase WARM applies acc[j]; SOLVE and RELAX update it with the given bias (m/s or
-    rad/s), mass_scale, impulse_scale, clamped to [lo, hi]; REACTION adds its linear
-    impulse on b to out_f[j] and, for an angular row (u = 0), its torque to out_t[j].
+    rad/s), mass_scale, impulse_scale, clamped to [lo, hi], and raise out.progress to
+    (|change|, |acc[j]|); REACTION adds its linear impulse on b to out.force[j] and, for
+    an angular row (u = 0), its torque to out.torque[j].
     """
     if phase == WARM:
         return _apply(v, m, ux, uy, a1, a2, acc[j])
     if phase == REACTION:
-        out_f[j, 0] += acc[j] * ux
-        out_f[j, 1] += acc[j] * uy
+        out.force[j, 0] += acc[j] * ux
+        out.force[j, 1] += acc[j] * uy
         if ux == 0.0 and uy == 0.0:
-            out_t[j] += acc[j] * a2
+            out.torque[j] += acc[j] * a2
         return v
     vax, vay, wa, vbx, vby, wb = v
     ma, ia, mb, ib = m
@@ -239,18 +322,19 @@ def _row(v, m, ux, uy, a1, a2, acc, j, phase, bias, m_scale, i_scale, lo, hi, ou
     total = min(max(acc[j] + impulse, lo), hi)
     impulse = total - acc[j]
     acc[j] = total
+    _progress(out.progress, abs(impulse), abs(total))
     return _apply(v, m, ux, uy, a1, a2, impulse)
 
 
 @njit(cache=True)
-def _point(v, m, rax, ray, rbx, rby, acc, j, phase, bx, by, m_scale, i_scale, largest, out_f):
+def _point(v, m, rax, ray, rbx, rby, acc, j, phase, bx, by, m_scale, i_scale, largest, out):
     """The 2x2 block of a shared point, accumulated impulse acc[j] (2,) on b, |acc| <=
-    largest (N s). bias (bx, by) m/s as in ``_row``; REACTION adds acc[j] to out_f[j]."""
+    largest (N s). bias (bx, by) m/s as in ``_row``; REACTION adds acc[j] to out.force[j]."""
     vax, vay, wa, vbx, vby, wb = v
     ma, ia, mb, ib = m
     if phase == REACTION:
-        out_f[j, 0] += acc[j, 0]
-        out_f[j, 1] += acc[j, 1]
+        out.force[j, 0] += acc[j, 0]
+        out.force[j, 1] += acc[j, 1]
         return v
     if phase == WARM:
         px, py = acc[j, 0], acc[j, 1]
@@ -272,6 +356,7 @@ def _point(v, m, rax, ray, rbx, rby, acc, j, phase, bx, by, m_scale, i_scale, la
             ty *= largest / size
         acc[j, 0], acc[j, 1] = tx, ty
         px, py = tx - ox, ty - oy
+        _progress(out.progress, math.hypot(px, py), math.hypot(tx, ty))
     return (vax - ma * px, vay - ma * py, wa - ia * (rax * py - ray * px),
             vbx + mb * px, vby + mb * py, wb + ib * (rbx * py - rby * px))
 
@@ -300,26 +385,26 @@ def _spring(c, spring):
 
 
 @njit(cache=True)
-def _limits(v, m, r, j, phase, value, ux, uy, a1, a2, soft, inv_h, out_f, out_t):
+def _limits(v, m, r, j, phase, value, ux, uy, a1, a2, soft, inv_h, out):
     """The lower and upper rows of a limited coordinate ``value`` (rad or m)."""
     if not r.has_limit[j]:
         return v
     bias, ms, isc = _limit(value - r.lower[j], soft, phase, inv_h)
     v = _row(v, m, ux, uy, a1, a2, r.lower_impulse, j, phase, bias, ms, isc, 0.0, np.inf,
-             out_f, out_t)
+             out)
     bias, ms, isc = _limit(r.upper[j] - value, soft, phase, inv_h)
     return _row(v, m, -ux, -uy, -a1, -a2, r.upper_impulse, j, phase, bias, ms, isc, 0.0,
-                np.inf, out_f, out_t)
+                np.inf, out)
 
 
 @njit(cache=True)
-def _motor(v, m, r, j, phase, ux, uy, a1, a2, h, out_f, out_t):
+def _motor(v, m, r, j, phase, ux, uy, a1, a2, h, out):
     """A motor row driving Cdot toward motor_speed, |impulse| <= max_motor h."""
     if not r.has_motor[j]:
         return v
     bound = r.max_motor[j] * h
     return _row(v, m, ux, uy, a1, a2, r.motor_impulse, j, phase, -r.motor_speed[j], 1.0, 0.0,
-                -bound, bound, out_f, out_t)
+                -bound, bound, out)
 
 
 # --------------------------------------------------------------------------------------
@@ -328,45 +413,48 @@ def _motor(v, m, r, j, phase, ux, uy, a1, a2, h, out_f, out_t):
 
 
 @njit(cache=True)
-def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out_f, out_t):
+def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out):
     """Joint j's rows in Box2D v3's order (springs, motors, limits, then the rigid rows).
 
     g: (rax, ray, rbx, rby, dx, dy, qa, qb) the arms, the separation d = pB - pA (m) and
-    the angles (rad) now. Returns the new velocities."""
+    the angles (rad) now. soft: (J, 2, 3) the rigid rows' coefficients, linear and
+    angular (``stiffened_softness``). Returns the new velocities."""
     rax, ray, rbx, rby, dx, dy, qa, qb = g
     kind = r.kind[j]
+    lin = soft[j, 0]
+    ang = soft[j, 1]
     h = 1.0 / inv_h
     angle = qb - qa - r.reference_angle[j]
     if kind == REVOLUTE or kind == WELD or kind == MOTOR:
         if kind == REVOLUTE:
-            v = _motor(v, m, r, j, phase, 0.0, 0.0, 1.0, 1.0, h, out_f, out_t)
-            v = _limits(v, m, r, j, phase, angle, 0.0, 0.0, 1.0, 1.0, soft, inv_h, out_f, out_t)
-            bias, ms, isc = _equality(1.0, soft, phase)
+            v = _motor(v, m, r, j, phase, 0.0, 0.0, 1.0, 1.0, h, out)
+            v = _limits(v, m, r, j, phase, angle, 0.0, 0.0, 1.0, 1.0, ang, inv_h, out)
+            bias, ms, isc = _equality(1.0, lin, phase)
             largest = np.inf
         elif kind == WELD:
             if r.has_spring[j]:
                 bias, ms, isc = _spring(angle, spring[j])
             else:
-                bias, ms, isc = _equality(angle, soft, phase)
+                bias, ms, isc = _equality(angle, ang, phase)
             v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase, bias, ms, isc,
-                     -np.inf, np.inf, out_f, out_t)
+                     -np.inf, np.inf, out)
             bias, ms, isc = _spring(1.0, spring[j]) if r.has_spring[j] else _equality(
-                1.0, soft, phase)
+                1.0, lin, phase)
             largest = np.inf
         else:
             bound = r.max_torque[j] * h
             v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase,
-                     MOTOR_CORRECTION * inv_h * angle, 1.0, 0.0, -bound, bound, out_f, out_t)
+                     MOTOR_CORRECTION * inv_h * angle, 1.0, 0.0, -bound, bound, out)
             bias, ms, isc = MOTOR_CORRECTION * inv_h, 1.0, 0.0
             largest = r.max_motor[j] * h
         # bias above is per metre of separation: the point's bias is (bias dx, bias dy).
         return _point(v, m, rax, ray, rbx, rby, r.linear_impulse, j, phase, bias * dx,
-                      bias * dy, ms, isc, largest, out_f)
+                      bias * dy, ms, isc, largest, out)
     if kind == MOUSE:
         spring_j = spring[j]
         return _point(v, m, rax, ray, rbx, rby, r.linear_impulse, j, phase,
                       spring_j[1] * spring_j[0] * dx, spring_j[1] * spring_j[0] * dy,
-                      spring_j[1], spring_j[2], r.max_force[j] * h, out_f)
+                      spring_j[1], spring_j[2], r.max_force[j] * h, out)
     if kind == DISTANCE:
         length = math.hypot(dx, dy)
         if length < 1e-9:
@@ -375,21 +463,21 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out_f, out_t):
         a1 = rax * uy - ray * ux
         a2 = rbx * uy - rby * ux
         if r.min_length[j] == r.max_length[j]:
-            bias, ms, isc = _equality(length - r.length[j], soft, phase)
+            bias, ms, isc = _equality(length - r.length[j], lin, phase)
             return _row(v, m, ux, uy, a1, a2, r.axial_impulse, j, phase, bias, ms, isc,
-                        -np.inf, np.inf, out_f, out_t)
+                        -np.inf, np.inf, out)
         if r.has_spring[j]:
             bias, ms, isc = _spring(length - r.length[j], spring[j])
             v = _row(v, m, ux, uy, a1, a2, r.spring_impulse, j, phase, bias, ms, isc,
-                     -np.inf, np.inf, out_f, out_t)
+                     -np.inf, np.inf, out)
         if r.min_length[j] > 0.0:
-            bias, ms, isc = _limit(length - r.min_length[j], soft, phase, inv_h)
+            bias, ms, isc = _limit(length - r.min_length[j], lin, phase, inv_h)
             v = _row(v, m, ux, uy, a1, a2, r.lower_impulse, j, phase, bias, ms, isc, 0.0,
-                     np.inf, out_f, out_t)
+                     np.inf, out)
         if r.max_length[j] < _NO_LIMIT:
-            bias, ms, isc = _limit(r.max_length[j] - length, soft, phase, inv_h)
+            bias, ms, isc = _limit(r.max_length[j] - length, lin, phase, inv_h)
             v = _row(v, m, -ux, -uy, -a1, -a2, r.upper_impulse, j, phase, bias, ms, isc, 0.0,
-                     np.inf, out_f, out_t)
+                     np.inf, out)
         return v
     # PRISMATIC and WHEEL: an axis carried by a, along which b slides.
     ca, sa = math.cos(qa), math.sin(qa)
@@ -399,38 +487,38 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out_f, out_t):
     a1 = (dx + rax) * uy - (dy + ray) * ux
     a2 = rbx * uy - rby * ux
     if kind == PRISMATIC:
-        v = _motor(v, m, r, j, phase, ux, uy, a1, a2, h, out_f, out_t)
+        v = _motor(v, m, r, j, phase, ux, uy, a1, a2, h, out)
     else:
-        v = _motor(v, m, r, j, phase, 0.0, 0.0, 1.0, 1.0, h, out_f, out_t)
+        v = _motor(v, m, r, j, phase, 0.0, 0.0, 1.0, 1.0, h, out)
         if r.has_spring[j]:
             bias, ms, isc = _spring(translation, spring[j])
             v = _row(v, m, ux, uy, a1, a2, r.spring_impulse, j, phase, bias, ms, isc,
-                     -np.inf, np.inf, out_f, out_t)
+                     -np.inf, np.inf, out)
         else:
-            bias, ms, isc = _equality(translation, soft, phase)
+            bias, ms, isc = _equality(translation, lin, phase)
             v = _row(v, m, ux, uy, a1, a2, r.axial_impulse, j, phase, bias, ms, isc,
-                     -np.inf, np.inf, out_f, out_t)
-    v = _limits(v, m, r, j, phase, translation, ux, uy, a1, a2, soft, inv_h, out_f, out_t)
+                     -np.inf, np.inf, out)
+    v = _limits(v, m, r, j, phase, translation, ux, uy, a1, a2, lin, inv_h, out)
     px, py = -uy, ux
-    bias, ms, isc = _equality(px * dx + py * dy, soft, phase)
+    bias, ms, isc = _equality(px * dx + py * dy, lin, phase)
     v = _row(v, m, px, py, (dx + rax) * py - (dy + ray) * px, rbx * py - rby * px,
-             r.perp_impulse, j, phase, bias, ms, isc, -np.inf, np.inf, out_f, out_t)
+             r.perp_impulse, j, phase, bias, ms, isc, -np.inf, np.inf, out)
     if kind == PRISMATIC:
-        bias, ms, isc = _equality(angle, soft, phase)
+        bias, ms, isc = _equality(angle, ang, phase)
         v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase, bias, ms, isc,
-                 -np.inf, np.inf, out_f, out_t)
+                 -np.inf, np.inf, out)
     return v
 
 
 @njit(cache=True)
 def solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows, phase,
-                 soft, spring, inv_h, out_f, out_t):
+                 soft, spring, inv_h, out):
     """One pass of ``phase`` (WARM, SOLVE, RELAX, REACTION) over every joint, in order.
 
     com (B, 2) m, angle (B,) rad: the bodies now; velocity, angular_velocity updated in
     place; inv_mass, inv_inertia: (B,) (0: static, kinematic, asleep). rows: JointRows.
-    soft: (3,) ``joint_softness``; spring: (J, 3) ``spring_softness``; inv_h: 1/s.
-    out_f (J, 2), out_t (J,): what REACTION adds to (N s on b; other phases leave them).
+    soft: (J, 2, 3) ``stiffened_softness``; spring: (J, 3) ``spring_softness``;
+    inv_h: 1/s. out: Output, what REACTION adds to and SOLVE, RELAX report progress in.
     """
     for j in range(rows.kind.shape[0]):
         a = rows.body_a[j]
@@ -455,11 +543,39 @@ def solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, 
         rby = s * rows.local_b[j, 0] + c * rows.local_b[j, 1]
         g = (rax, ray, rbx, rby, cbx + rbx - cax - rax, cby + rby - cay - ray, qa, qb)
         v = _joint((vax, vay, wa, vbx, vby, wb), (ma, ia, mb, ib), g, rows, j, phase, soft,
-                   spring, inv_h, out_f, out_t)
+                   spring, inv_h, out)
         if a >= 0:
             velocity[a, 0], velocity[a, 1], angular_velocity[a] = v[0], v[1], v[2]
         if b >= 0:
             velocity[b, 0], velocity[b, 1], angular_velocity[b] = v[3], v[4], v[5]
+
+
+@njit(cache=True)
+def joint_passes(bodies, joints, phase, inv_h, out, passes):
+    """Up to ``passes`` passes of ``phase`` (SOLVE or RELAX) over the joints, stopping
+    after one whose largest impulse change is at most CONVERGED times the largest
+    accumulated impulse ("Loaded joints"); WARM runs once. Returns the passes run.
+
+    bodies: (com, angle, velocity, angular_velocity, inv_mass, inv_inertia) as
+    ``solve_joints``'; joints: (JointRows, soft (J, 2, 3), spring (J, 3), params (4,)),
+    ``stiffened_softness``'s; WARM refills soft from the impulses it applied.
+    """
+    com, angle, velocity, angular_velocity, inv_mass, inv_inertia = bodies
+    rows, soft, spring, params = joints
+    if phase == WARM:
+        solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows,
+                     phase, soft, spring, inv_h, out)
+        stiffen(inv_mass, inv_inertia, rows, params, soft)
+        return 1
+    for n in range(passes):
+        out.progress[:] = 0.0
+        solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows,
+                     phase, soft, spring, inv_h, out)
+        if phase == SOLVE:
+            stiffen(inv_mass, inv_inertia, rows, params, soft)
+        if out.progress[0] <= CONVERGED * out.progress[1]:
+            return n + 1
+    return passes
 
 
 def joint_reactions(com: np.ndarray, angle: np.ndarray, rows: JointRows,
@@ -467,9 +583,9 @@ def joint_reactions(com: np.ndarray, angle: np.ndarray, rows: JointRows,
     """(force (J, 2) N, torque (J,) N m): what each joint's rows applied to its first body
     over the last substep's accumulated impulses / h. The torque counts the angular rows
     only (motor, limits, a weld's or prismatic's angle), as Box2D's constraint torque."""
-    force, torque = np.zeros((len(rows), 2)), np.zeros(len(rows))
+    out = Output(np.zeros((len(rows), 2)), np.zeros(len(rows)), np.zeros(2))
     if len(rows):
         zero = np.zeros(len(angle))
         solve_joints(com, angle, np.zeros_like(com), zero, zero, zero, rows, REACTION,
-                     np.zeros(3), np.zeros((len(rows), 3)), 1.0 / h, force, torque)
-    return force / h, torque / h
+                     np.zeros((len(rows), 2, 3)), np.zeros((len(rows), 3)), 1.0 / h, out)
+    return out.force / h, out.torque / h

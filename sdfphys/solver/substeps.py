@@ -42,7 +42,16 @@ import numpy as np
 from numba import njit
 
 from ..settings import Settings
-from .joints import RELAX, SOLVE, WARM, JointRows, joint_softness, solve_joints, spring_softness
+from .joints import (
+    RELAX,
+    SOLVE,
+    WARM,
+    JointRows,
+    Output,
+    joint_passes,
+    spring_softness,
+    stiffened_softness,
+)
 from .rows import BodyState, ContactConstraints
 from .softness import CONVERGED, REST_SPEED, row_softness
 
@@ -426,8 +435,12 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
                      use_friction, extra_passes, rest_passes, soft_depth, joints):
     """All substeps of one step: integrate v, warm start, solve, integrate x, relax.
 
-    joints: (JointRows, joint softness (3,), spring softness (J, 3)); the joint rows are
-    warm started, solved and relaxed before the contacts in each phase (Box2D v3's order).
+    joints: (JointRows, stiffened softness (J, 2, 3), spring softness (J, 3), stiffening
+    parameters (4,)); the joint
+    rows are warm started, solved and relaxed before the contacts in each phase (Box2D
+    v3's order), each phase in passes until converged (``joints.joint_passes``), and
+    once more after the contacts when there are both: a contact's single pass must not
+    open a loaded joint (a folding chain's links touching each other).
 
     After the solve and after the relax passes, the pairs of loaded islands
     (``loaded_pairs``) get up to ``extra_passes`` more passes each (``_sweeps``).
@@ -454,10 +467,10 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             tangent_mass, friction, bias_rate, mass_scale, impulse_scale, normal_impulse,
             tangent_impulse, total_normal_impulse)
     pseudo = (pseudo_velocity, pseudo_angular, pseudo_impulse)
-    joint_rows, joint_soft, joint_spring = joints
-    has_joints = joint_rows.kind.shape[0] > 0
-    no_force = np.empty((0, 2))
-    no_torque = np.empty(0)
+    has_joints = joints[0].kind.shape[0] > 0
+    joint_bodies = (com, angle, velocity, angular_velocity, inv_mass, inv_inertia)
+    joint_out = Output(np.empty((0, 2)), np.empty(0), np.zeros(2))
+    joint_passes_max = extra_passes + 1
     passes_run = 0
     push_outs = 0
     for _ in range(substeps):
@@ -466,15 +479,13 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
         _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
                               angular_damping, gravity, h)
         if has_joints:
-            solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
-                         joint_rows, WARM, joint_soft, joint_spring, inv_h, no_force, no_torque)
+            joint_passes(joint_bodies, joints, WARM, inv_h, joint_out, 1)
         if has_contacts:
             _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
                         pair_start, normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
                         total_normal_impulse)
         if has_joints:
-            solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
-                         joint_rows, SOLVE, joint_soft, joint_spring, inv_h, no_force, no_torque)
+            joint_passes(joint_bodies, joints, SOLVE, inv_h, joint_out, joint_passes_max)
         if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
                                   max_push_out, soft_depth, True, use_friction, 1, extra_passes,
@@ -486,10 +497,9 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             _update_anchors(com, com0, angle, angle0, round_body, cos_d, sin_d, inv_mass,
                             body_a, body_b, normal, anchor_a0, anchor_b0, base_separation,
                             arm_a0, arm_b0, anchor_a, anchor_b, separation)
-        for _ in range(relax_passes if has_joints else 0):
-            solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
-                         joint_rows, RELAX, joint_soft, joint_spring, inv_h, no_force,
-                         no_torque)
+        if has_joints and relax_passes > 0:
+            joint_passes(joint_bodies, joints, RELAX, inv_h, joint_out,
+                         max(relax_passes, joint_passes_max))
         if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
                                   max_push_out, soft_depth, False, use_friction, relax_passes,
@@ -514,6 +524,8 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     h = settings.dt / settings.substeps
     gravity = np.asarray(gravity, dtype=np.float64)
     joints = JointRows.empty() if joints is None else joints
+    joint_soft, stiffening = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, joints,
+                                                settings, gravity)
     v, w = bodies.velocity, bodies.angular_velocity
     spin = 0.0 if bodies.radius is None else w * np.where(bodies.inv_mass > 0.0,
                                                           bodies.radius, 0.0)
@@ -531,7 +543,7 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         h, settings.substeps, settings.relax_passes, settings.max_push_out,
         settings.max_linear_speed, use_friction, settings.stiff_iterations - 1,
         settings.rest_iterations - 1, settings.soft_depth,
-        (joints, joint_softness(settings, h), spring_softness(joints, h)))
+        (joints, joint_soft, spring_softness(joints, h), stiffening))
     return int(passes), int(push_outs)
 
 
