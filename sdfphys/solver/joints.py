@@ -42,7 +42,7 @@ from numba import njit
 
 from .softness import CONVERGED, soft_coefficients
 
-__all__ = ["JOINT_DAMPING_RATIO", "MOTOR_CORRECTION", "JointRows", "Output", "joint_passes",
+__all__ = ["JOINT_DAMPING_RATIO", "JOINT_PASSES", "MOTOR_CORRECTION", "JointRows", "Output", "joint_passes",
            "joint_reactions", "spring_softness", "stiffen", "stiffened_softness"]
 
 REVOLUTE, PRISMATIC, DISTANCE, WELD, WHEEL, MOTOR, MOUSE = range(7)
@@ -52,6 +52,8 @@ JOINT_DAMPING_RATIO = 2.0
 #: Fraction of a motor joint's pose error corrected per substep (Box2D v3's
 #: ``correctionFactor`` default).
 MOTOR_CORRECTION = 0.3
+#: Joint passes per phase, at most, per ``stiff_iterations`` ("Loaded joints").
+JOINT_PASSES = 8
 #: Row phases: apply the stored impulse, solve with bias, relax, sum the reaction.
 WARM, SOLVE, RELAX, REACTION = range(4)
 #: A distance limit beyond this is no limit (joints.py's _FAR).
@@ -213,10 +215,13 @@ def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: Join
 # r is taken afresh every substep, after the warm start: a whipping chain's tension
 # grows twentyfold within one step, and rows stiffened for last step's load open by
 # F / (r m w^2) under it (tens of centimetres).
-# Rows that stiff need converged passes: the joints get up to ``stiff_iterations``
-# passes in each phase of a substep, stopping after a pass whose largest impulse change
-# is at most CONVERGED times the largest accumulated impulse (one pass when nothing
-# is loaded, a joint against the world converges in one).
+# Rows that stiff need converged passes: the joints get up to JOINT_PASSES x
+# ``stiff_iterations`` passes in each phase of a substep, stopping after a pass whose
+# largest impulse change is at most CONVERGED times the largest accumulated impulse
+# (one pass when nothing is loaded; a joint against the world converges in one).
+# Unconverged stiffened rows ring: a 20-link chain hanging a 100 kg weight at rest
+# needs about 100 passes (Gauss-Seidel moves an error one joint per pass and a light
+# link passes on ~1/100 of a heavy neighbour's), and at 64 it oscillated and blew up.
 # --------------------------------------------------------------------------------------
 
 
@@ -571,8 +576,6 @@ def joint_passes(bodies, joints, phase, inv_h, out, passes):
         out.progress[:] = 0.0
         solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows,
                      phase, soft, spring, inv_h, out)
-        if phase == SOLVE:
-            stiffen(inv_mass, inv_inertia, rows, params, soft)
         if out.progress[0] <= CONVERGED * out.progress[1]:
             return n + 1
     return passes

@@ -43,6 +43,7 @@ from numba import njit
 
 from ..settings import Settings
 from .joints import (
+    JOINT_PASSES,
     RELAX,
     SOLVE,
     WARM,
@@ -470,7 +471,7 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
     has_joints = joints[0].kind.shape[0] > 0
     joint_bodies = (com, angle, velocity, angular_velocity, inv_mass, inv_inertia)
     joint_out = Output(np.empty((0, 2)), np.empty(0), np.zeros(2))
-    joint_passes_max = extra_passes + 1
+    joint_passes_max = JOINT_PASSES * (extra_passes + 1)
     passes_run = 0
     push_outs = 0
     for _ in range(substeps):
