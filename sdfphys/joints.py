@@ -121,21 +121,28 @@ def _pair(value: Any, path: str) -> tuple[float, float]:
     return lower, upper
 
 
+def _dot(path: str) -> str:
+    """``path`` as the prefix of a key below it (empty at the top)."""
+    return f"{path}." if path else ""
+
+
 def _table(value: Any, path: str, keys: Sequence[str]) -> dict:
     if not isinstance(value, Mapping):
-        raise SpecError(path, f"must be a table, got {value!r}")
+        raise SpecError(path or "joint", f"must be a table, got {value!r}")
+    path = _dot(path)
     for key in value:
         if key not in keys:
-            raise SpecError(f"{path}.{key}", "unknown key" + suggest(str(key), list(keys)))
+            raise SpecError(f"{path}{key}", "unknown key" + suggest(str(key), list(keys)))
     return dict(value)
 
 
 def _spring(value: Any, path: str) -> tuple[float, float]:
     spring = _table(value, path, ("hertz", "damping_ratio"))
+    path = _dot(path)
     if "hertz" not in spring:
-        raise SpecError(f"{path}.hertz", "is required")
-    hertz = check_number(spring["hertz"], f"{path}.hertz", low=0.0, high=_MAX_HERTZ)
-    zeta = check_number(spring.get("damping_ratio", 0.0), f"{path}.damping_ratio", low=0.0,
+        raise SpecError(f"{path}hertz", "is required")
+    hertz = check_number(spring["hertz"], f"{path}hertz", low=0.0, high=_MAX_HERTZ)
+    zeta = check_number(spring.get("damping_ratio", 0.0), f"{path}damping_ratio", low=0.0,
                         high=1e6)
     return hertz, zeta
 
@@ -143,14 +150,15 @@ def _spring(value: Any, path: str) -> tuple[float, float]:
 def _motor(value: Any, path: str, kind: str) -> tuple[float, float]:
     first, second = _MOTOR[kind]
     motor = _table(value, path, (first, second))
+    path = _dot(path)
     for key in (first, second):
         if key not in motor:
-            raise SpecError(f"{path}.{key}", "is required")
+            raise SpecError(f"{path}{key}", "is required")
     if first == "speed":
-        speed = check_number(motor["speed"], f"{path}.speed", low=-_MAX_SPEED, high=_MAX_SPEED)
+        speed = check_number(motor["speed"], f"{path}speed", low=-_MAX_SPEED, high=_MAX_SPEED)
     else:
-        speed = check_number(motor[first], f"{path}.{first}", low=0.0, high=_MAX_FORCE)
-    return speed, check_number(motor[second], f"{path}.{second}", low=0.0, high=_MAX_FORCE)
+        speed = check_number(motor[first], f"{path}{first}", low=0.0, high=_MAX_FORCE)
+    return speed, check_number(motor[second], f"{path}{second}", low=0.0, high=_MAX_FORCE)
 
 
 def _point(value: Any, path: str) -> tuple[float, float]:
@@ -169,60 +177,61 @@ def check_joint(data: Any, path: str, index_of: Callable[[str], int | None], cou
     ``anchor`` otherwise: the second body's centre, or the first's against the world).
     """
     table = _table(data, path, _COMMON + tuple({k for keys in _KEYS.values() for k in keys}))
+    path = _dot(path)
     kind = table.get("type")
     if kind is None:
-        raise SpecError(f"{path}.type", "is required (" + " | ".join(JOINT_TYPES[:-1]) + ")")
+        raise SpecError(f"{path}type", "is required (" + " | ".join(JOINT_TYPES[:-1]) + ")")
     if kind not in JOINT_TYPES:
-        raise SpecError(f"{path}.type", f"unknown joint type {kind!r}"
+        raise SpecError(f"{path}type", f"unknown joint type {kind!r}"
                         + suggest(str(kind), list(JOINT_TYPES)))
     for key in table:
         if key not in _COMMON and key not in _KEYS[kind]:
-            raise SpecError(f"{path}.{key}", f"not used by a {kind} joint (it takes "
+            raise SpecError(f"{path}{key}", f"not used by a {kind} joint (it takes "
                             + ", ".join(_KEYS[kind]) + ")")
     name = table.get("name", "")
     if not isinstance(name, str):
-        raise SpecError(f"{path}.name", f"must be a string, got {name!r}")
+        raise SpecError(f"{path}name", f"must be a string, got {name!r}")
     pair = table.get("bodies")
     if pair is None:
-        raise SpecError(f"{path}.bodies", "is required: [first, second]")
+        raise SpecError(f"{path}bodies", "is required: [first, second]")
     if isinstance(pair, (str, bytes)) or not isinstance(pair, Sequence) or len(pair) != 2:
-        raise SpecError(f"{path}.bodies", f"must be two bodies [first, second], got {pair!r}")
-    bodies = (_body(pair[0], f"{path}.bodies[0]", index_of, count),
-              _body(pair[1], f"{path}.bodies[1]", index_of, count))
+        raise SpecError(f"{path}bodies", f"must be two bodies [first, second], got {pair!r}")
+    bodies = (_body(pair[0], f"{path}bodies[0]", index_of, count),
+              _body(pair[1], f"{path}bodies[1]", index_of, count))
     if bodies[0] == bodies[1]:
-        raise SpecError(f"{path}.bodies", "a joint needs two different bodies")
+        raise SpecError(f"{path}bodies", "a joint needs two different bodies")
     if kind == "mouse" and (bodies[0] < 0 or bodies[1] >= 0):
-        raise SpecError(f"{path}.bodies", f"a mouse joint takes [body, {WORLD!r}]")
+        raise SpecError(f"{path}bodies", f"a mouse joint takes [body, {WORLD!r}]")
     collide = table.get("collide_connected", False)
     if not isinstance(collide, bool):
-        raise SpecError(f"{path}.collide_connected", f"must be true or false, got {collide!r}")
+        raise SpecError(f"{path}collide_connected", f"must be true or false, got {collide!r}")
     values: dict[str, Any] = {}
     if "anchor" in _KEYS[kind]:
         default = centers[bodies[1]] if bodies[1] >= 0 else centers[bodies[0]]
-        values["anchor"] = _point(table.get("anchor", tuple(default)), f"{path}.anchor")
+        values["anchor"] = _point(table.get("anchor", tuple(default)), f"{path}anchor")
     elif kind == "motor":
         values["anchor"] = tuple(float(x) for x in centers[bodies[0]]) if bodies[0] >= 0 \
             else (0.0, 0.0)
     if "axis" in _KEYS[kind]:
         if "axis" not in table:
-            raise SpecError(f"{path}.axis", f"is required for a {kind} joint")
-        ax, ay = check_vec2(table["axis"], f"{path}.axis")
+            raise SpecError(f"{path}axis", f"is required for a {kind} joint")
+        ax, ay = check_vec2(table["axis"], f"{path}axis")
         norm = math.hypot(ax, ay)
         if not norm > 1e-9:
-            raise SpecError(f"{path}.axis", f"must not be zero, got [{ax:g}, {ay:g}]")
+            raise SpecError(f"{path}axis", f"must not be zero, got [{ax:g}, {ay:g}]")
         values["axis"] = (ax / norm, ay / norm)
     if "limits" in table:
-        values["limits"] = _pair(table["limits"], f"{path}.limits")
+        values["limits"] = _pair(table["limits"], f"{path}limits")
     if "motor" in table:
-        values["motor"] = _motor(table["motor"], f"{path}.motor", kind)
+        values["motor"] = _motor(table["motor"], f"{path}motor", kind)
     elif kind == "motor":
-        raise SpecError(f"{path}.motor", "is required: {max_force = ..., max_torque = ...}")
+        raise SpecError(f"{path}motor", "is required: {max_force = ..., max_torque = ...}")
     if "spring" in table:
-        values["spring"] = _spring(table["spring"], f"{path}.spring")
+        values["spring"] = _spring(table["spring"], f"{path}spring")
     elif kind == "mouse":
         values["spring"] = MOUSE_SPRING
     if "max_force" in table:
-        values["max_force"] = check_number(table["max_force"], f"{path}.max_force", low=0.0,
+        values["max_force"] = check_number(table["max_force"], f"{path}max_force", low=0.0,
                                            high=_MAX_FORCE)
     if kind == "distance":
         values.update(_distance(table, path, centers, bodies, "spring" in values))
@@ -231,29 +240,30 @@ def check_joint(data: Any, path: str, index_of: Callable[[str], int | None], cou
 
 def _distance(table: dict, path: str, centers: np.ndarray, bodies: tuple[int, int],
               spring: bool) -> dict:
-    """anchors, length, min_length, max_length of a distance joint (module docstring)."""
+    """anchors, length, min_length, max_length of a distance joint (module docstring);
+    ``path``: the joint's key path with its trailing dot."""
     if "anchors" in table:
         raw = table["anchors"]
         if isinstance(raw, (str, bytes)) or not isinstance(raw, Sequence) or len(raw) != 2:
-            raise SpecError(f"{path}.anchors", f"must be two points [[x, y], [x, y]], got {raw!r}")
-        anchors = (_point(raw[0], f"{path}.anchors[0]"), _point(raw[1], f"{path}.anchors[1]"))
+            raise SpecError(f"{path}anchors", f"must be two points [[x, y], [x, y]], got {raw!r}")
+        anchors = (_point(raw[0], f"{path}anchors[0]"), _point(raw[1], f"{path}anchors[1]"))
     else:
         anchors = tuple(tuple(float(x) for x in centers[b]) if b >= 0 else (0.0, 0.0)
                         for b in bodies)
     span = math.dist(anchors[0], anchors[1])
-    length = check_number(table.get("length", span), f"{path}.length", low=0.0, high=_FAR)
+    length = check_number(table.get("length", span), f"{path}length", low=0.0, high=_FAR)
     free = spring or "min_length" in table or "max_length" in table
-    low = check_number(table.get("min_length", 0.0 if free else length), f"{path}.min_length",
+    low = check_number(table.get("min_length", 0.0 if free else length), f"{path}min_length",
                        low=0.0, high=_FAR)
     high = check_number(table.get("max_length", _FAR if free else length),
-                        f"{path}.max_length", low=0.0, high=_FAR)
+                        f"{path}max_length", low=0.0, high=_FAR)
     if low > high:
-        raise SpecError(f"{path}.min_length", f"must be <= max_length ({high:g}), got {low:g}")
+        raise SpecError(f"{path}min_length", f"must be <= max_length ({high:g}), got {low:g}")
     if not spring and "length" in table and not low <= length <= high:
-        raise SpecError(f"{path}.length", f"must lie in [min_length, max_length] = "
+        raise SpecError(f"{path}length", f"must lie in [min_length, max_length] = "
                         f"[{low:g}, {high:g}], got {length:g}")
     if not (spring or low < high) and length < 1e-6:
-        raise SpecError(f"{path}.length", "a rigid distance joint needs length > 0 "
+        raise SpecError(f"{path}length", "a rigid distance joint needs length > 0 "
                         "(use a revolute joint to pin two points together)")
     return {"anchors": anchors, "length": length, "min_length": low, "max_length": high}
 

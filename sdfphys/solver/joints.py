@@ -113,9 +113,6 @@ class JointRows(NamedTuple):
     def empty(cls) -> JointRows:
         return cls(*(np.zeros((0,) + shape, dtype) for shape, dtype in _FIELDS.values()))
 
-    def __len__(self) -> int:  # type: ignore[override]
-        return len(self.kind)
-
     @classmethod
     def from_spec(cls, spec, com: np.ndarray, angle: np.ndarray) -> JointRows:
         """One row from a validated ``joints.JointSpec`` and the bodies' com (B, 2) m and
@@ -195,7 +192,7 @@ def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: Join
     g = float(np.hypot(gravity[0], gravity[1])) if settings.load_stiffening else 0.0
     params = np.array([2.0 * math.pi * 2.0 * min(settings.contact_hertz, 0.25 / h),
                        JOINT_DAMPING_RATIO, h, g * h])
-    soft = np.empty((len(rows), 2, 3))
+    soft = np.empty((rows.kind.shape[0], 2, 3))
     stiffen(inv_mass, inv_inertia, rows, params, soft)
     return soft, params
 
@@ -260,7 +257,7 @@ def stiffen(inv_mass, inv_inertia, rows, params, out):
 def spring_softness(rows: JointRows, h: float) -> np.ndarray:
     """(J, 3) the springs' bias_rate, mass_scale, impulse_scale for substep h (s): one
     ``soft_coefficients`` per distinct (hertz, damping ratio)."""
-    out = np.zeros((len(rows), 3))
+    out = np.zeros((rows.kind.shape[0], 3))
     out[:, 1] = 1.0
     springs = np.column_stack([rows.spring_hertz, rows.spring_damping])
     distinct, which = np.unique(springs, axis=0, return_inverse=True)
@@ -586,9 +583,10 @@ def joint_reactions(com: np.ndarray, angle: np.ndarray, rows: JointRows,
     """(force (J, 2) N, torque (J,) N m): what each joint's rows applied to its first body
     over the last substep's accumulated impulses / h. The torque counts the angular rows
     only (motor, limits, a weld's or prismatic's angle), as Box2D's constraint torque."""
-    out = Output(np.zeros((len(rows), 2)), np.zeros(len(rows)), np.zeros(2))
-    if len(rows):
+    count = rows.kind.shape[0]
+    out = Output(np.zeros((count, 2)), np.zeros(count), np.zeros(2))
+    if count:
         zero = np.zeros(len(angle))
         solve_joints(com, angle, np.zeros_like(com), zero, zero, zero, rows, REACTION,
-                     np.zeros((len(rows), 2, 3)), np.zeros((len(rows), 3)), 1.0 / h, out)
+                     np.zeros((count, 2, 3)), np.zeros((count, 3)), 1.0 / h, out)
     return out.force / h, out.torque / h
