@@ -339,8 +339,9 @@ class WorldJoints:
         """Add a joint from a dict shaped like a scene's ``[[joint]]`` table (bodies by
         name, index, or "world"); returns its index. Bad input raises SpecError naming
         the key (``axis: must not be zero, got [0, 0]``). The bodies' islands wake."""
-        names = self._names
-        index_of = lambda name: names.index(name) if name in self._name_set else None  # noqa: E731
+        def index_of(name: str) -> int | None:
+            return self._names.index(name) if name in self._name_set else None
+
         joint = check_joint(spec, "", index_of, len(self), self.position)
         return self._add_joint(joint)
 
@@ -381,6 +382,24 @@ class WorldJoints:
         """(J,) N m, counter-clockwise: the torque each joint's angular rows (motor, limits,
         a weld's or prismatic's angle) applied to its first body in the last substep."""
         return self._reactions()[1]
+
+    def joint_anchors(self) -> tuple[np.ndarray, np.ndarray]:
+        """(first, second): (J, 2) m each, the world points where each joint holds its first
+        and second body now (equal for an ideal revolute or weld joint; a mouse joint's
+        second point is its target; a motor joint's are the first body's centre of mass
+        and where the second body wants it)."""
+        rows = self._joints.rows
+        com, angle = self._view("com"), self._view("angle")
+
+        def anchor(body: np.ndarray, local: np.ndarray) -> np.ndarray:
+            out = local.copy()
+            on = body >= 0
+            c, s = np.cos(angle[body[on]]), np.sin(angle[body[on]])
+            out[on] = com[body[on]] + np.column_stack([c * local[on, 0] - s * local[on, 1],
+                                                       s * local[on, 0] + c * local[on, 1]])
+            return out
+
+        return anchor(rows.body_b, rows.local_b), anchor(rows.body_a, rows.local_a)
 
     def set_joint_target(self, j: int, target: Sequence[float]) -> None:
         """Move mouse joint ``j``'s target to the world point ``target`` (m); its body wakes."""

@@ -43,18 +43,8 @@ def peaks(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def joint_gaps(world: World) -> np.ndarray:
     """(J,) m: the distance between each joint's two anchors (0 for an ideal point joint)."""
-    rows = world._joints.rows
-    com, angle = world.center_of_mass, world.angle
-
-    def anchor(body, local):
-        out = local.copy()
-        ok = body >= 0
-        c, s = np.cos(angle[body[ok]]), np.sin(angle[body[ok]])
-        out[ok] = com[body[ok]] + np.column_stack([c * local[ok, 0] - s * local[ok, 1],
-                                                   s * local[ok, 0] + c * local[ok, 1]])
-        return out
-
-    return np.hypot(*(anchor(rows.body_a, rows.local_a) - anchor(rows.body_b, rows.local_b)).T)
+    first, second = world.joint_anchors()
+    return np.hypot(*(first - second).T)
 
 
 # ---------------------------------------------------------------------------------------
@@ -434,3 +424,33 @@ def test_spring_frequency_matches_pymunk_damped_spring():
     ours = 1.0 / np.diff(peaks(t, x[:, 1] - 1.0)[0]).mean()
     assert theirs == pytest.approx(2.0, rel=0.005)
     assert ours == pytest.approx(2.0, rel=0.005)
+
+
+# ---------------------------------------------------------------------------------------
+# Drawing
+# ---------------------------------------------------------------------------------------
+
+
+def test_renderer_draws_anchors_links_and_springs():
+    """A spring between two discs 2 m apart, seen at 50 px/m: the spring's colour lies on
+    the segment between them, the joint colour on the anchor dots at the discs' centres."""
+    import pygame
+
+    from sdfphys.render import Camera, Palette, Renderer
+
+    world = World(gravity=(0.0, 0.0))
+    world.add_body({"type": "circle", "radius": 0.2}, position=(-1.0, 0.0), name="a")
+    world.add_body({"type": "circle", "radius": 0.2}, position=(1.0, 0.0), name="b")
+    surface = pygame.Surface((200, 100))
+    renderer = Renderer(Camera((0.0, 0.0), 50.0, (200, 100)))
+    renderer.draw(surface, world)
+    plain = pygame.surfarray.array3d(surface).copy()
+    world.add_joint({"type": "distance", "bodies": ["a", "b"], "spring": {"hertz": 1.0}})
+    renderer.draw(surface, world)
+    drawn = pygame.surfarray.array3d(surface)
+    palette = Palette()
+    spring = np.all(drawn == np.array(palette.spring), axis=2)
+    joint = np.all(drawn == np.array(palette.joint), axis=2)
+    assert spring[60:140, 40:60].sum() > 40 and not np.any(spring[:45]) and not np.any(spring[155:])
+    assert joint[48:53, 48:53].any() and joint[148:153, 48:53].any()
+    assert not np.any(np.all(plain == np.array(palette.spring), axis=2))

@@ -142,18 +142,18 @@ class JointRows(NamedTuple):
         limits = spec.limits or (0.0, 0.0)
         motor = spec.motor or (0.0, 0.0)
         spring = spec.spring or (0.0, 0.0)
-        values = dict(
-            kind=kind, body_a=second, body_b=first, local_a=la, local_b=lb, local_axis=axis,
-            reference_angle=pose[first][1] - qa, length=spec.length,
-            min_length=spec.min_length, max_length=spec.max_length, lower=limits[0],
-            upper=limits[1], has_limit=spec.limits is not None,
-            has_motor=spec.motor is not None and kind != MOTOR,
-            has_spring=spec.spring is not None and spring[0] > 0.0,
-            collide_connected=spec.collide_connected,
-            motor_speed=0.0 if kind == MOTOR else motor[0],
-            max_motor=motor[0] if kind == MOTOR else motor[1],
-            max_torque=motor[1] if kind == MOTOR else 0.0, max_force=spec.max_force,
-            spring_hertz=spring[0], spring_damping=spring[1])
+        values = {
+            "kind": kind, "body_a": second, "body_b": first, "local_a": la, "local_b": lb,
+            "local_axis": axis, "reference_angle": pose[first][1] - qa, "length": spec.length,
+            "min_length": spec.min_length, "max_length": spec.max_length, "lower": limits[0],
+            "upper": limits[1], "has_limit": spec.limits is not None,
+            "has_motor": spec.motor is not None and kind != MOTOR,
+            "has_spring": spec.spring is not None and spring[0] > 0.0,
+            "collide_connected": spec.collide_connected,
+            "motor_speed": 0.0 if kind == MOTOR else motor[0],
+            "max_motor": motor[0] if kind == MOTOR else motor[1],
+            "max_torque": motor[1] if kind == MOTOR else 0.0, "max_force": spec.max_force,
+            "spring_hertz": spring[0], "spring_damping": spring[1]}
         return cls(*(np.full((1,) + shape, values.get(name, 0.0), dtype)
                      for name, (shape, dtype) in _FIELDS.items()))
 
