@@ -14,8 +14,9 @@ anchors at ``length``, or free between ``min_length`` and ``max_length`` (a rope
 ``spring`` {hertz, damping_ratio} toward ``length``), ``weld`` (no relative motion;
 ``spring`` makes it soft), ``wheel`` (slides along ``axis`` on a ``spring``, turns
 freely; ``limits`` in m, ``motor`` {speed rad/s, max_torque N m} turns the wheel),
-``motor`` (drives the relative pose back to the one at creation with ``motor``
-{max_force N, max_torque N m}), and ``mouse`` (Python only: pulls an anchor of the
+``motor`` (drives the relative pose back to the one at creation with force and torque
+at most ``motor`` {max_force N, max_torque N m}, on a ``spring``, by default 4 Hz
+critically damped; Box2D v3.1's motor joint), and ``mouse`` (Python only: pulls an anchor of the
 first body toward a target point, ``world.set_joint_target``, on a ``spring`` with
 force at most ``max_force``).
 
@@ -48,7 +49,7 @@ _KEYS = {
     "distance": ("anchors", "length", "min_length", "max_length", "spring"),
     "weld": ("anchor", "spring"),
     "wheel": ("anchor", "axis", "limits", "motor", "spring"),
-    "motor": ("motor",),
+    "motor": ("motor", "spring"),
     "mouse": ("anchor", "spring", "max_force"),
 }
 _COMMON = ("type", "name", "bodies", "collide_connected")
@@ -62,8 +63,10 @@ _MAX_HERTZ = 1e6
 #: Largest motor speed (rad/s or m/s), torque and force bounds (N m, N).
 _MAX_SPEED = 1e4
 _MAX_FORCE = 1e12
-#: The mouse joint's default spring (Box2D v3 samples: 5 Hz, damping ratio 0.7).
-MOUSE_SPRING = (5.0, 0.7)
+#: Springs of the kinds that always have one: the mouse joint's is Box2D v3's samples'
+#: (5 Hz, damping ratio 0.7); a motor joint's is critically damped (a rigid one would
+#: move its body only by its bias velocity, which each substep's relax pass removes).
+DEFAULT_SPRING = {"mouse": (5.0, 0.7), "motor": (4.0, 1.0)}
 
 
 class JointSpec(NamedTuple):
@@ -228,8 +231,8 @@ def check_joint(data: Any, path: str, index_of: Callable[[str], int | None], cou
         raise SpecError(f"{path}motor", "is required: {max_force = ..., max_torque = ...}")
     if "spring" in table:
         values["spring"] = _spring(table["spring"], f"{path}spring")
-    elif kind == "mouse":
-        values["spring"] = MOUSE_SPRING
+    elif kind in DEFAULT_SPRING:
+        values["spring"] = DEFAULT_SPRING[kind]
     if "max_force" in table:
         values["max_force"] = check_number(table["max_force"], f"{path}max_force", low=0.0,
                                            high=_MAX_FORCE)

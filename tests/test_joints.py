@@ -191,6 +191,57 @@ def test_welded_cantilever_sags_less_than_2_cm():
     assert abs(world.velocity[4, 1]) < 1e-3
 
 
+def test_wheel_sags_on_its_spring_and_turns_at_its_motor_speed():
+    """A 2 kg disc on a vertical wheel joint to the world, spring 4 Hz: it settles
+    g / (2 pi 4)^2 = 15.5 mm below its anchor, on its axis, turning at the motor's speed."""
+    world = World()
+    world.add_body({"type": "circle", "radius": 0.3}, position=(0.0, 1.0), mass=2.0, name="w")
+    j = world.add_joint({"type": "wheel", "bodies": ["w", "world"], "anchor": [0.0, 1.0],
+                         "axis": [0.0, 1.0], "spring": {"hertz": 4.0, "damping_ratio": 1.0},
+                         "motor": {"speed": -3.0, "max_torque": 10.0}})
+    for _ in range(180):
+        world.step()
+    assert world.position[0, 0] == pytest.approx(0.0, abs=1e-9)
+    assert 1.0 - world.position[0, 1] == pytest.approx(G / (2 * math.pi * 4.0) ** 2, rel=1e-3)
+    assert world.angular_velocity[0] == pytest.approx(-3.0, abs=1e-9)
+    np.testing.assert_allclose(world.joint_force[j], [0.0, 2.0 * G], rtol=1e-6, atol=1e-9)
+
+
+def test_soft_weld_turns_at_its_hertz():
+    """A 1 x 0.2 m box welded at its centre to the world by a 2 Hz spring, no damping,
+    spun at 2 rad/s: it rocks at 2 Hz (angular effective mass: its inertia)."""
+    world = World(gravity=(0.0, 0.0))
+    world.add_body({"type": "box", "size": [1.0, 0.2]}, name="b", angular_velocity=2.0)
+    world.add_joint({"type": "weld", "bodies": ["b", "world"], "anchor": [0.0, 0.0],
+                     "spring": {"hertz": 2.0}})
+    steps = 240
+    angle = np.empty(steps)
+    for k in range(steps):
+        world.step()
+        angle[k] = world.angle[0]
+    times, _ = peaks(DT * np.arange(1, steps + 1), angle)
+    assert 1.0 / np.diff(times).mean() == pytest.approx(2.0, rel=0.005)
+
+
+def test_motor_joint_returns_to_its_pose_with_bounded_force():
+    """A 1 kg box held by a motor joint at the pose it was created in, moved 1 m away and
+    turned 0.5 rad: the joint pulls it back with at most max_force = 20 N (after 0.25 s it
+    has come at most 20 h^2 n (n + 1) / 2 = 0.6354 m, n = 60 substeps of h) and holds it."""
+    world = World(gravity=(0.0, 0.0))
+    world.add_body({"type": "box", "size": [0.5, 0.5]}, mass=1.0, name="b")
+    j = world.add_joint({"type": "motor", "bodies": ["b", "world"],
+                         "motor": {"max_force": 20.0, "max_torque": 5.0}})
+    world.set_state(0, position=(1.0, 0.0), angle=0.5)
+    for _ in range(15):
+        world.step()
+        assert np.hypot(*world.joint_force[j]) <= 20.0 * (1 + 1e-9)
+    assert world.position[0, 0] >= 1.0 - 20.0 * (DT / 4) ** 2 * 60 * 61 / 2 - 1e-12
+    for _ in range(105):
+        world.step()
+    np.testing.assert_allclose(world.position[0], [0.0, 0.0], atol=1e-4)
+    assert world.angle[0] == pytest.approx(0.0, abs=1e-4)
+
+
 # ---------------------------------------------------------------------------------------
 # The loaded chain
 # ---------------------------------------------------------------------------------------

@@ -42,16 +42,13 @@ from numba import njit
 
 from .softness import CONVERGED, soft_coefficients
 
-__all__ = ["JOINT_DAMPING_RATIO", "JOINT_PASSES", "MOTOR_CORRECTION", "JointRows", "Output", "joint_passes",
+__all__ = ["JOINT_DAMPING_RATIO", "JOINT_PASSES", "JointRows", "Output", "joint_passes",
            "joint_reactions", "spring_softness", "stiffen", "stiffened_softness"]
 
 REVOLUTE, PRISMATIC, DISTANCE, WELD, WHEEL, MOTOR, MOUSE = range(7)
 #: Damping ratio of rigid joint rows (Box2D v3's ``jointDampingRatio``); their hertz is
 #: twice the capped contact hertz (Box2D v3: ``2 * contactHertz``, 60 Hz by default).
 JOINT_DAMPING_RATIO = 2.0
-#: Fraction of a motor joint's pose error corrected per substep (Box2D v3's
-#: ``correctionFactor`` default).
-MOTOR_CORRECTION = 0.3
 #: Joint passes per phase, at most, per ``stiff_iterations`` ("Loaded joints").
 JOINT_PASSES = 8
 #: Row phases: apply the stored impulse, solve with bias, relax, sum the reaction.
@@ -445,9 +442,14 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out):
             largest = np.inf
         else:
             bound = r.max_torque[j] * h
-            v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase,
-                     MOTOR_CORRECTION * inv_h * angle, 1.0, 0.0, -bound, bound, out)
-            bias, ms, isc = MOTOR_CORRECTION * inv_h, 1.0, 0.0
+            if r.has_spring[j]:
+                bias, ms, isc = _spring(angle, spring[j])
+            else:
+                bias, ms, isc = _equality(angle, ang, phase)
+            v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase, bias, ms, isc,
+                     -bound, bound, out)
+            bias, ms, isc = _spring(1.0, spring[j]) if r.has_spring[j] else _equality(
+                1.0, lin, phase)
             largest = r.max_motor[j] * h
         # bias above is per metre of separation: the point's bias is (bias dx, bias dy).
         return _point(v, m, rax, ray, rbx, rby, r.linear_impulse, j, phase, bias * dx,
