@@ -33,6 +33,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .errors import SpecError, check_number, check_vec2
+from .islands import island_roots
 from .sdf.build import suggest
 
 __all__ = ["JOINT_TYPES", "WORLD", "JointSpec", "JointTable", "check_joint"]
@@ -276,7 +277,8 @@ class JointTable:
 
     ``specs``: the validated JointSpecs; ``rows``: ``solver.joints.JointRows`` (the same
     order), rebuilt by ``add``/``remove``/``without_body`` (rare); the solver updates
-    the rows' impulses in place every step.
+    the rows' impulses in place every step, and ``stiffness_cap`` (1,), the cap on the
+    joints' load stiffening (``solver.joints``, "Loaded joints"; inf: none yet).
     """
 
     def __init__(self) -> None:
@@ -284,6 +286,7 @@ class JointTable:
 
         self.specs: list[JointSpec] = []
         self.rows = JointRows.empty()
+        self.stiffness_cap = np.full(1, np.inf)
 
     def __len__(self) -> int:
         return len(self.specs)
@@ -324,6 +327,29 @@ class JointTable:
         lo = np.minimum(r.body_a[off], r.body_b[off])
         hi = np.maximum(r.body_a[off], r.body_b[off])
         return np.unique(lo * np.int64(count) + hi)
+
+    def groups(self, count: int) -> np.ndarray | None:
+        """(B,) int64: for each of the ``count`` bodies the lowest index of the bodies it is
+        joined to through joints between bodies (itself if none); None without such joints."""
+        r = self.rows
+        both = (r.body_a >= 0) & (r.body_b >= 0)
+        if not np.any(both):
+            return None
+        return island_roots(np.ones(count), r.body_a[both], r.body_b[both])
+
+    @staticmethod
+    def spread_fractions(group: np.ndarray | None, fast: np.ndarray, fraction: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """Time of impact for jointed bodies: every body of the ``group`` (``groups``) of a
+        fast body stopped at ``fraction`` (F,) of its step takes the least fraction of its
+        group, so the group stops together and its joints stay closed (a forearm rewound
+        alone opened its elbow by 4 cm). Returns (bodies, fractions) to apply."""
+        if group is None or len(fast) == 0:
+            return fast, fraction
+        least = np.ones(len(group))
+        np.minimum.at(least, group[fast], fraction)
+        bodies = np.union1d(fast, np.flatnonzero(least[group] < 1.0))
+        return bodies, least[group[bodies]]
 
     def linked(self, body_a: np.ndarray, body_b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The body pairs (body_a, body_b) (K,) of the contacts followed by those of the

@@ -533,7 +533,7 @@ class World(WorldJoints):
         s = self.settings
         use_friction = bool(np.any(constraints.friction > 0.0))
         extra, push_outs = solve_substeps(bodies, constraints, self._gravity, s, use_friction,
-                                          self._joints.rows)
+                                          (self._joints.rows, self._joints.stiffness_cap))
         counts = self.stage_counts
         counts["converge"] += extra
         counts["push_out"] += push_outs
@@ -566,11 +566,12 @@ class World(WorldJoints):
                            bodies.angle - start_angle, radius)
         if len(fast) == 0:
             return
+        group = self._joints.groups(self._n)
         fraction = step_fractions([shape.field for shape in self._shapes],
                                   [getattr(shape, "vertices", None) for shape in self._shapes],
                                   self._view("shape_id"), start_com, bodies.com, start_angle,
-                                  bodies.angle, radius, core, fast, s.linear_slop,
-                                  self._joints.excluded_pairs(self._n))
+                                  bodies.angle, radius, core, fast, s.linear_slop, group)
+        fast, fraction = self._joints.spread_fractions(group, fast, fraction)
         t = fraction[:, None]
         bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])
         bodies.angle[fast] = start_angle[fast] + fraction * (bodies.angle[fast]

@@ -176,11 +176,13 @@ _FIELDS = {name: ((2,) if name in ("local_a", "local_b", "local_axis", "linear_i
 
 
 def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: JointRows,
-                       settings, gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(soft (J, 2, 3), params (4,)): bias_rate 1/s, mass_scale, impulse_scale of each
+                       settings, gravity: np.ndarray, cap: float
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """(soft (J, 2, 3), params (6,)): bias_rate 1/s, mass_scale, impulse_scale of each
     joint's rigid rows, linear [:, 0] and angular [:, 1] ("Loaded joints" below), from
     the accumulated impulses now; ``joint_passes`` refills them every substep from
-    params = (omega rad/s, damping ratio, h s, |g| h m/s).
+    params = (omega rad/s, damping ratio, h s, |g| h m/s, cap, largest r), and lowers
+    or raises the cap on r (``cap``: where the last step left it; inf: none).
 
     inv_mass, inv_inertia: (B,); gravity: (2,) m/s^2 (zero, or
     ``settings.load_stiffening`` false: no stiffening).
@@ -188,7 +190,7 @@ def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: Join
     h = settings.dt / settings.substeps
     g = float(np.hypot(gravity[0], gravity[1])) if settings.load_stiffening else 0.0
     params = np.array([2.0 * math.pi * 2.0 * min(settings.contact_hertz, 0.25 / h),
-                       JOINT_DAMPING_RATIO, h, g * h])
+                       JOINT_DAMPING_RATIO, h, g * h, cap, 1.0])
     soft = np.empty((rows.kind.shape[0], 2, 3))
     stiffen(inv_mass, inv_inertia, rows, params, soft)
     return soft, params
@@ -216,14 +218,19 @@ def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: Join
 # Unconverged stiffened rows ring: a 20-link chain hanging a 100 kg weight at rest
 # needs about 100 passes (Gauss-Seidel moves an error one joint per pass and a light
 # link passes on ~1/100 of a heavy neighbour's), and at 64 it oscillated and blew up.
+# So r is capped where the passes cannot keep up: a solve that does not converge
+# halves the cap (below the largest r it met), one that converges in a quarter of its
+# passes doubles it; the cap carries over from step to step (``JointTable``).
 # --------------------------------------------------------------------------------------
 
 
 @njit(cache=True)
 def stiffen(inv_mass, inv_inertia, rows, params, out):
     """Fill out (J, 2, 3) (``stiffened_softness``); params: omega rad/s and zeta of the
-    joint softness, h s, weight_impulse |g| h m/s (0: no stiffening)."""
+    joint softness, h s, weight_impulse |g| h m/s (0: no stiffening), the cap on r;
+    params[5] receives the largest r before the cap."""
     omega, zeta, h, weight_impulse = params[0], params[1], params[2], params[3]
+    params[5] = 1.0
     for j in range(rows.kind.shape[0]):
         a = rows.body_a[j]
         b = rows.body_b[j]
@@ -241,6 +248,8 @@ def stiffen(inv_mass, inv_inertia, rows, params, out):
             r = 1.0
             if weight_impulse > 0.0:
                 r = 1.0 + load * inverse / weight_impulse
+                params[5] = max(params[5], r)
+                r = min(r, params[4])
             root = math.sqrt(r)
             w = omega * root
             a1 = 2.0 * zeta * root + h * w
@@ -561,8 +570,10 @@ def joint_passes(bodies, joints, phase, inv_h, out, passes):
     accumulated impulse ("Loaded joints"); WARM runs once. Returns the passes run.
 
     bodies: (com, angle, velocity, angular_velocity, inv_mass, inv_inertia) as
-    ``solve_joints``'; joints: (JointRows, soft (J, 2, 3), spring (J, 3), params (4,)),
-    ``stiffened_softness``'s; WARM refills soft from the impulses it applied.
+    ``solve_joints``'; joints: (JointRows, soft (J, 2, 3), spring (J, 3), params (6,)),
+    ``stiffened_softness``'s; WARM refills soft from the impulses it applied. A SOLVE
+    phase that does not converge halves the cap on r (params[4]) for the next substeps,
+    one that converges within a quarter of ``passes`` doubles it.
     """
     com, angle, velocity, angular_velocity, inv_mass, inv_inertia = bodies
     rows, soft, spring, params = joints
@@ -576,7 +587,11 @@ def joint_passes(bodies, joints, phase, inv_h, out, passes):
         solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows,
                      phase, soft, spring, inv_h, out)
         if out.progress[0] <= CONVERGED * out.progress[1]:
+            if phase == SOLVE and 4 * (n + 1) <= passes:
+                params[4] *= 2.0
             return n + 1
+    if phase == SOLVE:
+        params[4] = max(1.0, 0.5 * min(params[4], params[5]))
     return passes
 
 
