@@ -291,14 +291,19 @@ class JointTable:
     def __len__(self) -> int:
         return len(self.specs)
 
-    def add(self, spec: JointSpec, com: np.ndarray, angle: np.ndarray) -> int:
-        """Append ``spec``, its frames taken from the bodies' com (B, 2) m, angle (B,) rad."""
+    def add(self, specs: list[JointSpec], com: np.ndarray, angle: np.ndarray) -> int:
+        """Append ``specs`` (one concatenation however many), their frames taken from the
+        bodies' com (B, 2) m and angle (B,) rad; returns the index of the last."""
         from .solver.joints import JointRows
 
-        if spec.name and spec.name in {s.name for s in self.specs}:
-            raise SpecError("name", f"duplicate joint name {spec.name!r}")
-        self.specs.append(spec)
-        self.rows = JointRows.concatenate(self.rows, JointRows.from_spec(spec, com, angle))
+        names = {s.name for s in self.specs}
+        for spec in specs:
+            if spec.name and spec.name in names:
+                raise SpecError("name", f"duplicate joint name {spec.name!r}")
+            names.add(spec.name)
+        self.specs.extend(specs)
+        self.rows = JointRows.concatenate(
+            [self.rows] + [JointRows.from_spec(spec, com, angle) for spec in specs])
         return len(self.specs) - 1
 
     def remove(self, j: int) -> JointSpec:
@@ -374,12 +379,12 @@ class WorldJoints:
         joint = check_joint(spec, "", index_of, len(self), self.position)
         return self._add_joint(joint)
 
-    def _add_joint(self, joint: JointSpec) -> int:
-        """Add a validated JointSpec (``Scene.build`` calls this directly)."""
-        j = self._joints.add(joint, self._view("com"), self._view("angle"))
-        for body in joint.bodies:
-            if body >= 0:
-                self._wake_touching(body)
+    def _add_joint(self, *joints: JointSpec) -> int:
+        """Add validated JointSpecs (``Scene.build`` passes all of a scene's at once);
+        returns the index of the last."""
+        j = self._joints.add(list(joints), self._view("com"), self._view("angle"))
+        for body in {b for joint in joints for b in joint.bodies if b >= 0}:
+            self._wake_touching(body)
         return j
 
     def remove_joint(self, j: int) -> None:

@@ -108,8 +108,8 @@ class Scene:
                 world._add(b.shape, values, b.name)     # values checked by _parse_body
             except SpecError as err:
                 raise err.in_file(self.source) from None
-        for joint in self.joints:
-            world._add_joint(joint)
+        if self.joints:
+            world._add_joint(*self.joints)
         world.scene = self
         return world
 

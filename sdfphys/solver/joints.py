@@ -155,8 +155,9 @@ class JointRows(NamedTuple):
                      for name, (shape, dtype) in _FIELDS.items()))
 
     @classmethod
-    def concatenate(cls, first: JointRows, second: JointRows) -> JointRows:
-        return cls(*(np.concatenate([x, y]) for x, y in zip(first, second)))
+    def concatenate(cls, parts: list[JointRows]) -> JointRows:
+        """The rows of ``parts`` one after the other."""
+        return cls(*(np.concatenate(arrays) for arrays in zip(*parts)))
 
     def take(self, index: np.ndarray) -> JointRows:
         return JointRows(*(np.ascontiguousarray(x[index]) for x in self))
