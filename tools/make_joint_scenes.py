@@ -195,14 +195,14 @@ def car() -> None:
     joints = [{"type": "wheel", "bodies": [w["name"], "chassis"], "anchor": w["position"],
                "axis": [0.0, 1.0], "limits": [-0.25, 0.25],
                "spring": {"hertz": 4.0, "damping_ratio": 0.7},
-               "motor": {"speed": -12.0, "max_torque": 60.0}} for w in wheels]
+               "motor": {"speed": -8.0, "max_torque": 60.0}} for w in wheels]
     write("car", """
 A car on wheel joints: a 38 kg chassis and two wheels of radius 0.4 m on vertical
 suspension springs (4 Hz, damping ratio 0.7, travel +-0.25 m), both driven at
--12 rad/s with 60 N m, over SDF terrain (a smooth union of a slab, two buried
+-8 rad/s with 60 N m, over SDF terrain (a smooth union of a slab, two buried
 circles and an ellipse).
 Shows: wheel joints (spring, limits, motor), SDF contacts on jointed bodies.""",
-          [terrain, chassis] + wheels, joints, {"duration": 8.0}, render((6.0, 2.0), 40.0))
+          [terrain, chassis] + wheels, joints, {"duration": 5.0}, render((10.0, 3.0), 36.0))
 
 
 if __name__ == "__main__":
