@@ -4,7 +4,8 @@ As Box2D's debug draw: each body's centre of mass is joined to its anchor by a t
 line, the anchors are dots (a gap between the two dots of a point joint is its error),
 a distance joint is a line between its anchors (dashed while a rope is slack) or a
 zigzag spring, a prismatic or wheel joint draws its axis through the second body's
-anchor (and a wheel's spring as a zigzag along it), a mouse joint a line to its target.
+anchor (and a wheel's spring as a zigzag from the axis' far end to the wheel), a mouse
+joint a line to its target.
 A drawing step, not a physics one: it loops over the joints in Python.
 """
 
@@ -73,9 +74,9 @@ def draw_joints(surface: pygame.Surface, camera: Any, world: Any, palette: Any) 
                              s * rows.local_axis[j, 0] + c * rows.local_axis[j, 1]])
             line(second[j] - AXIS_HALF_LENGTH * axis, second[j] + AXIS_HALF_LENGTH * axis,
                  palette.joint)
-            if kind == WHEEL and rows.has_spring[j]:
+            if kind == WHEEL and rows.has_spring[j]:     # from the axis' top to the wheel
                 along = second[j] + float(np.dot(first[j] - second[j], axis)) * axis
-                points = pixels(_zigzag(second[j] - AXIS_HALF_LENGTH * axis, along,
+                points = pixels(_zigzag(second[j] + AXIS_HALF_LENGTH * axis, along,
                                         SPRING_WIDTH))
                 pygame.draw.lines(surface, palette.spring, False, points.tolist(), 2)
         elif kind == MOUSE:
