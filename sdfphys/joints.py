@@ -177,8 +177,9 @@ def check_joint(data: Any, path: str, index_of: Callable[[str], int | None], cou
     """A validated JointSpec from a scene table or dict; ``path`` prefixes key paths.
 
     index_of: body name -> index or None; count: the number of bodies; centers: (B, 2)
-    m, their centres of mass (the default anchor of a motor joint, the default
-    ``anchor`` otherwise: the second body's centre, or the first's against the world).
+    m, their positions (user frame origins): the default ``anchor`` is the second
+    body's, or the first's against the world; a distance joint's default ``anchors``
+    are both bodies'.
     """
     table = _table(data, path, _COMMON + tuple({k for keys in _KEYS.values() for k in keys}))
     path = _dot(path)
