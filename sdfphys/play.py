@@ -5,7 +5,7 @@ paused), R reset (a new world from the factory), S screenshot (PNG in the curren
 directory, its name printed), C contacts overlay, F field overlay, B bounds overlay,
 H key help, Esc or closing the window quits. The overlays shown have a legend.
 Mouse: press the left button on a dynamic body and drag; the grabbed point is
-pulled toward the pointer by a soft spring (``DragSpring``). The right button on
+pulled toward the pointer by a soft mouse joint (``DragSpring``, ``grab``). The right button on
 any body shows that body's field alone (and turns the field overlay on); on empty
 space, the union of all fields again.
 
@@ -43,7 +43,7 @@ __all__ = [
     "DragSpring",
     "RateMeter",
     "RenderSettings",
-    "apply_drag",
+    "grab",
     "pick_body",
     "play",
 ]
@@ -80,26 +80,33 @@ class RenderSettings(Protocol):
 
 @dataclass(frozen=True)
 class DragSpring:
-    """The mouse spring, applied to the grabbed body's velocity before every step.
+    """The mouse joint that pulls a grabbed body (``World.add_joint``, type ``mouse``).
 
-    The grabbed point p (velocity v_p) is pulled toward the pointer m like a unit
-    mass on a damped spring of natural frequency ``hertz`` and damping ratio
-    ``damping_ratio`` (so the response does not depend on the body's mass),
-    integrated implicitly over the step dt (stable for any stiffness):
-
-        v_p' = (v_p + dt w^2 (m - p)) / (1 + 2 zeta w dt + w^2 dt^2),   w = 2 pi hertz
-
-    The change v_p' - v_p, capped at ``max_acceleration`` * dt, is applied as the
-    impulse at p that produces it (through the body's 2x2 effective mass at p), so a
-    body grabbed off-centre also turns.
+    The grabbed point is pulled toward the pointer by a soft constraint of natural
+    frequency ``hertz`` and ``damping_ratio`` (for the body's effective mass at that
+    point, so the response does not depend on the mass), solved with the contacts in
+    every substep; its force is at most ``weights`` times the body's weight (m |g|,
+    with |g| at least 9.81 m/s^2 so that a body can be dragged without gravity): a
+    grabbed body pushes others aside but cannot crush a pile under a heavy one.
     """
 
     hertz: float = 5.0
     """Natural frequency of the pull, Hz (higher: stiffer)."""
     damping_ratio: float = 0.7
     """1 is critical damping; below 1 the body overshoots the pointer."""
-    max_acceleration: float = 500.0
-    """Cap on the grabbed point's acceleration from the spring, m/s^2."""
+    weights: float = 50.0
+    """The joint's force bound in the body's weights."""
+
+
+def grab(world: Any, body: int, point: np.ndarray, spring: DragSpring = DragSpring()) -> int:
+    """Add the mouse joint that pulls body ``body``'s material point at world ``point``
+    (2,) m (its target: ``point`` until ``World.set_joint_target``); returns its index."""
+    weight = float(world.mass[body]) * max(float(np.hypot(*world.gravity)), 9.81)
+    return world.add_joint({"type": "mouse", "bodies": [body, "world"],
+                            "anchor": [float(point[0]), float(point[1])],
+                            "spring": {"hertz": spring.hertz,
+                                       "damping_ratio": spring.damping_ratio},
+                            "max_force": spring.weights * weight})
 
 
 def pick_body(world: Any, point: np.ndarray, tolerance: float = 0.0,
@@ -121,32 +128,6 @@ def pick_body(world: Any, point: np.ndarray, tolerance: float = 0.0,
         if d <= best_d:
             best, best_d = b, d
     return best
-
-
-def apply_drag(world: Any, body: int, anchor: np.ndarray, target: np.ndarray, dt: float,
-               spring: DragSpring = DragSpring()) -> None:
-    """Pull body ``body``'s point ``anchor`` (2,) (body frame, m, from the centre of mass)
-    toward world point ``target`` (2,) m over one step of ``dt`` s (see DragSpring)."""
-    com, angle = world.center_of_mass[body], float(world.angle[body])
-    c, s = math.cos(angle), math.sin(angle)
-    r = np.array([c * anchor[0] - s * anchor[1], s * anchor[0] + c * anchor[1]])
-    v, w = world.velocity[body], float(world.angular_velocity[body])
-    inv_m, inv_i = 1.0 / float(world.mass[body]), 1.0 / float(world.inertia[body])
-    v_point = v + w * np.array([-r[1], r[0]])
-    omega = 2.0 * math.pi * spring.hertz
-    wanted = (v_point + dt * omega ** 2 * (target - com - r)) / (
-        1.0 + 2.0 * spring.damping_ratio * omega * dt + (omega * dt) ** 2)
-    change = wanted - v_point
-    cap = spring.max_acceleration * dt
-    size = float(np.hypot(*change))
-    if size > cap:
-        change *= cap / size
-    # Effective mass at the point: K = inv_m I + inv_i (perp r)(perp r)^T.
-    k = np.array([[inv_m + inv_i * r[1] ** 2, -inv_i * r[0] * r[1]],
-                  [-inv_i * r[0] * r[1], inv_m + inv_i * r[0] ** 2]])
-    impulse = np.linalg.solve(k, change)
-    world.set_state(body, velocity=v + inv_m * impulse,
-                    angular_velocity=w + inv_i * (r[0] * impulse[1] - r[1] * impulse[0]))
 
 
 class RateMeter:
@@ -172,7 +153,7 @@ class RateMeter:
 @dataclass
 class _Grab:
     body: int
-    anchor: np.ndarray    # body frame, m
+    joint: int            # the mouse joint's index
     target: np.ndarray    # world, m
 
 
@@ -209,13 +190,12 @@ class _Session:
             point = self.camera.screen_to_world([event.pos])[0]
             body = pick_body(self.world, point, tolerance=3.0 / self.camera.scale)
             if body is not None:
-                frames = body_frames(self.world)
-                c, s = math.cos(frames.angle[body]), math.sin(frames.angle[body])
-                dx, dy = point - frames.com[body]
-                self.grab = _Grab(body, np.array([c * dx + s * dy, -s * dx + c * dy]), point)
+                self.grab = _Grab(body, grab(self.world, body, point, self.spring), point)
         elif event.type == pygame.MOUSEMOTION and self.grab is not None:
             self.grab.target = self.camera.screen_to_world([event.pos])[0]
-        elif event.type == pygame.MOUSEBUTTONUP and event.button == 1:
+            self.world.set_joint_target(self.grab.joint, self.grab.target)
+        elif event.type == pygame.MOUSEBUTTONUP and event.button == 1 and self.grab is not None:
+            self.world.remove_joint(self.grab.joint)
             self.grab = None
         elif event.type == pygame.MOUSEBUTTONDOWN and event.button == 3:
             point = self.camera.screen_to_world([event.pos])[0]
@@ -253,24 +233,12 @@ class _Session:
             count = max(1, round(1.0 / (self.fps * self.dt)))
         self.step_once = False
         for _ in range(count):
-            if self.grab is not None:
-                apply_drag(self.world, self.grab.body, self.grab.anchor, self.grab.target,
-                           self.dt, self.spring)
             self.world.step()
         self.step_rate.add(count, time.perf_counter())
 
     def draw(self, screen: pygame.Surface, font: pygame.font.Font, frame_rate: float) -> None:
         self.renderer.draw(screen, self.world, self.overlays)
         palette: Palette = self.renderer.palette
-        if self.grab is not None:
-            frames = body_frames(self.world)
-            b = self.grab.body
-            c, s = math.cos(frames.angle[b]), math.sin(frames.angle[b])
-            a = self.grab.anchor
-            point = frames.com[b] + np.array([c * a[0] - s * a[1], s * a[0] + c * a[1]])
-            ends = self.camera.world_to_screen(np.array([point, self.grab.target])) - 0.5
-            pygame.draw.aaline(screen, palette.mark, ends[0], ends[1])
-            pygame.draw.circle(screen, palette.mark, ends[0], 3)
         flags = [name for name, on in (("PAUSED", self.paused),
                                        ("contacts", self.overlays.contacts),
                                        ("field", self.overlays.field),

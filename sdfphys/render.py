@@ -22,6 +22,8 @@ Frames and units:
   hue faded toward grey, static ones a grey and kinematic ones an amber per material,
   and bodies of one colour alternate between lighter and darker shades in scene order,
   so neighbours in a stack differ.
+- Joints (``render_joints``): anchors, links from the centres of mass, axes, springs,
+  drawn over the bodies in ``Palette.joint`` and ``Palette.spring``.
 - Overlays (``Overlays``): contact points and normals, the SDF distance map
   with iso-lines at screen resolution (one body's field or the union of all; kept
   while no body moves), body bounds, and a legend of those shown. ``hud`` prints the
@@ -43,6 +45,7 @@ import pygame
 
 from .collide.broadphase import world_bounds
 from .render_field import _field_lut, _shade, distance_map
+from .render_joints import draw_joints
 from .sdf import compiled
 
 __all__ = ["ASLEEP", "DYNAMIC", "KINEMATIC", "SPRITE_TOLERANCE", "STATIC", "BodyFrames", "Camera",
@@ -141,6 +144,8 @@ class Palette:
     field_inside: Color = (70, 130, 230)
     field_outside: Color = (232, 150, 80)
     iso: Color = (250, 250, 250)
+    joint: Color = (236, 226, 150)
+    spring: Color = (120, 220, 150)
     text: Color = (232, 232, 232)
     panel: Color = (44, 48, 58)
 
@@ -380,6 +385,8 @@ class Renderer:
                           colours)
         self._draw_circles(surface, frames, np.flatnonzero(visible & (body_kind == "circle")),
                            colours)
+        if len(getattr(world, "joints", ())):
+            draw_joints(surface, self.camera, world, self.palette)
         if overlays.field:
             self._draw_field(surface, frames, overlays)
         if overlays.bounds:

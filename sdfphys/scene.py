@@ -8,6 +8,8 @@ The format is the DESIGN.md contract::
     [render]  size = [960, 540], center = [0.0, 4.0], scale = 50.0, fps = 60
     [[body]]  name, shape, position, angle, velocity, angular_velocity,
               density | mass, friction, restitution, static, kinematic
+    [[joint]] type, name, bodies, anchor | anchors, axis, length, limits, motor,
+              spring, collide_connected (``sdfphys.joints``)
 
 Every problem raises one ``SpecError`` naming the file and the key path
 (``scenes/x.toml: body[2].shape.radius: must be > 0, got -1``), with the nearest
@@ -28,6 +30,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from .errors import SpecError, check_int, check_number, check_vec2
+from .joints import JointSpec, check_joint
 from .limits import MAX_DURATION, BodyValues, check_body, check_gravity
 from .sdf.build import suggest
 from .settings import Settings, preset
@@ -35,7 +38,7 @@ from .shapes import shape_from_spec
 
 __all__ = ["BodySpec", "RenderSpec", "Scene", "apply_overrides", "load_scene", "read_scene"]
 
-TOP_KEYS = ("version", "world", "sim", "render", "body")
+TOP_KEYS = ("version", "world", "sim", "render", "body", "joint")
 WORLD_KEYS = ("gravity",)
 RENDER_KEYS = ("size", "center", "scale", "fps", "hud")
 BODY_KEYS = ("name", "shape", "position", "angle", "velocity", "angular_velocity",
@@ -82,6 +85,7 @@ class Scene:
     duration: float
     render: RenderSpec
     bodies: list[BodySpec]
+    joints: list[JointSpec] = field(default_factory=list)
     data: dict = field(default_factory=dict, repr=False)
     """The scene as read (after overrides), for ``digest``."""
 
@@ -104,6 +108,8 @@ class Scene:
                 world._add(b.shape, values, b.name)     # values checked by _parse_body
             except SpecError as err:
                 raise err.in_file(self.source) from None
+        if self.joints:
+            world._add_joint(*self.joints)
         world.scene = self
         return world
 
@@ -228,7 +234,7 @@ def _known_sections(data: Mapping) -> None:
         if not hint and stem:
             hint = f" (did you mean {stem[0]!r}?)"
         raise SpecError(str(key), f"unknown key{hint}; a scene has version, [world], [sim], "
-                                  "[render] and [[body]]")
+                                  "[render], [[body]] and [[joint]]")
 
 
 def _parse(data: Any, source: str) -> Scene:
@@ -258,7 +264,25 @@ def _parse(data: Any, source: str) -> Scene:
             raise SpecError(f"body[{i}].name",
                             f"duplicate name {b.name!r} (also body[{seen[b.name]}])")
         seen[b.name] = i
-    return Scene(source, gravity, quality, settings, duration, render, bodies)
+    return Scene(source, gravity, quality, settings, duration, render, bodies,
+                 _parse_joints(data.get("joint", []), bodies, seen))
+
+
+def _parse_joints(joints: Any, bodies: list[BodySpec], index: dict[str, int]
+                  ) -> list[JointSpec]:
+    """The ``[[joint]]`` tables, validated against the bodies (``joints.check_joint``)."""
+    if not isinstance(joints, list):
+        raise SpecError("joint", "must be an array of tables ([[joint]])")
+    positions = [b.position for b in bodies]
+    specs = [check_joint(j, f"joint[{i}]", index.get, len(bodies), positions)
+             for i, j in enumerate(joints)]
+    named: dict[str, int] = {}
+    for i, spec in enumerate(specs):
+        if spec.name and spec.name in named:
+            raise SpecError(f"joint[{i}].name",
+                            f"duplicate name {spec.name!r} (also joint[{named[spec.name]}])")
+        named[spec.name] = i
+    return specs
 
 
 def _parse_sim(sim: dict) -> tuple[str, Settings, float]:

@@ -258,12 +258,19 @@ def vertex_time_of_impact(fields: list[Field], vertices: list[np.ndarray | None]
 def step_fractions(fields: list[Field], vertices: list[np.ndarray | None],
                    shape_id: np.ndarray, start: np.ndarray, end: np.ndarray,
                    start_angle: np.ndarray, end_angle: np.ndarray, radius: np.ndarray,
-                   core_radius: np.ndarray, fast: np.ndarray, slop: float) -> np.ndarray:
+                   core_radius: np.ndarray, fast: np.ndarray, slop: float,
+                   group: np.ndarray | None = None) -> np.ndarray:
     """The world's stage: min of ``time_of_impact`` and ``vertex_time_of_impact`` (F,),
-    the candidate pairs found once for both (arguments as theirs)."""
+    the candidate pairs found once for both (arguments as theirs). group: (B,) labels
+    of bodies joined by joints (``joints.JointTable.groups``), or None: a fast body is
+    not stopped against a body of its own group (the group stops as one, and rewinding
+    one member against another would open their joints)."""
     if len(fast) == 0:
         return np.ones(0)
     pairs = _candidate_pairs(fast, start, end, radius)
+    if group is not None:
+        keep = group[fast[pairs[0]]] != group[pairs[1]]
+        pairs = (pairs[0][keep], pairs[1][keep])
     return np.minimum(
         _disc_fractions(fields, shape_id, start, end, end_angle, radius, core_radius, fast,
                         slop, pairs),

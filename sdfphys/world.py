@@ -30,6 +30,7 @@ from .collide import Contacts, find_contacts
 from .collide.narrowphase import PAIR_FUNCTIONS
 from .errors import SpecError
 from .islands import island_roots
+from .joints import JointTable, WorldJoints
 from .limits import (
     KINDS,
     BodyValues,
@@ -117,7 +118,7 @@ def _read_only(array: np.ndarray) -> np.ndarray:
     return array
 
 
-class World:
+class World(WorldJoints):
     """A 2D rigid-body world: bodies as arrays, ``step()`` advances ``settings.dt``.
 
     gravity: (2,) m/s^2 (settable attribute). settings: every knob (Settings).
@@ -150,6 +151,7 @@ class World:
         self._sleep_contacts = Contacts.empty()
         self._sleep_impulses = ImpulseCache.empty()
         self._islands_made = 0
+        self._joints = JointTable()     # ``joints.WorldJoints``
 
     # ----------------------------------------------------------------------------------
     # Bodies
@@ -285,6 +287,7 @@ class World:
         self._sleep_impulses = self._sleep_impulses.without_body(i)
         self._contacts = self._contacts.without_body(i)
         self._sleep_contacts = self._sleep_contacts.without_body(i)
+        self._joints.without_body(i)
 
     def set_state(self, index: int, *, position: Any = None, angle: float | None = None,
                   velocity: Any = None, angular_velocity: float | None = None) -> None:
@@ -467,7 +470,7 @@ class World:
         kinematic = self._active() & (self._view("kind") == _KINEMATIC)
         sleep_time[c.body_b[kinematic[c.body_a]]] = 0.0
         sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
-        root = island_roots(bodies.inv_mass, c.body_a, c.body_b)
+        root = island_roots(bodies.inv_mass, *self._joints.linked(c.body_a, c.body_b))
         falling = falling_asleep(root, awake, sleep_time, s.time_to_sleep)
         if not np.any(falling):
             return
@@ -504,7 +507,8 @@ class World:
         movable = self._active() if self.settings.sleeping else self._view("kind") == _DYNAMIC
         self._contacts = find_contacts(self._collision_shapes(), self._view("shape_id"),
                                        bodies.com, bodies.angle, movable, self.settings,
-                                       bodies.velocity, bodies.angular_velocity, ran)
+                                       bodies.velocity, bodies.angular_velocity, ran,
+                                       exclude=self._joints.excluded_pairs(self._n))
         self.stage_counts["collide"] += 1
         for a, b in ran:
             self.stage_counts[f"{a}_{b}"] += 1
@@ -528,7 +532,8 @@ class World:
         pseudo-velocities, solver "Split push-out")."""
         s = self.settings
         use_friction = bool(np.any(constraints.friction > 0.0))
-        extra, push_outs = solve_substeps(bodies, constraints, self._gravity, s, use_friction)
+        extra, push_outs = solve_substeps(bodies, constraints, self._gravity, s, use_friction,
+                                          (self._joints.rows, self._joints.stiffness_cap))
         counts = self.stage_counts
         counts["converge"] += extra
         counts["push_out"] += push_outs
@@ -561,10 +566,12 @@ class World:
                            bodies.angle - start_angle, radius)
         if len(fast) == 0:
             return
+        group = self._joints.groups(self._n)
         fraction = step_fractions([shape.field for shape in self._shapes],
                                   [getattr(shape, "vertices", None) for shape in self._shapes],
                                   self._view("shape_id"), start_com, bodies.com, start_angle,
-                                  bodies.angle, radius, core, fast, s.linear_slop)
+                                  bodies.angle, radius, core, fast, s.linear_slop, group)
+        fast, fraction = self._joints.spread_fractions(group, fast, fraction)
         t = fraction[:, None]
         bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])
         bodies.angle[fast] = start_angle[fast] + fraction * (bodies.angle[fast]

@@ -10,7 +10,7 @@ import pytest
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import pygame
 
-from sdfphys.play import DragSpring, RateMeter, apply_drag, pick_body, play
+from sdfphys.play import DragSpring, RateMeter, grab, pick_body, play
 from sdfphys.render import Camera, Palette
 from sdfphys.world import World
 
@@ -189,33 +189,24 @@ def test_contacts_toggle_draws_contacts(tmp_path, monkeypatch):
     assert np.any(np.all(marked == colour, axis=2))
 
 
-def test_apply_drag_is_mass_independent_and_moves_the_grabbed_point():
-    world = World(gravity=(0.0, 0.0))
-    world.add_body({"type": "circle", "radius": 0.5}, density=1.0)
-    world.add_body({"type": "circle", "radius": 0.5}, position=(5.0, 0.0), density=50.0)
-    spring, dt = DragSpring(hertz=2.0, damping_ratio=1.0), 1 / 60
-    apply_drag(world, 0, np.zeros(2), np.array([1.0, 0.0]), dt, spring)
-    apply_drag(world, 1, np.zeros(2), np.array([6.0, 0.0]), dt, spring)
-    w = 2 * np.pi * 2.0
-    expected = dt * w ** 2 * 1.0 / (1 + 2 * w * dt + (w * dt) ** 2)
-    np.testing.assert_allclose(world.velocity[:, 0], [expected, expected])
-    # Off-centre grab: the grabbed point gets the velocity change, and the body turns.
-    anchor = np.array([0.0, 0.4])
-    apply_drag(world, 0, anchor, np.array([1.0, 0.4]), dt, spring)
-    v, omega = world.velocity[0], world.angular_velocity[0]
-    point_velocity = v + omega * np.array([-anchor[1], anchor[0]])
-    wanted = (np.array([expected, 0.0]) + dt * w ** 2 * np.array([1.0, 0.0])) / (
-        1 + 2 * w * dt + (w * dt) ** 2)
-    np.testing.assert_allclose(point_velocity, wanted, atol=1e-12)
-    assert omega < 0                          # pulled right above the centre: clockwise
-
-
-def test_apply_drag_caps_the_acceleration():
-    world = World(gravity=(0.0, 0.0))
-    world.add_body({"type": "circle", "radius": 0.5})
-    spring = DragSpring(hertz=50.0, max_acceleration=60.0)
-    apply_drag(world, 0, np.zeros(2), np.array([100.0, 0.0]), 0.01, spring)
-    np.testing.assert_allclose(world.velocity[0], [0.6, 0.0])
+def test_grab_is_a_mouse_joint_whose_force_is_bounded_by_the_weight():
+    """A 1 kg box grabbed at its centre and pulled 1 m up: with the default bound (50
+    weights) it reaches the pointer; with 0.5 weights the joint cannot lift it (its
+    force, N, never exceeds half its weight)."""
+    for weights, lifted in ((50.0, True), (0.5, False)):
+        world = World()
+        world.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, -0.5),
+                       kind="static")
+        world.add_body({"type": "box", "size": [0.5, 0.5]}, position=(0.0, 0.25), mass=1.0)
+        j = grab(world, 1, np.array([0.0, 0.25]), DragSpring(weights=weights))
+        world.set_joint_target(j, (0.0, 1.25))
+        force = 0.0
+        for _ in range(120):
+            world.step()
+            force = max(force, float(np.hypot(*world.joint_force[j])))
+        assert force <= weights * 9.81 * (1 + 1e-9)
+        assert (abs(world.position[1, 1] - 1.25) < 0.01) == lifted
+        assert (world.position[1, 1] < 0.26) == (not lifted)
 
 
 def test_pick_body_finds_dynamic_bodies_only():

@@ -2,7 +2,8 @@
 
 Prints ONE markdown table on stdout: the case, what is measured, sdfphys's figure, the
 bound, pass/fail, and the same case in pymunk at its defaults (10 iterations,
-collision_slop 0.1, default collision_bias) with whether pymunk meets the same bound.
+collision_slop 0.1, default collision_bias) with whether pymunk meets the same bound,
+and for the joint cases Box2D v3 (pyb2d3) at its defaults.
 The scenes, figures and bounds are those of ``tests/stability/stability_*.py`` (the slow
 test suite asserts the same bounds on sdfphys). A sdfphys run that crashes or produces
 a non-finite state is reported as such and fails. Progress, run times and the count of
@@ -25,6 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "stabilit
 
 import stability_energy as energy
 import stability_input as bad_input
+import stability_joints as joints
 import stability_speed as speed
 import stability_stacking as stacking
 from stability_common import Bound, NonFiniteState
@@ -34,7 +36,8 @@ Figures = Callable[[], dict[str, float]]
 
 @dataclass(frozen=True)
 class Row:
-    """One line of the table: ``ours``/``theirs`` return a case's figures, ``key`` picks one."""
+    """One line of the table: ``ours``/``theirs`` (pymunk)/``box2d`` return a case's
+    figures, ``key`` picks one."""
 
     case: str
     figure: str
@@ -42,6 +45,7 @@ class Row:
     bound: Bound
     ours: Figures
     theirs: Figures | None
+    box2d: Figures | None = None
 
 
 def rows() -> list[Row]:
@@ -110,6 +114,16 @@ def rows() -> list[Row]:
     out.append(Row("5-box stack and base-5 pyramid, 2 ... 10 s", "fastest box point", "speed",
                    stacking.AT_REST, stacking.ours_resting_stacks,
                    stacking.pymunk_resting_stacks))
+    chain = "20-link chain of 1 kg links (0.5 x 0.1 m) holding 100 kg"
+    out += [Row(f"{chain}, released horizontal, 1 ... 10 s", "largest joint gap", "gap",
+                joints.JOINT_GAP, joints.ours_heavy_chain, joints.pymunk_heavy_chain,
+                joints.box2d_heavy_chain),
+            Row(f"{chain}, hanging, after 3 s", "largest joint gap", "hanging",
+                joints.JOINT_GAP, joints.ours_heavy_chain, joints.pymunk_heavy_chain,
+                joints.box2d_heavy_chain),
+            Row("ragdoll (scenes/ragdoll.toml) with a 100 kg torso and 1 kg limbs, dropped "
+                "tumbling, 5 s", "largest joint gap", "gap", joints.JOINT_GAP,
+                joints.ours_ragdoll, joints.pymunk_ragdoll, joints.box2d_ragdoll)]
     out.append(Row(f"{len(bad_input.DEGENERATE)} degenerate or non-finite scene values",
                    "not rejected with a SpecError naming the key", "accepted",
                    bad_input.ALL_REJECTED, bad_input.ours_degenerate, None))
@@ -130,8 +144,8 @@ def measure(run: Figures, key: str) -> tuple[float | None, str]:
 def main() -> None:
     """Measure every row and print the table."""
     argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
-    lines = ["| case | figure | sdfphys | bound | pass | pymunk (same bound) |",
-             "|---|---|---|---|---|---|"]
+    lines = ["| case | figure | sdfphys | bound | pass | pymunk (same bound) | Box2D v3 |",
+             "|---|---|---|---|---|---|---|"]
     failed = 0
     for row in rows():
         t0 = time.perf_counter()
@@ -144,10 +158,16 @@ def main() -> None:
             theirs, theirs_text = measure(row.theirs, row.key)
             if theirs is not None:
                 theirs_text += " (pass)" if row.bound.holds(theirs) else " (fail)"
+        box2d_text = "n/a"
+        if row.box2d is not None:
+            box2d, box2d_text = measure(row.box2d, row.key)
+            if box2d is not None:
+                box2d_text += " (pass)" if row.bound.holds(box2d) else " (fail)"
         print(f"{row.case}: {row.figure}: sdfphys {ours_text} ({t1 - t0:.1f} s), pymunk "
-              f"{theirs_text} ({time.perf_counter() - t1:.1f} s)", file=sys.stderr, flush=True)
+              f"{theirs_text}, Box2D {box2d_text} ({time.perf_counter() - t1:.1f} s)",
+              file=sys.stderr, flush=True)
         lines.append(f"| {row.case} | {row.figure} | {ours_text} | {row.bound} | "
-                     f"{'pass' if ok else 'FAIL'} | {theirs_text} |")
+                     f"{'pass' if ok else 'FAIL'} | {theirs_text} | {box2d_text} |")
     print("\n".join(lines))
     print(f"{failed} of {len(lines) - 2} sdfphys figures outside their bounds", file=sys.stderr)
 

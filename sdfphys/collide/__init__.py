@@ -206,12 +206,20 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
     return c.take(np.lexsort((c.feature, pair_key)))
 
 
+def _without(pairs: np.ndarray, exclude: np.ndarray | None, n: int) -> np.ndarray:
+    """``pairs`` (P, 2) without those whose key i * n + j is in ``exclude`` (sorted)."""
+    if exclude is None or len(pairs) == 0:
+        return pairs
+    return pairs[~np.isin(pairs[:, 0] * np.int64(n) + pairs[:, 1], exclude,
+                          assume_unique=False)]
+
+
 def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.ndarray,
                   angle: np.ndarray, movable: np.ndarray, settings: Settings,
                   velocity: np.ndarray | None = None,
                   angular_velocity: np.ndarray | None = None,
                   ran: set[tuple[str, str]] | None = None,
-                  fast_circles: bool = True) -> Contacts:
+                  fast_circles: bool = True, exclude: np.ndarray | None = None) -> Contacts:
     """All contacts of B bodies this step, sorted by (body_a, body_b, feature).
 
     shapes: Shape objects; shape_id: (B,) int index into ``shapes`` per body;
@@ -223,6 +231,8 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     (``PAIR_FUNCTIONS`` keys): which narrowphase machinery this query needed.
     fast_circles: compiled boxes, circle-circle and circle-box contacts (module doc); False runs
     every stage in numpy and every pair through ``_narrowphase`` (same result).
+    exclude: sorted int64 keys i * B + j (i < j) of body pairs that never collide (bodies
+    joined by a joint), dropped from the candidate pairs; None: none.
     Returns contacts with body_a < body_b, depth > -(settings.speculative_distance +
     reach_a + reach_b), at most settings.contacts_per_pair per pair.
     """
@@ -244,7 +254,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                                   settings.dt)
         boxes = world_bounds(local_bounds[body_shape], radius[body_shape], position, angle,
                              0.5 * margin + reach)
-        pairs = candidate_pairs(boxes, movable)
+        pairs = _without(candidate_pairs(boxes, movable), exclude, n)
         pose = np.column_stack([position, angle])
         return _narrowphase(distinct, body_shape, pairs, pose, margin, reach, settings, ran)
 
@@ -252,7 +262,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     reach_and_boxes(local_bounds, radius, body_shape, position, angle, velocity,
                     angular_velocity, float(settings.dt), 0.5 * margin,
                     UNBOUNDED_RADIUS, REACH_CAP_RADII, reach, boxes)
-    pairs = candidate_pairs(boxes, movable)
+    pairs = _without(candidate_pairs(boxes, movable), exclude, n)
     shape_class = tables.shape_class
     trig = np.empty((n, 4))
     box_body = shape_class[body_shape] == BOX

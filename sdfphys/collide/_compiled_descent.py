@@ -18,7 +18,7 @@ Both problems of ``descent``:
 
 - ``TRIANGLE`` (``descent._TriangleProblem``): f of program a over triangles;
   phi = f, data = grad f (2 columns).
-- ``PAIR`` (``descent._PairProblem``): fields a and b, pair k placing b in a's
+- ``PAIR`` (``field_pairs._PairProblem``): fields a and b, pair k placing b in a's
   frame by p_a = R_k p_b + o_k; a point of start i belongs to pair
   ``pair_of[i]``. At a point p of a's frame, with q = R^T (p - o) (b's frame):
   data = (f_a(p), f_b(q), grad f_a(p), R grad f_b(q)) (6 columns) and
@@ -97,7 +97,7 @@ def _evaluate(kind: int, code_a: np.ndarray, consts_a: np.ndarray, depth_a: int,
               data: np.ndarray) -> None:
     """The problem at points[:n] (of pairs pair[:n], PAIR): phi, grad phi, data rows.
 
-    The operations are those of ``descent._PairProblem.values`` / ``evaluate``
+    The operations are those of ``field_pairs._PairProblem.values`` / ``evaluate``
     (``_times`` writes v @ M as v_x M_0j + v_y M_1j), in chunks of ``_CHUNK`` points.
     """
     size = min(n, _CHUNK)
@@ -362,7 +362,7 @@ def _h(code_a: np.ndarray, consts_a: np.ndarray, work_a, code_b: np.ndarray,
        ox: float, oy: float, dx: float, dy: float, sx: float, sy: float, s: np.ndarray,
        m: int, value: np.ndarray, slope: np.ndarray) -> None:
     """h(s) = max(f_a(x), f_b(x - shift)), x = origin + s direction, and its slope in s,
-    at s[:m] into value, slope (``descent._patch_ends``'s ``h``, pair k, the same
+    at s[:m] into value, slope (``field_pairs._patch_ends``'s ``h``, pair k, the same
     operations). work_*: (stack, frames, cur, points (M, 2), f (M,), grad (M, 2))."""
     stack_a, frames_a, cur_a, xa, fa, ga = work_a
     stack_b, frames_b, cur_b, xb, fb, gb = work_b
@@ -398,7 +398,7 @@ def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a
                rotation: np.ndarray, offset: np.ndarray, pair: np.ndarray, centre: np.ndarray,
                normal: np.ndarray, depth: np.ndarray, sliver: np.ndarray, reach: np.ndarray,
                iterations: int, tol: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``descent._patch_ends`` with both fields given by their programs.
+    """``field_pairs._patch_ends`` with both fields given by their programs.
 
     Same arguments (pair (K,), centre (K, 2), normal (K, 2), depth, sliver, reach,
     tol (K,)) and results (s (K, 2), found (K, 2): column 0 the -t end, 1 the +t
@@ -480,7 +480,7 @@ def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a
 @njit(cache=True, error_model="numpy")
 def _clusters(group: np.ndarray, point: np.ndarray, key: np.ndarray, score: np.ndarray,
               tiebreak: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``descent._clusters`` (same arguments and results): per group (a run of equal
+    """``field_pairs._clusters`` (same arguments and results): per group (a run of equal
     ``group``), each point's leader is the lowest-key point within the group's
     radius (numpy's argmin: the first on ties, slot 0 when none); per head, the
     member with the lowest score (to 4 ulps) and then the lowest tiebreak."""
@@ -539,14 +539,14 @@ def field_contacts(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesti
                    rotation: np.ndarray, offset: np.ndarray, pair_of: np.ndarray,
                    best: np.ndarray, phi: np.ndarray, data: np.ndarray, scale: np.ndarray,
                    n_starts: int, margin: float, iterations: int, merge: float, sliver: float):
-    """``descent.field_field_contacts`` from the descent's results on: contacts of the
+    """``field_pairs.field_field_contacts`` from the descent's results on: contacts of the
     starts that hit, merged (``_clusters``), flat patches replaced by their ends
     (``patch_ends``), merged again. The same operations in the same order.
 
     rotation (L, 2, 2), offset (L, 2): b's placements; pair_of (S,): each start's
     pair (S = L n_starts, start id = row % n_starts); best (S, 2), phi (S,),
     data (S, 6): the descent's results; scale (L,): the regions' diagonals;
-    merge, sliver: ``descent._MERGE`` and ``descent._SLIVER``. Returns (pair (K,)
+    merge, sliver: ``field_pairs._MERGE`` and ``field_pairs._SLIVER``. Returns (pair (K,)
     into the L placements, point (K, 2), depth (K,), normal (K, 2), start id (K,)).
     """
     n_s = phi.shape[0]

@@ -9,7 +9,7 @@ docstring; the derivations of its pieces sit above the functions below.
 
 Kinds of problem (``kind``): ``TRIANGLE`` (f restricted to a triangle, paths
 projected onto the start's triangle) and ``PAIR`` (a balance of two fields over
-the plane, see ``descent._PairProblem``; data columns f_a, f_b, grad f_a, grad f_b).
+the plane, see ``field_pairs._PairProblem``; data columns f_a, f_b, grad f_a, grad f_b).
 
 State of P starts, updated in place (columns named by the constants below):
 
