@@ -70,6 +70,7 @@ import numpy as np
 
 from .bench_scenes import SAMPLE_TIMES, SCENES, BenchScene, Trace
 from .errors import SpecError
+from .interrupt import check as check_interrupt
 from .interrupt import deferred
 from .settings import PRESETS, Settings, preset
 
@@ -160,6 +161,7 @@ def run_scene(scene: BenchScene, settings: Settings) -> Trace:
         t0 = time.perf_counter()
         world.step()
         step_s[k] = time.perf_counter() - t0
+        check_interrupt()
         d = world.contacts.depth
         if len(d):
             depth[k] = float(np.max(d))

@@ -119,6 +119,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                     raise
             sys.stdout.flush()
             print(f"sdfphys: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
+            interrupt.quiet_finalizers()
             return interrupt.exit_status(signum)
 
 
@@ -203,6 +204,7 @@ def _run(args) -> int:
             if step == steps:
                 break
             world.step()
+            interrupt.check()
             if len(world.contacts):
                 max_depth = max(max_depth, float(world.contacts.depth.max()))
             progress.update(step + 1)

@@ -7,6 +7,15 @@ signals are ignored while they do. ``received()`` tells the command line which s
 came, whatever exception it finally sees (an exception raised inside a compiled
 kernel's call can surface as another one, e.g. numba's SystemError).
 
+A handler runs at whatever Python line the main thread is on, and an exception raised
+where Python cannot propagate it (a ``__del__``, a garbage-collector or C-library
+callback, of which numba's compiler runs many) is printed as "Exception ignored" and
+dropped: the command would go on with the signal marked handled and further signals
+ignored. Inside ``handled()`` such a dropped ``Interrupted`` is not printed
+(``sys.unraisablehook``; other dropped exceptions are, as before), and the long loops
+(``run``'s and ``record``'s steps, the bench's runs) call ``check()`` after each step,
+which raises ``Interrupted`` again for a signal whose exception never left that spot.
+
 ``deferred()`` holds the two signals back during a few lines that create or remove a
 temporary file (``pthread_sigmask``): a signal is never handled between creating a
 file and recording its name for the cleanup.
@@ -15,16 +24,20 @@ file and recording its name for the cleanup.
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-__all__ = ["SIGNALS", "Interrupted", "deferred", "exit_status", "handled", "received"]
+__all__ = ["SIGNALS", "Interrupted", "check", "deferred", "exit_status", "handled",
+           "quiet_finalizers", "received"]
 
 #: The signals handled.
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 _received: int | None = None
+#: Inside ``handled()`` (main thread): ``check`` may raise.
+_active = False
 
 
 class Interrupted(KeyboardInterrupt):
@@ -51,17 +64,42 @@ def _main_thread() -> bool:
 def handled() -> Iterator[None]:
     """Handle SIGINT and SIGTERM as ``Interrupted`` inside the block (main thread only;
     elsewhere the block runs unchanged). The previous handlers are restored after."""
-    global _received
+    global _received, _active
     _received = None
     if not _main_thread():
         yield
         return
     previous = {s: signal.signal(s, _handler) for s in SIGNALS}
+    previous_hook = sys.unraisablehook
+
+    def unraisable(report) -> None:
+        if not isinstance(report.exc_value, Interrupted):
+            previous_hook(report)
+
+    sys.unraisablehook = unraisable
+    _active = True
     try:
         yield
     finally:
+        _active = False
+        sys.unraisablehook = previous_hook
         for s, handler in previous.items():
             signal.signal(s, handler)
+
+
+def check() -> None:
+    """Raise ``Interrupted`` if, inside ``handled()``, a signal was handled whose
+    exception was dropped (module doc); nothing otherwise. Call it from the main loops
+    only, not from the cleanups that an ``Interrupted`` runs."""
+    if _active and _received is not None:
+        raise Interrupted(_received)
+
+
+def quiet_finalizers() -> None:
+    """Report no exception that a finalizer drops from now on. For a process that ends
+    on a signal: the objects of work it cut short (a kernel half compiled by numba and
+    llvmlite) may fail to close at exit, which says nothing to the user."""
+    sys.unraisablehook = lambda report: None
 
 
 def received() -> int | None:

@@ -40,6 +40,7 @@ import numpy as np
 
 from . import __version__
 from .errors import SpecError
+from .interrupt import check as check_interrupt
 from .interrupt import deferred
 from .limits import check_steps
 from .scene import read_scene
@@ -160,6 +161,7 @@ def record(scene: str | os.PathLike | Mapping, seconds: float | None = None,
     for k in range(steps + 1):
         if k:
             world.step()
+            check_interrupt()
             if progress is not None:
                 progress(k)
         position[k] = world.position
