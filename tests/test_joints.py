@@ -503,3 +503,24 @@ def test_renderer_draws_anchors_links_and_springs():
     assert spring[60:140, 40:60].sum() > 40 and not np.any(spring[:45]) and not np.any(spring[155:])
     assert joint[48:53, 48:53].any() and joint[148:153, 48:53].any()
     assert not np.any(np.all(plain == np.array(palette.spring), axis=2))
+
+
+def test_a_world_without_joints_compiles_no_joint_code():
+    """The substep kernel takes None for "no joints" (a type to numba), so a scene without
+    joints compiles (or loads) a kernel whose joint argument is none, its joint passes
+    pruned; a joint adds the second specialization."""
+    probe = """
+import sdfphys
+from sdfphys.solver import substeps
+w = sdfphys.World()
+w.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
+w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 1.0))
+w.step()
+print([str(sig[-1]) for sig in substeps._substeps_kernel.signatures])
+w.add_joint({"type": "revolute", "bodies": [1, "world"], "anchor": [0.0, 2.0]})
+w.step()
+print(len(substeps._substeps_kernel.signatures))
+"""
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         check=True, timeout=300).stdout.split()
+    assert out == ["['none']", "2"]

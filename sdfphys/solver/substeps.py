@@ -410,10 +410,11 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_d
     islands at rest over the small limit take part in the first ``rest_passes`` extra
     passes only. Returns the number of extra passes run.
 
-    joints: (any joints, joint bodies, joint rows, Output) (``_substeps_kernel``): with
+    joints: None, or (joint bodies, joint rows, Output) (``_substeps_kernel``): with
     joints, each extra pass is followed by one pass over the joints, and convergence
     asks it of both (contacts converged alone push jointed bodies apart: a crate on a
-    bridge of planks 25 times lighter opened its joints by 19 cm).
+    bridge of planks 25 times lighter opened its joints by 19 cm). None is a type, not
+    a value, to numba: a scene without joints compiles no joint code.
     """
     loaded_pairs, small_pairs = loaded
     for _ in range(passes):
@@ -427,9 +428,9 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_d
             return n
         change, impulse = _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out,
                                  soft_depth, use_bias, use_friction)
-        has_joints, joint_bodies, joint_rows, joint_out = joints
         joints_converged = True
-        if has_joints:
+        if joints is not None:
+            joint_bodies, joint_rows, joint_out = joints
             joint_passes(joint_bodies, joint_rows, SOLVE if use_bias else RELAX, inv_h,
                          joint_out, 1)
             joints_converged = joint_out.progress[0] <= CONVERGED * joint_out.progress[1]
@@ -448,8 +449,8 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
                      use_friction, extra_passes, rest_passes, soft_depth, joints):
     """All substeps of one step: integrate v, warm start, solve, integrate x, relax.
 
-    joints: (JointRows, stiffened softness (J, 2, 3), spring softness (J, 3), stiffening
-    parameters (4,)); the joint
+    joints: None (no joints: no joint code is compiled), or (JointRows, stiffened
+    softness (J, 2, 3), spring softness (J, 3), stiffening parameters (4,)); the joint
     rows are warm started, solved and relaxed before the contacts in each phase (Box2D
     v3's order), each phase in passes until converged (``joints.joint_passes``), and
     once more after the contacts when there are both: a contact's single pass must not
@@ -480,11 +481,10 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             tangent_mass, friction, bias_rate, mass_scale, impulse_scale, normal_impulse,
             tangent_impulse, total_normal_impulse)
     pseudo = (pseudo_velocity, pseudo_angular, pseudo_impulse)
-    has_joints = joints[0].kind.shape[0] > 0
     joint_bodies = (com, angle, velocity, angular_velocity, inv_mass, inv_inertia)
     joint_out = Output(np.empty((0, 2)), np.empty(0), np.zeros(2))
     joint_passes_max = JOINT_PASSES * (extra_passes + 1)
-    in_sweeps = (has_joints, joint_bodies, joints, joint_out)
+    in_sweeps = None if joints is None else (joint_bodies, joints, joint_out)
     passes_run = 0
     push_outs = 0
     for _ in range(substeps):
@@ -492,13 +492,13 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
         push_outs += split
         _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
                               angular_damping, gravity, h)
-        if has_joints:
+        if joints is not None:
             joint_passes(joint_bodies, joints, WARM, inv_h, joint_out, 1)
         if has_contacts:
             _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
                         pair_start, normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
                         total_normal_impulse)
-        if has_joints:
+        if joints is not None:
             joint_passes(joint_bodies, joints, SOLVE, inv_h, joint_out, joint_passes_max)
         if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
@@ -511,7 +511,7 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             _update_anchors(com, com0, angle, angle0, round_body, cos_d, sin_d, inv_mass,
                             body_a, body_b, normal, anchor_a0, anchor_b0, base_separation,
                             arm_a0, arm_b0, anchor_a, anchor_b, separation)
-        if has_joints and relax_passes > 0:
+        if joints is not None and relax_passes > 0:
             joint_passes(joint_bodies, joints, RELAX, inv_h, joint_out,
                          max(relax_passes, joint_passes_max))
         if has_contacts:
@@ -538,9 +538,13 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     c = constraints
     h = settings.dt / settings.substeps
     gravity = np.asarray(gravity, dtype=np.float64)
-    joints, cap = (JointRows.empty(), np.full(1, np.inf)) if joints is None else joints
-    joint_soft, stiffening = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, joints,
-                                                settings, gravity, float(cap[0]))
+    if joints is not None and len(joints[0].kind) > 0:
+        rows, cap = joints
+        joint_soft, stiffening = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows,
+                                                    settings, gravity, float(cap[0]))
+        joint_args = (rows, joint_soft, spring_softness(rows, h), stiffening)
+    else:
+        joint_args = None
     v, w = bodies.velocity, bodies.angular_velocity
     spin = 0.0 if bodies.radius is None else w * np.where(bodies.inv_mass > 0.0,
                                                           bodies.radius, 0.0)
@@ -557,9 +561,9 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         c.normal_impulse, c.tangent_impulse, c.total_normal_impulse,
         h, settings.substeps, settings.relax_passes, settings.max_push_out,
         settings.max_linear_speed, use_friction, settings.stiff_iterations - 1,
-        settings.rest_iterations - 1, settings.soft_depth,
-        (joints, joint_soft, spring_softness(joints, h), stiffening))
-    cap[0] = stiffening[4]
+        settings.rest_iterations - 1, settings.soft_depth, joint_args)
+    if joint_args is not None:
+        cap[0] = stiffening[4]
     return int(passes), int(push_outs)
 
 
