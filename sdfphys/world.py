@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from . import _warm
 from .collide import Contacts, find_contacts
 from .collide.narrowphase import PAIR_FUNCTIONS
 from .errors import SpecError
@@ -363,6 +364,8 @@ class World(WorldJoints):
         step with no awake dynamic and no moving kinematic body only advances the time,
         and sleeping islands within contact range of an active body wake first.
         """
+        if self.step_count == 0:
+            _warm.start(self)
         sleeping = self.settings.sleeping
         if not sleeping or np.any(self._active()):
             bodies = self._body_state()
@@ -386,6 +389,16 @@ class World(WorldJoints):
                 self._fall_asleep(bodies, constraints, start_com, start_angle)
         self.time += self.settings.dt
         self.step_count += 1
+
+    def _compile_ahead(self) -> None:
+        """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
+        the kernels' sake: the solver's stages once on no contacts."""
+        bodies = self._body_state()
+        constraints = self._prepare(Contacts.empty(), bodies)
+        self._substeps(constraints, bodies)
+        apply_restitution(bodies, constraints, self.settings)
+        if self.settings.sleeping:
+            self._fall_asleep(bodies, constraints, bodies.com.copy(), bodies.angle.copy())
 
     def _body_state(self) -> BodyState:
         """The solver's view; sleeping bodies take part with zero inverse mass."""

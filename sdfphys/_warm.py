@@ -1,0 +1,77 @@
+"""A second process compiles the solver's kernels while the first compiles the collisions'.
+
+Numba compiles one kernel at a time under a process-wide lock, so a cold first step is
+serial: the collision kernels (stage 1, most of it for fields: the descents) and then
+the solver's (stages 2-6, most of it for a scene of boxes). On a machine with two cores or more, the first step of the
+first world of a process whose solver kernels are not yet in the on-disk cache forks a
+child (``start``): it runs the solver's stages on no contacts (``World._compile_ahead``),
+which compiles the same kernels with the same argument types into the same cache, and
+exits. (Running the collision stage's pair groups in reverse there gained nothing: they
+share the descent's kernels, which both processes then compiled at once.) The parent goes on with stage 1; when it reaches a kernel the child has saved, it
+loads it instead of compiling it (numba checks the cache before compiling, and writes a
+cache file under a temporary name and renames it, so a reader never sees half of one).
+What the child has not finished yet the parent compiles as before: the trajectory is
+the same either way, only the wait shorter.
+
+The child writes nothing but cache files: its standard streams go to the null device,
+it closes every other inherited descriptor (a video encoder's pipe must see its end of
+file when the parent closes it), takes the default action on SIGINT and SIGTERM, ends
+itself after CHILD_SECONDS, keeps
+the compile notice quiet, and leaves with ``os._exit`` (no atexit handler, no flush of
+the parent's buffers). ``SDFPHYS_WARM=0`` in the environment turns it off.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import signal
+import threading
+from typing import Any
+
+__all__ = ["start"]
+
+_started = False
+#: The child ends itself after this long whatever it is doing (SIGALRM's default
+#: action): a lock another thread of the parent held at the fork cannot keep it alive.
+CHILD_SECONDS = 900
+
+
+def _cold() -> bool:
+    """Whether the substep kernel has no entry for this source in the on-disk cache
+    (numba's index for it is missing or stale). Any failure to tell: False."""
+    from .solver import substeps
+
+    try:
+        return not substeps._substeps_kernel._cache._cache_file._load_index()
+    except (AttributeError, OSError, ImportError, EOFError, pickle.UnpicklingError):
+        return False            # another numba's layout, an unreadable index: no fork
+
+
+def start(world: Any) -> int | None:
+    """Fork the compiling child for ``world`` if this process has not yet, the machine has
+    two cores or more, the platform forks, it is not turned off and the cache is cold.
+    Returns the child's pid (None: no child)."""
+    global _started
+    if _started:
+        return None
+    _started = True
+    if (os.environ.get("SDFPHYS_WARM", "1") == "0" or not hasattr(os, "fork")
+            or (os.cpu_count() or 1) < 2 or not _cold()):
+        return None
+    pid = os.fork()
+    if pid == 0:                                    # the child
+        try:
+            signal.signal(signal.SIGINT, signal.SIG_DFL)
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            signal.alarm(CHILD_SECONDS)
+            null = os.open(os.devnull, os.O_RDWR)
+            for fd in (0, 1, 2):
+                os.dup2(null, fd)
+            os.closerange(3, 1 << 16)
+            os.environ["SDFPHYS_COMPILE_NOTICE"] = "0"
+            world._compile_ahead()
+        finally:
+            os._exit(0)
+    threading.Thread(target=os.waitpid, args=(pid, 0), daemon=True).start()
+    return pid

@@ -1,0 +1,51 @@
+"""The compiling child of a cold first step (``sdfphys._warm``)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+PROBE = """
+import os, time
+import sdfphys
+from sdfphys import _warm
+from sdfphys.solver import substeps
+
+w = sdfphys.World()
+w.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
+w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 1.0))
+cold = _warm._cold()
+pid = _warm.start(w)
+again = _warm.start(w)
+deadline = time.monotonic() + 600
+while pid is not None and _warm._cold() and time.monotonic() < deadline:
+    time.sleep(0.2)
+w.step()
+stats = substeps._substeps_kernel.stats
+print(cold, pid is not None, again is None, len(stats.cache_hits), len(stats.cache_misses))
+"""
+
+
+def _probe(**env: str) -> list[str]:
+    return subprocess.run([sys.executable, "-c", PROBE], capture_output=True, text=True,
+                          check=True, timeout=900,
+                          env={**os.environ, "SDFPHYS_COMPILE_NOTICE": "0", **env}
+                          ).stdout.split()
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not hasattr(os, "fork") or (os.cpu_count() or 1) < 2,
+                    reason="the child is forked on machines with two cores or more")
+def test_a_cold_first_step_forks_a_child_that_fills_the_cache_for_the_parent(tmp_path):
+    """On an empty cache the first start forks (the second does not), the child saves the
+    substep kernel, and the parent's first step loads it instead of compiling it."""
+    assert _probe(NUMBA_CACHE_DIR=str(tmp_path)) == ["True", "True", "True", "1", "0"]
+
+
+def test_no_child_when_turned_off():
+    """SDFPHYS_WARM=0: no fork, whatever the cache holds."""
+    out = _probe(SDFPHYS_WARM="0")
+    assert out[1:3] == ["False", "True"]
