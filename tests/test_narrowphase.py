@@ -395,7 +395,7 @@ def test_mesh_instancing_field_calls_do_not_grow_with_bodies(rng):
     ``field_field_contacts`` (the starts, one call per descent iteration, the patch
     search's two bracket ends and one call per iteration: 2 field_descent_iterations
     + 3, as for sdf-sdf groups), then the support search's projection, one call per
-    round and two for the far ends (SDF_CALLS). All independent of the number of bodies.
+    round and four for the far ends: probes, anchors, two ladders (SDF_CALLS). All independent of the number of bodies.
     """
     from sdfphys.collide.mesh_sdf import SDF_CALLS
 
