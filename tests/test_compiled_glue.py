@@ -74,7 +74,8 @@ def test_sdf_in_mesh_compiled_equals_numpy(monkeypatch):
     rng = np.random.default_rng(2026)
     meshes = [shape_from_spec(s) for s in MESHES[:2] + [{"type": "box", "size": [0.5, 9.0]}]]
     sdfs = [shape_from_spec(s) for s in SDFS[:2] + [{"type": "sdf", "field": {
-        "type": "box", "size": [0.6, 0.3]}}]]
+        "type": "box", "size": [0.6, 0.3]}}, {"type": "sdf", "field": {
+            "type": "rounded_box", "size": [0.7, 0.4], "radii": 0.1}}]]
     contacts = far_ends = 0
     for _ in range(120):
         mesh, sdf = meshes[rng.integers(len(meshes))], sdfs[rng.integers(len(sdfs))]

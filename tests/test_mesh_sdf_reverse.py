@@ -249,6 +249,36 @@ def test_slightly_tilted_sdf_box_keeps_both_bottom_corners(theta):
         assert np.sum(far) == 1 and c.depth[far][0] == np.min(c.depth)
 
 
+SDF_ROUNDED = {"type": "sdf", "field": {"type": "rounded_box", "size": [1.4, 0.9],
+                                        "radii": 0.2}}
+
+
+@pytest.mark.parametrize("theta", [0.0156, -0.004])
+def test_slightly_tilted_rounded_box_keeps_both_ends_of_its_flat_bottom(theta):
+    """A rounded box (flat bottom from x = -0.5 to 0.5 in its frame, corners of radius
+    0.2) 1 mm into the plank, tilted: its deepest point is on the lower rounding, where
+    both probes see one normal, so the incident face is the side toward the centre and
+    its line is found from a surface point on the flat part; its far end (the flat
+    part's end, to 1/16 of the last ladder gap) is a contact too. scenes/csg_bodies.toml
+    at t = 0.917 s: the far end, 1.3 cm above the ground and falling at -3.2 rad/s, was
+    missed and landed 4.4 cm deep."""
+    c_, s_ = math.cos(theta), math.sin(theta)
+    low = -0.5 if theta > 0 else 0.5                     # the lower end of the bottom
+    lowest = (np.array([low * c_, low * s_]) + rotation(theta) @ [0.0, -0.25]
+              + [0.0, -0.2])                              # the rounding's lowest point
+    y = 0.1 - 0.001 - lowest[1]
+    for c, sign in both_orders((0.0, 0.0, 0.0), SDF_ROUNDED, (0.3, y, theta), margin=0.03):
+        far = (c.feature & ((1 << 13) - 1)) >= mesh_sdf.FAR_END
+        assert np.sum(far) == 1
+        end = c.point[far][0] - [0.0, c.depth[far][0] / 2]         # the sdf's point
+        local = rotation(theta).T @ (end - [0.3, y])
+        np.testing.assert_allclose(local[1], -0.45, atol=TOL)      # on the flat bottom
+        assert 0.5 - 1.0 / 16 <= -np.sign(low) * local[0] <= 0.5   # near its end
+        np.testing.assert_allclose(c.depth[far][0], 0.1 - end[1], atol=TOL)
+        np.testing.assert_allclose(c.normal[far][0], [0.0, sign], atol=TOL)
+        np.testing.assert_allclose(c.depth.max(), 0.001, atol=TOL)
+
+
 def test_sdf_box_overhanging_the_mesh_plank_end():
     """The box spans x in [1.5, 2.5], the plank ends at x = 2: the far end past the
     plank is not on its face (dropped); contacts at the box's corner x = 1.5 and the

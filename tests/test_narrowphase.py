@@ -161,6 +161,26 @@ def test_reduction_keeps_a_deeper_middle_and_two_faces():
     assert keep.sum() == 2 and keep[0] and keep[3]
 
 
+def test_reduction_spends_its_budget_on_touching_points_before_far_gaps():
+    """scenes/showcase.toml at t = 1.233 s: a spinning star (-9.2 rad/s) touches an L
+    polygon with its shaft (11.6 mm deep) and, 0.55 m away, with a spike tip (3.8 mm);
+    the other candidates are gaps of 8.7 to 20 cm. Ranked by novelty alone the budget
+    of 4 went to the far gaps (the most spread) and dropped the tip, which the star's
+    spin drove 11 cm into the L in the next step. Ranked by novelty less the gap, the
+    tip is kept."""
+    point = np.array([[1.76528746, 1.32110185], [1.76283363, 1.31782651],
+                      [1.76860064, 1.31861901], [2.23984869, 0.96402048],
+                      [2.23984869, 0.96402048], [2.23069509, 0.91977788],
+                      [1.63516199, 1.23225526], [2.82928537, 1.53453908],
+                      [2.82928537, 1.53453908], [1.55739663, 1.2176575],
+                      [2.32032988, 0.90298658]])
+    depth = np.array([0.011642, 0.008232, 0.008232, 0.003805, 0.003805, -0.08694,
+                      -0.13060, -0.15520, -0.15520, -0.19809, -0.20205])
+    keep = reduce_contacts(np.array([0, len(depth)]), point, depth, 4, 0.005)
+    assert keep.sum() == 4 and keep[0]
+    assert keep[3] or keep[4]                                  # the spike tip
+
+
 def test_reduction_per_pair_and_budget(rng):
     sizes = rng.integers(1, 30, 200)
     start = np.r_[0, np.cumsum(sizes)]
@@ -375,7 +395,7 @@ def test_mesh_instancing_field_calls_do_not_grow_with_bodies(rng):
     ``field_field_contacts`` (the starts, one call per descent iteration, the patch
     search's two bracket ends and one call per iteration: 2 field_descent_iterations
     + 3, as for sdf-sdf groups), then the support search's projection, one call per
-    round and two for the far ends (SDF_CALLS). All independent of the number of bodies.
+    round and four for the far ends: probes, anchors, two ladders (SDF_CALLS). All independent of the number of bodies.
     """
     from sdfphys.collide.mesh_sdf import SDF_CALLS
 

@@ -27,6 +27,8 @@ points deepest in the mesh instead, for all n pairs of a group:
 3. ``_far_ends``: the other end of the sdf face leaving z toward the mesh face (the
    incident face, as Box2D's manifolds): a box resting slightly tilted has its
    deeper corner as the only minimum, yet its other bottom corner is a contact too.
+   A rounded end (a rounded box, a smooth blend) has no corner: there the end of
+   the face's flat part is taken, to 1/16 of the last ladder gap.
    It is measured against the plane of z's mesh face (depth exact), and kept when
    its foot lies on the same mesh outline edge and it is within the margin.
 
@@ -89,6 +91,21 @@ _MIN_STEP = 1e-12
 _PROBE = 1e-6
 _RUNGS = 24
 _ON_LINE = 1e-9
+#: Rounded ends (``_far_ends``): rungs of the second ladder, evenly spaced between the
+#: last rung on the face and the first off it (the flat part's end to 1/16 of that gap,
+#: which is at most the flat length found), and the shortest flat part, as a fraction of
+#: the overlap diagonal, whose end is reported (a curved surface stays on its tangent
+#: line, within the on-line tolerance, for a few 1e-5 diagonals).
+_FINE = 16
+_MIN_FLAT = 2.0 ** -10
+#: The two probes' normals agree within this (1 - cos, about 1.4 mrad): z is a smooth
+#: point of the sdf (no corner), both sides face the mesh alike, and the incident face
+#: is the side toward the body's centre (a rounded box's deepest point lies where its
+#: flat bottom runs into the rounded corner).
+_SMOOTH = 1e-6
+#: There, the ladders start from the surface point this many overlap diagonals from z
+#: toward the centre (on the flat part when it is longer).
+_ANCHOR = 2.0 ** -6
 #: The incident face must face the mesh face: (-n).g at least this (60 degrees).
 _FACING = 0.5
 #: A normal n is an outline edge's when |n . edge direction| <= this (1 urad).
@@ -97,8 +114,9 @@ _FACE_NORMAL = 1e-6
 #: field-field ids are < 3 x 1024, so it needs one more bit, see ``narrowphase``).
 FAR_END = 4096
 #: Evaluations of the sdf field after the field-field descent: the projection of
-#: the starts, one per support-search round, the far ends' probes and ladder.
-SDF_CALLS = REFINE_ROUNDS + 3
+#: the starts, one per support-search round, the far ends' probes, anchors and two
+#: ladders.
+SDF_CALLS = REFINE_ROUNDS + 5
 #: Run stages 2 and 3 in one compiled kernel (``_support``) when both fields compile
 #: (``sdf.compiled``); False forces the numpy stages (the tests compare the two).
 USE_COMPILED = True
@@ -212,13 +230,22 @@ def _far_ends(sdf: Field, z: np.ndarray, n: np.ndarray, diagonal: np.ndarray
     Two probes z +- h t (t = perp(n), h = ``_PROBE`` diagonal) projected onto the
     sdf's surface give the normals g of the faces leaving z either way; the incident
     face is the one whose g is most anti-parallel to n, used when (-n).g >=
-    ``_FACING``. Along its direction u (perp(g), away from z), the ladder z + L_k u
+    ``_FACING``; where the two normals agree (``_SMOOTH``: z is no corner), the side
+    toward the body's centre (the sdf frame's origin). Along its direction u (perp(g), away from z), the ladder z + L_k u
     (``_RUNGS`` rungs up to the diagonal) is projected onto the surface in one
     evaluation: rungs on the face stay where they are; the first rung past the
     face's end projects, for an exact field and a convex corner, exactly onto that
     corner, which is accepted when it lies on the face's line beyond the last rung
-    still on the face. Returns (found (K,) bool, end (K, 2) sdf frame). A curved
-    surface (no corner) gives no end. Two evaluations of the sdf field for all K.
+    still on the face. A rounded end (the face runs into a curve: a rounded box, a
+    smooth blend) projects off the line instead; then a second ladder of ``_FINE``
+    rungs, evenly spaced between the last rung on the face and the first off it,
+    finds the flat part's end to within 1/``_FINE`` of that gap (the end is the last
+    of them still on the face, so a point of the surface), reported when the flat
+    part is longer than ``_MIN_FLAT`` diagonals (a curved surface with no flat part
+    stays on its tangent line for a few 1e-5 diagonals only): a rounded box landing
+    nearly flat has its far end as a contact. Returns (found (K,) bool, end (K, 2)
+    sdf frame). A curved surface gives no end. Three evaluations of the sdf field for
+    all K (four at a smooth z).
     """
     k = len(z)
     tangent = np.column_stack([-n[:, 1], n[:, 0]])
@@ -226,24 +253,49 @@ def _far_ends(sdf: Field, z: np.ndarray, n: np.ndarray, diagonal: np.ndarray
     _, g = _project(sdf, np.concatenate([z + h * tangent, z - h * tangent]))
     facing = -np.einsum("kd,kd->k", g, np.concatenate([n, n])).reshape(2, k)
     side = np.argmax(facing, axis=0)                                     # 0: +t, 1: -t
+    pair_g = g.reshape(2, k, 2)
+    smooth = np.einsum("kd,kd->k", pair_g[0], pair_g[1]) >= 1.0 - _SMOOTH
+    centre_side = np.where(np.einsum("kd,kd->k", z, tangent) < 0.0, 0, 1)
+    side = np.where(smooth, centre_side, side)
     rows = np.arange(k)
     g = g.reshape(2, k, 2)[side, rows]
     sign = np.where(side == 0, 1.0, -1.0)
     u = np.column_stack([-g[:, 1], g[:, 0]])
     u *= np.where(np.einsum("kd,kd->k", u, tangent) * sign >= 0.0, 1.0, -1.0)[:, None]
+    facing = facing[side, rows]
+    # At a smooth point the face's line is not z's tangent (z lies on the rounding):
+    # the ladders start from the surface point _ANCHOR diagonals toward the centre.
+    anchor, g_anchor = _project(sdf, z + (_ANCHOR * diagonal)[:, None] * u)
+    u_anchor = np.column_stack([-g_anchor[:, 1], g_anchor[:, 0]])
+    u_anchor *= np.where(np.einsum("kd,kd->k", u_anchor, u) >= 0.0, 1.0, -1.0)[:, None]
+    origin = np.where(smooth[:, None], anchor, z)
+    g = np.where(smooth[:, None], g_anchor, g)
+    u = np.where(smooth[:, None], u_anchor, u)
+    facing = np.where(smooth, -np.einsum("kd,kd->k", g_anchor, n), facing)
     length = diagonal[:, None] * 2.0 ** (np.arange(_RUNGS) - _RUNGS + 1)   # (K, R)
-    rung = z[:, None, :] + length[:, :, None] * u[:, None, :]
+    rung = origin[:, None, :] + length[:, :, None] * u[:, None, :]
     projected = _project(sdf, rung.reshape(-1, 2))[0].reshape(k, _RUNGS, 2)
     tol = (_ON_LINE * diagonal)[:, None]
     on_face = np.linalg.norm(projected - rung, axis=2) <= tol
     first_off = np.argmin(np.cumprod(on_face, axis=1), axis=1)         # first rung off it
     reached = np.where(first_off > 0, length[rows, np.maximum(first_off - 1, 0)], 0.0)
     end = projected[rows, first_off]
-    along = np.einsum("kd,kd->k", end - z, u)
-    off_line = np.abs(np.einsum("kd,kd->k", end - z, g))
-    found = ((facing[side, rows] >= _FACING) & ~on_face[rows, first_off]
+    along = np.einsum("kd,kd->k", end - origin, u)
+    off_line = np.abs(np.einsum("kd,kd->k", end - origin, g))
+    found = ((facing >= _FACING) & ~on_face[rows, first_off]
              & (off_line <= tol[:, 0]) & (along > reached) & (along <= length[rows, first_off]))
-    return found, end
+    # Rounded ends: the flat part's end between the last rung on the face and the first off.
+    gap = length[rows, first_off] - reached
+    fine = reached[:, None] + gap[:, None] * (np.arange(1, _FINE) / _FINE)[None, :]
+    rung = origin[:, None, :] + fine[:, :, None] * u[:, None, :]
+    projected = _project(sdf, rung.reshape(-1, 2))[0].reshape(k, _FINE - 1, 2)
+    on_fine = np.linalg.norm(projected - rung, axis=2) <= tol
+    count = np.sum(np.cumprod(on_fine, axis=1), axis=1)
+    flat = np.where(count > 0, fine[rows, np.maximum(count - 1, 0)], reached)
+    rounded = ((facing >= _FACING) & ~found & (first_off > 0)
+               & ~on_face[rows, first_off] & (flat > _MIN_FLAT * diagonal))
+    end = np.where(rounded[:, None], origin + flat[:, None] * u, end)
+    return found | rounded, end
 
 
 def _nearest_edges(vertices: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -518,11 +570,17 @@ def _support(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting_s: 
     lengths = np.empty(_RUNGS)
     for r in range(_RUNGS):
         lengths[r] = 2.0 ** (r - _RUNGS + 1)
+    smooth = np.zeros(n_k, dtype=np.bool_)
+    anchors = np.empty((n_k, 2))
     for h in range(n_k):
         i = keep[h]
         f0 = -(0.0 + gp[h, 0] * n[i, 0] + gp[h, 1] * n[i, 1])
         f1 = -(0.0 + gp[n_k + h, 0] * n[i, 0] + gp[n_k + h, 1] * n[i, 1])
         side = 1 if f1 > f0 or (math.isnan(f1) and not math.isnan(f0)) else 0
+        smooth[h] = (0.0 + gp[h, 0] * gp[n_k + h, 0] + gp[h, 1] * gp[n_k + h, 1]
+                     >= 1.0 - _SMOOTH)
+        if smooth[h]:
+            side = 0 if (0.0 + z[i, 0] * -n[i, 1] + z[i, 1] * n[i, 0]) < 0.0 else 1
         facing[h] = f1 if side == 1 else f0
         gx, gy = gp[side * n_k + h, 0], gp[side * n_k + h, 1]
         face_g[h, 0], face_g[h, 1] = gx, gy
@@ -530,17 +588,35 @@ def _support(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting_s: 
         ux, uy = -gy, gx
         flip = 1.0 if (0.0 + ux * -n[i, 1] + uy * n[i, 0]) * sign >= 0.0 else -1.0
         u[h, 0], u[h, 1] = ux * flip, uy * flip
+        a = _ANCHOR * diagonal[i]
+        anchors[h, 0], anchors[h, 1] = z[i, 0] + a * u[h, 0], z[i, 1] + a * u[h, 1]
+    anchor, g_anchor = _project_compiled(code_s, consts_s, depth_s, nesting_s, anchors, n_k)
+    origin = np.empty((n_k, 2))
+    for h in range(n_k):
+        i = keep[h]
+        origin[h, 0], origin[h, 1] = z[i, 0], z[i, 1]
+        if smooth[h]:
+            gx, gy = g_anchor[h, 0], g_anchor[h, 1]
+            ux, uy = -gy, gx
+            flip = 1.0 if (0.0 + ux * u[h, 0] + uy * u[h, 1]) >= 0.0 else -1.0
+            u[h, 0], u[h, 1] = ux * flip, uy * flip
+            face_g[h, 0], face_g[h, 1] = gx, gy
+            origin[h, 0], origin[h, 1] = anchor[h, 0], anchor[h, 1]
+            facing[h] = -(0.0 + gx * n[i, 0] + gy * n[i, 1])
         for r in range(_RUNGS):
             length = diagonal[i] * lengths[r]
-            rung[h * _RUNGS + r, 0] = z[i, 0] + length * u[h, 0]
-            rung[h * _RUNGS + r, 1] = z[i, 1] + length * u[h, 1]
+            rung[h * _RUNGS + r, 0] = origin[h, 0] + length * u[h, 0]
+            rung[h * _RUNGS + r, 1] = origin[h, 1] + length * u[h, 1]
     projected, _ = _project_compiled(code_s, consts_s, depth_s, nesting_s, rung,
                                      n_k * _RUNGS)
-    # The far ends measured against the deepest point's mesh face, kept or not.
-    far = np.zeros(n_k, dtype=np.bool_)
-    end = np.empty((n_k, 2))
-    end_depth = np.empty(n_k)
+    # The corners, and the second ladder toward each rounded end (``_far_ends``).
+    found = np.zeros(n_k, dtype=np.bool_)
+    rounded = np.zeros(n_k, dtype=np.bool_)
+    reached = np.empty(n_k)
+    corner = np.empty((n_k, 2))
     on_face = np.empty(_RUNGS, dtype=np.bool_)
+    fine = np.empty((n_k, _FINE - 1))
+    fine_rung = np.empty((n_k * (_FINE - 1), 2))
     for h in range(n_k):
         i = keep[h]
         tol = _ON_LINE * diagonal[i]
@@ -554,12 +630,42 @@ def _support(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting_s: 
                 first_off = r
                 break
         off_face = not on_face[first_off]
-        reached = diagonal[i] * lengths[first_off - 1] if first_off > 0 else 0.0
+        reached[h] = diagonal[i] * lengths[first_off - 1] if first_off > 0 else 0.0
         ex, ey = projected[h * _RUNGS + first_off, 0], projected[h * _RUNGS + first_off, 1]
-        along = 0.0 + (ex - z[i, 0]) * u[h, 0] + (ey - z[i, 1]) * u[h, 1]
-        off_line = abs(0.0 + (ex - z[i, 0]) * face_g[h, 0] + (ey - z[i, 1]) * face_g[h, 1])
-        found = (facing[h] >= _FACING and off_face and off_line <= tol and along > reached
-                 and along <= diagonal[i] * lengths[first_off])
+        corner[h, 0], corner[h, 1] = ex, ey
+        ox, oy = origin[h, 0], origin[h, 1]
+        along = 0.0 + (ex - ox) * u[h, 0] + (ey - oy) * u[h, 1]
+        off_line = abs(0.0 + (ex - ox) * face_g[h, 0] + (ey - oy) * face_g[h, 1])
+        found[h] = (facing[h] >= _FACING and off_face and off_line <= tol
+                    and along > reached[h] and along <= diagonal[i] * lengths[first_off])
+        rounded[h] = facing[h] >= _FACING and not found[h] and first_off > 0 and off_face
+        gap = diagonal[i] * lengths[first_off] - reached[h]
+        for r in range(_FINE - 1):
+            fine[h, r] = reached[h] + gap * ((r + 1) / _FINE)
+            fine_rung[h * (_FINE - 1) + r, 0] = ox + fine[h, r] * u[h, 0]
+            fine_rung[h * (_FINE - 1) + r, 1] = oy + fine[h, r] * u[h, 1]
+    fine_projected, _ = _project_compiled(code_s, consts_s, depth_s, nesting_s, fine_rung,
+                                          n_k * (_FINE - 1))
+    # The far ends measured against the deepest point's mesh face, kept or not.
+    far = np.zeros(n_k, dtype=np.bool_)
+    end = np.empty((n_k, 2))
+    end_depth = np.empty(n_k)
+    for h in range(n_k):
+        i = keep[h]
+        tol = _ON_LINE * diagonal[i]
+        flat = reached[h]
+        for r in range(_FINE - 1):
+            dx = fine_projected[h * (_FINE - 1) + r, 0] - fine_rung[h * (_FINE - 1) + r, 0]
+            dy = fine_projected[h * (_FINE - 1) + r, 1] - fine_rung[h * (_FINE - 1) + r, 1]
+            if not math.sqrt(dx * dx + dy * dy) <= tol:
+                break
+            flat = fine[h, r]
+        rounded[h] = rounded[h] and flat > _MIN_FLAT * diagonal[i]
+        if rounded[h]:
+            ex, ey = origin[h, 0] + flat * u[h, 0], origin[h, 1] + flat * u[h, 1]
+        else:
+            ex, ey = corner[h, 0], corner[h, 1]
+        found_h = found[h] or rounded[h]
         d = -phi[i]
         e_d = d + (0.0 + (z[i, 0] - ex) * n[i, 0] + (z[i, 1] - ey) * n[i, 1])
         end[h, 0], end[h, 1], end_depth[h] = ex, ey, e_d
@@ -572,7 +678,7 @@ def _support(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting_s: 
         k = pair[i]
         mx, my = _to_mesh(n[i, 0] + offset[k, 0], n[i, 1] + offset[k, 1], k, cos, sin, offset)
         face_normal = abs(0.0 + mx * evx + my * evy) <= _FACE_NORMAL * math.sqrt(e_length2)
-        far[h] = (found and face_normal and t_foot >= -_ON_LINE and t_foot <= 1.0 + _ON_LINE
+        far[h] = (found_h and face_normal and t_foot >= -_ON_LINE and t_foot <= 1.0 + _ON_LINE
                   and e_d > -margin and e_d <= d + _ON_LINE * diagonal[i])
     # The contacts, then their far ends, stably by pair; to the world.
     n_far = 0

@@ -8,9 +8,12 @@ Box2D's manifolds (two points per face contact) and MuJoCo's multi-contact
 reduction (keep the deepest, then points that maximize the spread):
 
 1. start with the deepest candidate (ties broken by the smaller feature key);
-2. repeatedly add the candidate with the largest *novelty* with respect to the
-   kept set, while that novelty exceeds ``tolerance`` and fewer than ``budget``
-   points are kept;
+2. repeatedly add, among the candidates whose *novelty* with respect to the kept
+   set exceeds ``tolerance``, the one with the largest novelty less its gap
+   (novelty + min(depth, 0)), while fewer than ``budget`` points are kept: the
+   budget goes first to what is touching or nearest to it, and a speculative point
+   must be farther from the kept ones than from contact to win over a touching one
+   (a spinning star's touching spike tip is not dropped for the most spread gaps);
 3. after each addition, drop kept points that have become redundant (their
    novelty with respect to the other kept points is at most ``tolerance``).
 
@@ -98,14 +101,17 @@ def _reduce(start: np.ndarray, point: np.ndarray, depth: np.ndarray, budget: int
         for _ in range(e - s):
             if n_kept >= budget:
                 break
-            best, best_score = -1, tolerance
+            best, best_score = -1, -np.inf
             for c in range(s, e):
                 is_kept = False
                 for u in range(n_kept):
                     is_kept = is_kept or kept[u] == c
                 if is_kept:
                     continue
-                score = _novelty(c, kept, n_kept, -1, point, depth)
+                novelty = _novelty(c, kept, n_kept, -1, point, depth)
+                if not novelty > tolerance:
+                    continue
+                score = novelty + min(depth[c], 0.0)
                 if score > best_score:
                     best, best_score = c, score
             if best < 0:

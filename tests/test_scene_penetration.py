@@ -1,0 +1,81 @@
+"""No contact missed: every scene keeps its deepest contact under 1 cm over its duration.
+
+The measure is the one ``sdfphys run`` prints as "max penetration": the largest
+``world.contacts.depth`` (m, > 0 overlapping) over every step of ``sim.duration``.
+Scenes still over the bound are strict xfails naming the cause found (pair, time,
+figures): they pass the day the cause is fixed, and then the mark must go.
+About a minute for all scenes once the kernels are compiled: marked ``slow``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sdfphys.scene import read_scene
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = sorted(p.stem for p in (ROOT / "scenes").glob("*.toml"))
+#: Deepest contact allowed over a scene's duration, m.
+BOUND = 0.01
+
+#: Scenes over the bound, with the cause found (deepest pair, time, figures).
+OPEN: dict[str, str] = {
+    "chain_bridge": "box-box (clipped manifold) crate1 on plank19 at t = 0.85 s, 3.3 cm: the "
+                    "contact exists a step before (1.8 mm) and the crate still sinks; not "
+                    "yet classified (solver under the bridge's joint load suspected)",
+    "circles_in_box": "circle-circle body83 / body98 at t = 1.117 s, 2.2 cm: analytic "
+                      "contact present for steps before (1.4 mm, then 2.2 cm); push-out "
+                      "too weak in the 150-body pile (one solver pass per substep above "
+                      "stiff_island_limit)",
+    "concave_polygons": "poly7 / poly12 at t = 2.35 s, 4.4 cm: corner-corner overlap whose "
+                        "reported depth lags brute force (2.8 mm reported vs 10 mm, "
+                        "-1.0 mm vs 22 mm a step before): a deepest point not found",
+    "csg_bodies": "sdf-sdf csg2 / csg6 at t = 1.0 s, 1.26 cm (after the rounded far "
+                  "end fix: 4.36 -> 1.26 cm); not yet classified",
+    "grid_terrain": "mesh-sdf terrain / body19 at t = 1.15 s, 4.4 cm (8.4 cm before the "
+                    "reduction fix): the reverse view's point on the box's medial axis (a "
+                    "box corner in the curved grid terrain) is deeper than the corner's "
+                    "own view (3.07 vs 2.75 cm at t = 1.03 s, brute force 2.97) and has a "
+                    "box side's normal, flipping between the two sides step to step: the "
+                    "box spins up and sinks",
+    "marble_run": "circle-field track / marble9 at t = 3.28 s, 1.6 cm reported where the "
+                  "marble is 2.1-5.4 cm above the track (brute force): the smooth "
+                  "union's field is a bound (|grad| 0.80 there), r - f(c) a false depth",
+    "mixed_pairs": "polygon_over_circle_2 / circle_under_sdf_3 at t = 1.15 s, 1.9 cm "
+                   "(after the rounded far end fix: 2.37 -> 1.92 cm); not yet classified",
+    "ragdoll": "shin_l / shin_r at t = 2.37 s, 2.2 cm: a shin spinning at 38 rad/s; "
+               "speculative contact 15 cm away the step before, another corner hits "
+               "(0.63 rad a step): contact found at the wrong feature, too late",
+    "sdf_primitives": "mesh-sdf ground / ellipse at t = 1.43 s, 2.7 cm, depth exact (brute "
+                      "force), an ellipse rolling at 3 m/s and 8.9 rad/s; not yet "
+                      "classified (moon / hexagram, 3.6 cm before the far end fix: the "
+                      "field-field depth where f_a = f_b underestimates a corner's, "
+                      "brute force 3.9-5.0 cm)",
+    "showcase": "circle-sdf sdf_moon / body21 at t = 2.27 s, 6.1 cm (after the reduction "
+                "fix: 11.3 -> 6.1 cm): the moon's horn presses a circle on the terrain, "
+                "depth exact (brute force) and growing 2-3 mm a step over 15 steps while "
+                "the relative normal speed stays -0.1 m/s: push-out too weak",
+}
+
+
+def deepest_contact(name: str) -> float:
+    """The largest contact depth (m) over ``sim.duration`` of scenes/<name>.toml."""
+    scene = read_scene(ROOT / "scenes" / f"{name}.toml")
+    world = scene.build()
+    deepest = 0.0
+    for _ in range(round(scene.duration / world.settings.dt)):
+        world.step()
+        if len(world.contacts):
+            deepest = max(deepest, float(np.max(world.contacts.depth)))
+    return deepest
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", [
+    pytest.param(name, marks=pytest.mark.xfail(strict=True, reason=OPEN[name]))
+    if name in OPEN else name for name in SCENES])
+def test_deepest_contact_of_every_scene_is_under_a_centimetre(name):
+    assert deepest_contact(name) < BOUND
