@@ -2,23 +2,25 @@
 
 Numba compiles one kernel at a time under a process-wide lock, so a cold first step is
 serial: the collision kernels (stage 1, most of it for fields: the descents) and then
-the solver's (stages 2-6, most of it for a scene of boxes). On a machine with two cores or more, the first step of the
-first world of a process whose solver kernels are not yet in the on-disk cache forks a
-child (``start``): it runs the solver's stages on no contacts (``World._compile_ahead``),
-which compiles the same kernels with the same argument types into the same cache, and
-exits. (Running the collision stage's pair groups in reverse there gained nothing: they
-share the descent's kernels, which both processes then compiled at once.) The parent goes on with stage 1; when it reaches a kernel the child has saved, it
-loads it instead of compiling it (numba checks the cache before compiling, and writes a
-cache file under a temporary name and renames it, so a reader never sees half of one).
-What the child has not finished yet the parent compiles as before: the trajectory is
-the same either way, only the wait shorter.
+the solver's (stages 2-6, most of it for a scene of boxes). On a machine with two cores
+or more, the first step of the first world of a process whose solver kernels are not yet
+in the on-disk cache forks a child (``start``): it runs the stages after the contact
+rows' preparation on no contacts, last stage first (``World._compile_ahead``), which
+compiles the same kernels with the same argument types into the same cache, and exits.
+The parent goes on with the collisions and the preparation, then waits for the child
+(``join``) and loads the rest instead of compiling it (numba checks the cache before
+compiling, and writes a cache file under a temporary name and renames it, so a reader
+never sees half of one). The trajectory is the same either way, only the wait shorter.
+Racing the child instead of waiting for it compiled much of the substep kernels twice,
+in both processes at once; running the collision stage's pair groups in reverse in the
+child gained nothing on the showcase: the groups share the descent's kernels.
 
 The child writes nothing but cache files: its standard streams go to the null device,
 it closes every other inherited descriptor (a video encoder's pipe must see its end of
 file when the parent closes it), takes the default action on SIGINT and SIGTERM, ends
-itself after CHILD_SECONDS, keeps
-the compile notice quiet, and leaves with ``os._exit`` (no atexit handler, no flush of
-the parent's buffers). ``SDFPHYS_WARM=0`` in the environment turns it off.
+itself after CHILD_SECONDS, keeps the compile notice quiet, and leaves with
+``os._exit`` (no atexit handler, no flush of the parent's buffers). ``SDFPHYS_WARM=0``
+in the environment turns it off.
 """
 
 from __future__ import annotations
@@ -29,9 +31,12 @@ import signal
 import threading
 from typing import Any
 
-__all__ = ["start"]
+__all__ = ["CHILD_SECONDS", "join", "start"]
 
 _started = False
+#: Set while no child runs (``join``).
+_done = threading.Event()
+_done.set()
 #: The child ends itself after this long whatever it is doing (SIGALRM's default
 #: action): a lock another thread of the parent held at the fork cannot keep it alive.
 CHILD_SECONDS = 900
@@ -73,5 +78,20 @@ def start(world: Any) -> int | None:
             world._compile_ahead()
         finally:
             os._exit(0)
-    threading.Thread(target=os.waitpid, args=(pid, 0), daemon=True).start()
+    _done.clear()
+    threading.Thread(target=_reap, args=(pid,), daemon=True).start()
     return pid
+
+
+def _reap(pid: int) -> None:
+    """Wait for the child (no zombie is left), then let ``join`` return."""
+    try:
+        os.waitpid(pid, 0)
+    finally:
+        _done.set()
+
+
+def join(timeout: float = CHILD_SECONDS) -> None:
+    """Wait until the child (if any) has exited: the parent calls it where it would start
+    compiling what the child compiles (``World.step``, before the substeps)."""
+    _done.wait(timeout)

@@ -381,6 +381,8 @@ class World(WorldJoints):
                 self._contacts = contacts = contacts.take(awake[contacts.body_a]
                                                           | awake[contacts.body_b])
             constraints = self._prepare(contacts, bodies)
+            if self.step_count == 0:
+                _warm.join()
             self._substeps(constraints, bodies)
             self._restitution(constraints, bodies)
             self._time_of_impact(bodies, start_com, start_angle)
@@ -392,13 +394,15 @@ class World(WorldJoints):
 
     def _compile_ahead(self) -> None:
         """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
-        the kernels' sake: the solver's stages once on no contacts."""
+        the kernels' sake: the stages after the preparation of the contact rows, which
+        the parent compiles itself after the collisions, once on no contacts, last
+        stage first."""
         bodies = self._body_state()
-        constraints = self._prepare(Contacts.empty(), bodies)
-        self._substeps(constraints, bodies)
-        apply_restitution(bodies, constraints, self.settings)
+        constraints = ContactConstraints.empty()
         if self.settings.sleeping:
             self._fall_asleep(bodies, constraints, bodies.com.copy(), bodies.angle.copy())
+        apply_restitution(bodies, constraints, self.settings)
+        self._substeps(constraints, bodies)
 
     def _body_state(self) -> BodyState:
         """The solver's view; sleeping bodies take part with zero inverse mass."""

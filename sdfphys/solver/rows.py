@@ -8,6 +8,7 @@ approach speed for restitution and last step's impulses (``warm_start``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -97,6 +98,17 @@ class ContactConstraints:
     total_normal_impulse: np.ndarray
     pair_start: np.ndarray
     local_anchor: np.ndarray
+
+    @classmethod
+    def empty(cls) -> ContactConstraints:
+        """No rows, each array of ``prepare_contacts``' dtype and rank."""
+        ints = ("body_a", "body_b", "feature", "stiff")
+        pairs = ("normal", "anchor_a0", "anchor_b0", "anchor_a", "anchor_b", "local_anchor")
+        return cls(**{f.name: np.zeros((1,) if f.name == "pair_start" else (0, 2)
+                                       if f.name in pairs else 0,
+                                       np.int64 if f.name in ints + ("pair_start",)
+                                       else np.float64)
+                      for f in dataclasses.fields(cls)})
 
     def __len__(self) -> int:
         return len(self.feature)
