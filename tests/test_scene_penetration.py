@@ -23,9 +23,6 @@ BOUND = 0.01
 
 #: Scenes over the bound, with the cause found (deepest pair, time, figures).
 OPEN: dict[str, str] = {
-    "chain_bridge": "box-box (clipped manifold) crate1 on plank19 at t = 0.85 s, 3.3 cm: the "
-                    "contact exists a step before (1.8 mm) and the crate still sinks; not "
-                    "yet classified (solver under the bridge's joint load suspected)",
     "circles_in_box": "circle-circle body83 / body98 at t = 1.117 s, 2.2 cm: analytic "
                       "contact present for steps before (1.4 mm, then 2.2 cm); push-out "
                       "too weak in the 150-body pile (one solver pass per substep above "

@@ -235,3 +235,25 @@ def test_candidate_pairs_are_the_brute_force_ones_from_the_broadphase(n, monkeyp
         got = list(zip(slot[keep].tolist(), other[keep].tolist()))
         assert got == [(s, j) for s, j in sub if j not in set(fast.tolist())]
     assert np.all(np.diff(slot * n + other) > 0)
+
+
+def test_a_jointed_body_is_not_traced_against_an_obstacle_that_moved():
+    """The trace uses the obstacle's end pose, and a jointed body stops its whole group: a
+    bridge plank rising into a crate falling onto it stopped the bridge under the crate.
+    A fast ball and a wall that moved 2 slop this step: the ball alone is stopped as
+    before; the ball joined to a third body (its group has two members) is not; against
+    a wall that stayed put, both are stopped."""
+    shapes = [shape_from_spec(s) for s in (WALL, BALL, BALL)]
+    fields = [s.field for s in shapes]
+    radius = np.array([s.radius for s in shapes])
+    core = np.array([0.05, 0.1, 0.1])
+    end = np.array([[0.0, 0.0], [0.4, 0.3], [9.0, 9.0]])
+    angle = np.zeros(3)
+    alone, joined = np.array([0, 1, 2]), np.array([0, 1, 1])
+    for wall_start, group, stopped in (([2.0 * SLOP, 0.0], alone, True),
+                                       ([2.0 * SLOP, 0.0], joined, False),
+                                       ([0.0, 0.0], joined, True)):
+        start = np.array([wall_start, [-3.0, 0.3], [9.0, 9.0]])
+        t = toi.step_fractions(fields, [None] * 3, np.arange(3), start, end, angle, angle,
+                               radius, core, np.array([1]), SLOP, group)
+        assert (t[0] < 1.0) == stopped
