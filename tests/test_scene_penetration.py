@@ -43,9 +43,10 @@ OPEN: dict[str, str] = {
                   "union's field is a bound (|grad| 0.80 there), r - f(c) a false depth",
     "mixed_pairs": "polygon_over_circle_2 / circle_under_sdf_3 at t = 1.15 s, 1.9 cm "
                    "(after the rounded far end fix: 2.37 -> 1.92 cm); not yet classified",
-    "ragdoll": "shin_l / shin_r at t = 2.37 s, 2.2 cm: a shin spinning at 38 rad/s; "
-               "speculative contact 15 cm away the step before, another corner hits "
-               "(0.63 rad a step): contact found at the wrong feature, too late",
+    "ragdoll": "ground / upper_arm_l at t = 2.7 s, 1.07 cm; not yet classified (2.2 cm "
+               "before the joints' direct solve: shin_l / shin_r at t = 2.37 s, a shin "
+               "spinning at 38 rad/s, speculative contact 15 cm away the step before, "
+               "another corner hits: contact found at the wrong feature, too late)",
     "sdf_primitives": "mesh-sdf ground / ellipse at t = 1.43 s, 2.7 cm, depth exact (brute "
                       "force), an ellipse rolling at 3 m/s and 8.9 rad/s; not yet "
                       "classified (moon / hexagram, 3.6 cm before the far end fix: the "

@@ -40,10 +40,23 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .softness import CONVERGED, soft_coefficients
+from .softness import soft_coefficients
 
-__all__ = ["JOINT_DAMPING_RATIO", "JOINT_PASSES", "JointRows", "Output", "joint_passes",
-           "joint_reactions", "spring_softness", "stiffen", "stiffened_softness"]
+__all__ = [
+    "ANGLE_ROW",
+    "AXIAL_ROW",
+    "JOINT_DAMPING_RATIO",
+    "JOINT_PASSES",
+    "PERP_ROW",
+    "POINT_ROWS",
+    "JointRows",
+    "Output",
+    "joint_reactions",
+    "solve_joints",
+    "spring_softness",
+    "stiffen",
+    "stiffened_softness",
+]
 
 REVOLUTE, PRISMATIC, DISTANCE, WELD, WHEEL, MOTOR, MOUSE = range(7)
 #: Damping ratio of rigid joint rows (Box2D v3's ``jointDampingRatio``); their hertz is
@@ -55,6 +68,10 @@ JOINT_PASSES = 8
 WARM, SOLVE, RELAX, REACTION = range(4)
 #: A distance limit beyond this is no limit (joints.py's _FAR).
 _NO_LIMIT = 2.0 ** 17
+#: A joint's equality rows, as bits (``joint_direct`` solves them per island): the
+#: shared point (x and y), the angle, the perpendicular to an axis, the axis (a rigid
+#: wheel axis, a rod's length).
+POINT_ROWS, ANGLE_ROW, PERP_ROW, AXIAL_ROW = 1, 2, 4, 8
 
 
 class JointRows(NamedTuple):
@@ -422,12 +439,14 @@ def _motor(v, m, r, j, phase, ux, uy, a1, a2, h, out):
 
 
 @njit(cache=True)
-def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out):
+def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out, direct):
     """Joint j's rows in Box2D v3's order (springs, motors, limits, then the rigid rows).
 
     g: (rax, ray, rbx, rby, dx, dy, qa, qb) the arms, the separation d = pB - pA (m) and
     the angles (rad) now. soft: (J, 2, 3) the rigid rows' coefficients, linear and
-    angular (``stiffened_softness``). Returns the new velocities."""
+    angular (``stiffened_softness``). direct: the equality rows (``joint_direct`` bits
+    POINT, ANGLE, PERP, AXIAL) this pass leaves to the island's direct solve. Returns
+    the new velocities."""
     rax, ray, rbx, rby, dx, dy, qa, qb = g
     kind = r.kind[j]
     lin = soft[j, 0]
@@ -445,8 +464,9 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out):
                 bias, ms, isc = _spring(angle, spring[j])
             else:
                 bias, ms, isc = _equality(angle, ang, phase)
-            v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase, bias, ms, isc,
-                     -np.inf, np.inf, out)
+            if not direct & ANGLE_ROW:
+                v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase, bias, ms,
+                         isc, -np.inf, np.inf, out)
             bias, ms, isc = _spring(1.0, spring[j]) if r.has_spring[j] else _equality(
                 1.0, lin, phase)
             largest = np.inf
@@ -461,6 +481,8 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out):
             bias, ms, isc = _spring(1.0, spring[j]) if r.has_spring[j] else _equality(
                 1.0, lin, phase)
             largest = r.max_motor[j] * h
+        if direct & POINT_ROWS:
+            return v
         # bias above is per metre of separation: the point's bias is (bias dx, bias dy).
         return _point(v, m, rax, ray, rbx, rby, r.linear_impulse, j, phase, bias * dx,
                       bias * dy, ms, isc, largest, out)
@@ -477,6 +499,8 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out):
         a1 = rax * uy - ray * ux
         a2 = rbx * uy - rby * ux
         if r.min_length[j] == r.max_length[j]:
+            if direct & AXIAL_ROW:
+                return v
             bias, ms, isc = _equality(length - r.length[j], lin, phase)
             return _row(v, m, ux, uy, a1, a2, r.axial_impulse, j, phase, bias, ms, isc,
                         -np.inf, np.inf, out)
@@ -508,16 +532,17 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out):
             bias, ms, isc = _spring(translation, spring[j])
             v = _row(v, m, ux, uy, a1, a2, r.spring_impulse, j, phase, bias, ms, isc,
                      -np.inf, np.inf, out)
-        else:
+        elif not direct & AXIAL_ROW:
             bias, ms, isc = _equality(translation, lin, phase)
             v = _row(v, m, ux, uy, a1, a2, r.axial_impulse, j, phase, bias, ms, isc,
                      -np.inf, np.inf, out)
     v = _limits(v, m, r, j, phase, translation, ux, uy, a1, a2, lin, inv_h, out)
     px, py = -uy, ux
-    bias, ms, isc = _equality(px * dx + py * dy, lin, phase)
-    v = _row(v, m, px, py, (dx + rax) * py - (dy + ray) * px, rbx * py - rby * px,
-             r.perp_impulse, j, phase, bias, ms, isc, -np.inf, np.inf, out)
-    if kind == PRISMATIC:
+    if not direct & PERP_ROW:
+        bias, ms, isc = _equality(px * dx + py * dy, lin, phase)
+        v = _row(v, m, px, py, (dx + rax) * py - (dy + ray) * px, rbx * py - rby * px,
+                 r.perp_impulse, j, phase, bias, ms, isc, -np.inf, np.inf, out)
+    if kind == PRISMATIC and not direct & ANGLE_ROW:
         bias, ms, isc = _equality(angle, ang, phase)
         v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase, bias, ms, isc,
                  -np.inf, np.inf, out)
@@ -526,13 +551,15 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out):
 
 @njit(cache=True)
 def solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows, phase,
-                 soft, spring, inv_h, out):
+                 soft, spring, inv_h, out, direct):
     """One pass of ``phase`` (WARM, SOLVE, RELAX, REACTION) over every joint, in order.
 
     com (B, 2) m, angle (B,) rad: the bodies now; velocity, angular_velocity updated in
     place; inv_mass, inv_inertia: (B,) (0: static, kinematic, asleep). rows: JointRows.
     soft: (J, 2, 3) ``stiffened_softness``; spring: (J, 3) ``spring_softness``;
     inv_h: 1/s. out: Output, what REACTION adds to and SOLVE, RELAX report progress in.
+    direct: (J,) int64, the equality rows SOLVE and RELAX leave to ``joint_direct``
+    (bits; zeros: every row here).
     """
     for j in range(rows.kind.shape[0]):
         a = rows.body_a[j]
@@ -557,43 +584,12 @@ def solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, 
         rby = s * rows.local_b[j, 0] + c * rows.local_b[j, 1]
         g = (rax, ray, rbx, rby, cbx + rbx - cax - rax, cby + rby - cay - ray, qa, qb)
         v = _joint((vax, vay, wa, vbx, vby, wb), (ma, ia, mb, ib), g, rows, j, phase, soft,
-                   spring, inv_h, out)
+                   spring, inv_h, out,
+                   direct[j] if phase == SOLVE or phase == RELAX else 0)
         if a >= 0:
             velocity[a, 0], velocity[a, 1], angular_velocity[a] = v[0], v[1], v[2]
         if b >= 0:
             velocity[b, 0], velocity[b, 1], angular_velocity[b] = v[3], v[4], v[5]
-
-
-@njit(cache=True)
-def joint_passes(bodies, joints, phase, inv_h, out, passes):
-    """Up to ``passes`` passes of ``phase`` (SOLVE or RELAX) over the joints, stopping
-    after one whose largest impulse change is at most CONVERGED times the largest
-    accumulated impulse ("Loaded joints"); WARM runs once. Returns the passes run.
-
-    bodies: (com, angle, velocity, angular_velocity, inv_mass, inv_inertia) as
-    ``solve_joints``'; joints: (JointRows, soft (J, 2, 3), spring (J, 3), params (6,)),
-    ``stiffened_softness``'s; WARM refills soft from the impulses it applied. A SOLVE
-    phase that does not converge halves the cap on r (params[4]) for the next substeps,
-    one that converges within a quarter of ``passes`` doubles it.
-    """
-    com, angle, velocity, angular_velocity, inv_mass, inv_inertia = bodies
-    rows, soft, spring, params = joints
-    if phase == WARM:
-        solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows,
-                     phase, soft, spring, inv_h, out)
-        stiffen(inv_mass, inv_inertia, rows, params, soft)
-        return 1
-    for n in range(passes):
-        out.progress[:] = 0.0
-        solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows,
-                     phase, soft, spring, inv_h, out)
-        if out.progress[0] <= CONVERGED * out.progress[1]:
-            if phase == SOLVE and 4 * (n + 1) <= passes:
-                params[4] *= 2.0
-            return n + 1
-    if phase == SOLVE:
-        params[4] = max(1.0, 0.5 * min(params[4], params[5]))
-    return passes
 
 
 def joint_reactions(com: np.ndarray, angle: np.ndarray, rows: JointRows,
@@ -606,5 +602,6 @@ def joint_reactions(com: np.ndarray, angle: np.ndarray, rows: JointRows,
     if count:
         zero = np.zeros(len(angle))
         solve_joints(com, angle, np.zeros_like(com), zero, zero, zero, rows, REACTION,
-                     np.zeros((count, 2, 3)), np.zeros((count, 3)), 1.0 / h, out)
+                     np.zeros((count, 2, 3)), np.zeros((count, 3)), 1.0 / h, out,
+                     np.zeros(count, np.int64))
     return out.force / h, out.torque / h

@@ -42,6 +42,7 @@ import numpy as np
 from numba import njit
 
 from ..settings import Settings
+from .joint_direct import joint_passes, plan
 from .joints import (
     JOINT_PASSES,
     RELAX,
@@ -49,7 +50,6 @@ from .joints import (
     WARM,
     JointRows,
     Output,
-    joint_passes,
     spring_softness,
     stiffened_softness,
 )
@@ -430,13 +430,20 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_d
                                  soft_depth, use_bias, use_friction)
         joints_converged = True
         if joints is not None:
-            joint_bodies, joint_rows, joint_out = joints
-            joint_passes(joint_bodies, joint_rows, SOLVE if use_bias else RELAX, inv_h,
-                         joint_out, 1)
-            joints_converged = joint_out.progress[0] <= CONVERGED * joint_out.progress[1]
+            _joint_phase(joints, SOLVE if use_bias else RELAX, inv_h, 1, False)
+            progress = joints[2].progress
+            joints_converged = progress[0] <= CONVERGED * progress[1]
         if change <= CONVERGED * impulse and joints_converged:
             return n + 1
     return extra_passes
+
+
+@njit(cache=True)
+def _joint_phase(joints, phase, inv_h, passes, moved):
+    """``joint_passes`` with the kernel's joints tuple (joint bodies, joint arguments,
+    Output); returns the passes run."""
+    joint_bodies, rows, out = joints
+    return joint_passes(joint_bodies, rows, phase, inv_h, out, passes, moved)
 
 
 @njit(cache=True)
@@ -449,8 +456,11 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
                      use_friction, extra_passes, rest_passes, soft_depth, joints):
     """All substeps of one step: integrate v, warm start, solve, integrate x, relax.
 
-    joints: None (no joints: no joint code is compiled), or (JointRows, stiffened
-    softness (J, 2, 3), spring softness (J, 3), stiffening parameters (4,)); the joint
+    joints: None (no joints: no joint code is compiled, numba prunes the branches on the
+    None type), or (the bodies' (com, angle, velocity, angular_velocity, inv_mass,
+    inv_inertia), (JointRows, stiffened softness (J, 2, 3), spring softness (J, 3),
+    stiffening parameters (6,), the joint islands' ``joint_direct.DirectPlan``), an
+    Output). The joint
     rows are warm started, solved and relaxed before the contacts in each phase (Box2D
     v3's order), each phase in passes until converged (``joints.joint_passes``), and
     once more after the contacts when there are both: a contact's single pass must not
@@ -481,10 +491,7 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             tangent_mass, friction, bias_rate, mass_scale, impulse_scale, normal_impulse,
             tangent_impulse, total_normal_impulse)
     pseudo = (pseudo_velocity, pseudo_angular, pseudo_impulse)
-    joint_bodies = (com, angle, velocity, angular_velocity, inv_mass, inv_inertia)
-    joint_out = Output(np.empty((0, 2)), np.empty(0), np.zeros(2))
     joint_passes_max = JOINT_PASSES * (extra_passes + 1)
-    in_sweeps = None if joints is None else (joint_bodies, joints, joint_out)
     passes_run = 0
     push_outs = 0
     for _ in range(substeps):
@@ -493,17 +500,17 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
         _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
                               angular_damping, gravity, h)
         if joints is not None:
-            joint_passes(joint_bodies, joints, WARM, inv_h, joint_out, 1)
+            _joint_phase(joints, WARM, inv_h, 1, False)
         if has_contacts:
             _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
                         pair_start, normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
                         total_normal_impulse)
         if joints is not None:
-            joint_passes(joint_bodies, joints, SOLVE, inv_h, joint_out, joint_passes_max)
+            _joint_phase(joints, SOLVE, inv_h, joint_passes_max, False)
         if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
                                   max_push_out, soft_depth, True, use_friction, 1, extra_passes,
-                                  rest_passes, in_sweeps)
+                                  rest_passes, joints)
         _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h)
         if split:
             _integrate_pseudo(com, angle, pseudo_velocity, pseudo_angular, pseudo_impulse, h)
@@ -512,12 +519,11 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
                             body_a, body_b, normal, anchor_a0, anchor_b0, base_separation,
                             arm_a0, arm_b0, anchor_a, anchor_b, separation)
         if joints is not None and relax_passes > 0:
-            joint_passes(joint_bodies, joints, RELAX, inv_h, joint_out,
-                         max(relax_passes, joint_passes_max))
+            _joint_phase(joints, RELAX, inv_h, max(relax_passes, joint_passes_max), True)
         if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
                                   max_push_out, soft_depth, False, use_friction, relax_passes,
-                                  extra_passes, rest_passes, in_sweeps)
+                                  extra_passes, rest_passes, joints)
     return passes_run, push_outs
 
 
@@ -542,7 +548,11 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         rows, cap = joints
         joint_soft, stiffening = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows,
                                                     settings, gravity, float(cap[0]))
-        joint_args = (rows, joint_soft, spring_softness(rows, h), stiffening)
+        islands = plan(rows, bodies.inv_mass, bodies.inv_inertia)
+        joint_args = ((bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity,
+                       bodies.inv_mass, bodies.inv_inertia),
+                      (rows, joint_soft, spring_softness(rows, h), stiffening, islands),
+                      Output(np.empty((0, 2)), np.empty(0), np.zeros(2)))
     else:
         joint_args = None
     v, w = bodies.velocity, bodies.angular_velocity

@@ -1,0 +1,108 @@
+"""The joints' direct solve (``solver.joint_direct``) against dense numpy linear algebra."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sdfphys
+from sdfphys.solver import joint_direct as direct
+from sdfphys.solver.joints import RELAX, SOLVE, Output, stiffened_softness
+
+
+def chain_world(links: int = 5, pinned_end: bool = False, chains: int = 1):
+    """``chains`` chains of ``links`` 1 kg planks hinged end to end from the world at
+    x = 3 c, stepped 20 times; with ``pinned_end`` the last link is pinned too."""
+    bodies, joints = [], []
+    for c in range(chains):
+        for i in range(links):
+            bodies.append({"name": f"l{c}_{i}", "shape": {"type": "box", "size": [0.5, 0.1]},
+                           "position": [3.0 * c + 0.25 + 0.5 * i, 0.0], "mass": 1.0})
+            joints.append({"type": "revolute",
+                           "bodies": [f"l{c}_{i}", "world" if i == 0 else f"l{c}_{i - 1}"],
+                           "anchor": [3.0 * c + 0.5 * i, 0.0]})
+        if pinned_end:
+            joints.append({"type": "revolute", "bodies": [f"l{c}_{links - 1}", "world"],
+                           "anchor": [3.0 * c + 0.5 * links, 0.0]})
+    world = sdfphys.load_scene({"version": 1, "body": bodies, "joint": joints})
+    for _ in range(20):
+        world.step()
+    return world
+
+
+def dense_system(p, rows, inv_mass, inv_inertia):
+    """(J (R, 3B), M^-1 (3B,), G (R, R)) of plan p's rows as ``factor`` left them."""
+    count, bodies = len(p.row_joint), len(inv_mass)
+    jac = np.zeros((count, 3 * bodies))
+    for r in range(count):
+        j = p.row_joint[r]
+        ux, uy, a1, a2 = p.jac[r]
+        a, b = rows.body_a[j], rows.body_b[j]
+        if a >= 0:
+            jac[r, 3 * a:3 * a + 3] = (-ux, -uy, -a1)
+        if b >= 0:
+            jac[r, 3 * b:3 * b + 3] = (ux, uy, a2)
+    inverse = np.stack([inv_mass, inv_mass, inv_inertia], 1).reshape(-1)
+    a_matrix = jac @ (inverse[:, None] * jac.T)
+    g = np.diag(p.scale * np.diag(a_matrix))
+    for r in range(1, count):                   # a shared point's 2x2 block
+        if p.row_code[r] == 1 and p.row_joint[r - 1] == p.row_joint[r]:
+            g[r, r - 1] = g[r - 1, r] = p.scale[r] * a_matrix[r, r - 1]
+    return jac, inverse, a_matrix, g
+
+
+def test_one_direct_pass_is_the_dense_solution_of_the_soft_and_the_rigid_system():
+    """(A + G) d_l = -(J v + b C) - G l solved by numpy equals the envelope Cholesky's
+    impulses, and the velocities after it satisfy the rows' equations exactly."""
+    world = chain_world()
+    bodies = world._body_state()
+    rows = world._joints.rows
+    soft, _ = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows, world.settings,
+                                 world._gravity, 4.0)
+    rng = np.random.default_rng(3)
+    for phase in (SOLVE, RELAX):
+        p = direct.plan(rows, bodies.inv_mass, bodies.inv_inertia)
+        direct.factor(p, bodies.com, bodies.angle, bodies.inv_mass, bodies.inv_inertia, rows,
+                      soft, phase)
+        assert p.ok.tolist() == [True] and len(p.row_joint) == 10
+        jac, _, a_matrix, g = dense_system(p, rows, bodies.inv_mass, bodies.inv_inertia)
+        velocity = rng.normal(size=(len(bodies.inv_mass), 2))
+        spin = rng.normal(size=len(bodies.inv_mass))
+        impulse = np.array([direct._impulse(rows, j, c)
+                            for j, c in zip(p.row_joint, p.row_code)])
+        x = np.column_stack([velocity, spin]).reshape(-1)
+        expected = np.linalg.solve(a_matrix + g, -(jac @ x + p.rate * p.error) - g @ impulse)
+        after = rows._replace(**{f: getattr(rows, f).copy() for f in (
+            "linear_impulse", "angular_impulse", "perp_impulse", "axial_impulse")})
+        out = Output(np.zeros((0, 2)), np.zeros(0), np.zeros(2))
+        direct.direct_pass(p, velocity, spin, bodies.inv_mass, bodies.inv_inertia, after, out)
+        got = np.array([direct._impulse(after, j, c)
+                        for j, c in zip(p.row_joint, p.row_code)]) - impulse
+        np.testing.assert_allclose(got, expected, rtol=1e-10, atol=1e-12)
+        residual = jac @ np.column_stack([velocity, spin]).reshape(-1) + p.rate * p.error \
+            + g @ (impulse + got)
+        np.testing.assert_allclose(residual, 0.0, atol=1e-9)
+        assert out.progress[0] == pytest.approx(np.abs(got).max(), rel=1e-12)
+
+
+def test_islands_split_at_the_world_and_redundant_rigid_rows_fall_back():
+    """Two chains hung from the world are two islands; a chain pinned at both ends to the
+    world has 2 more rows than a free chain's 3 L - 1 degrees of freedom allow rigidly for
+    L = 1 (a plank pinned at both ends): solved softly it factors, rigid (relaxing) its
+    pivot fails and the island goes back to Gauss-Seidel (mask cleared), and back to the
+    direct solve at the next soft phase."""
+    world = chain_world(links=3, chains=2)
+    bodies, rows = world._body_state(), world._joints.rows
+    p = direct.plan(rows, bodies.inv_mass, bodies.inv_inertia)
+    assert np.diff(p.start).tolist() == [6, 6]
+
+    world = chain_world(links=1, pinned_end=True)
+    bodies, rows = world._body_state(), world._joints.rows
+    soft, _ = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows, world.settings,
+                                 world._gravity, 4.0)
+    p = direct.plan(rows, bodies.inv_mass, bodies.inv_inertia)
+    for phase, ok in ((SOLVE, True), (RELAX, False), (SOLVE, True)):
+        direct.factor(p, bodies.com, bodies.angle, bodies.inv_mass, bodies.inv_inertia, rows,
+                      soft, phase)
+        assert p.ok.tolist() == [ok]
+        assert (p.mask == (direct.equality_mask(0, False, 0.0, 0.0) if ok else 0)).all()
