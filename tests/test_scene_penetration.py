@@ -35,12 +35,13 @@ OPEN: dict[str, str] = {
                         "-1.0 mm vs 22 mm a step before): a deepest point not found",
     "csg_bodies": "sdf-sdf csg2 / csg6 at t = 1.0 s, 1.26 cm (after the rounded far "
                   "end fix: 4.36 -> 1.26 cm); not yet classified",
-    "grid_terrain": "mesh-sdf terrain / body19 at t = 1.15 s, 4.4 cm (8.4 cm before the "
-                    "reduction fix): the reverse view's point on the box's medial axis (a "
-                    "box corner in the curved grid terrain) is deeper than the corner's "
-                    "own view (3.07 vs 2.75 cm at t = 1.03 s, brute force 2.97) and has a "
-                    "box side's normal, flipping between the two sides step to step: the "
-                    "box spins up and sinks",
+    "grid_terrain": "circle-mesh body6 / body7 at t = 1.03 s, 2.9 cm (after the medial-axis "
+                    "fix: terrain / body19 4.4 cm -> under 1.1 cm): circle-polygon depth exact "
+                    "(brute force), present the steps before (-4.1, +1.2, +2.3 cm) as the "
+                    "circle falls at 9.5 m/s onto the spinning box, then 2.8, 2.7 cm with the "
+                    "relative normal speed near 0: push-out too weak in the pile; next "
+                    "body13 / body15 2.0 cm, terrain / body17 1.3 cm (triangle tip touching, "
+                    "-0.4 mm a step before, pushed in by the pile above)",
     "marble_run": "circle-field track / marble9 at t = 3.28 s, 1.6 cm reported where the "
                   "marble is 2.1-5.4 cm above the track (brute force): the smooth "
                   "union's field is a bound (|grad| 0.80 there), r - f(c) a false depth",
