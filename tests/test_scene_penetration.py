@@ -30,9 +30,14 @@ OPEN: dict[str, str] = {
                       "contact present for steps before (1.4 mm, then 2.2 cm); push-out "
                       "too weak in the 150-body pile (one solver pass per substep above "
                       "stiff_island_limit)",
-    "concave_polygons": "poly7 / poly12 at t = 2.35 s, 4.4 cm: corner-corner overlap whose "
-                        "reported depth lags brute force (2.8 mm reported vs 10 mm, "
-                        "-1.0 mm vs 22 mm a step before): a deepest point not found",
+    "concave_polygons": "poly11 / poly12 at t = 2.10 s, 1.9 cm (after the kink-face fix: "
+                        "poly7 / poly12 4.4 cm -> under 0.8 cm): contact present the steps "
+                        "before with the depth exact (brute force), 0.7, 0.8, 1.1, 1.9 cm "
+                        "while the L falls at 2.5 m/s: push-out too weak (solver); next "
+                        "poly10 / poly15 1.45 cm at t = 1.25 s: a vertex near the arrow's "
+                        "corner measured against one face (normal (0.79, 0.62), +0.3 mm) "
+                        "sinks 1.4 cm through the other face (-0.24, 0.97) in one step: "
+                        "found too late, no speculative contact on the second face",
     "csg_bodies": "sdf-sdf csg2 / csg6 at t = 1.0 s, 1.26 cm (after the rounded far "
                   "end fix: 4.36 -> 1.26 cm); not yet classified",
     "grid_terrain": "circle-mesh body6 / body7 at t = 1.03 s, 2.9 cm (after the medial-axis "
