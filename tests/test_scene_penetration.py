@@ -38,8 +38,11 @@ OPEN: dict[str, str] = {
                         "corner measured against one face (normal (0.79, 0.62), +0.3 mm) "
                         "sinks 1.4 cm through the other face (-0.24, 0.97) in one step: "
                         "found too late, no speculative contact on the second face",
-    "csg_bodies": "sdf-sdf csg2 / csg6 at t = 1.0 s, 1.26 cm (after the rounded far "
-                  "end fix: 4.36 -> 1.26 cm); not yet classified",
+    "csg_bodies": "sdf-sdf csg2 / csg6 at t = 1.0 s, 1.26 cm (after the rounded far end fix: "
+                  "4.36 -> 1.26 cm): push-out too weak (c): depth exact (brute force 1.25 cm), "
+                  "contact present from 4 mm five steps before, then 11.2, 12.3, 12.5, 12.1, "
+                  "11.3 mm with csg6 rolling at 5 rad/s on it: the overlap leaves at about "
+                  "0.5 mm a step",
     "grid_terrain": "circle-mesh body6 / body7 at t = 1.03 s, 2.9 cm (after the medial-axis "
                     "fix: terrain / body19 4.4 cm -> under 1.1 cm): circle-polygon depth exact "
                     "(brute force), present the steps before (-4.1, +1.2, +2.3 cm) as the "
@@ -50,16 +53,30 @@ OPEN: dict[str, str] = {
     "marble_run": "circle-field track / marble9 at t = 3.28 s, 1.6 cm reported where the "
                   "marble is 2.1-5.4 cm above the track (brute force): the smooth "
                   "union's field is a bound (|grad| 0.80 there), r - f(c) a false depth",
-    "mixed_pairs": "polygon_over_circle_2 / circle_under_sdf_3 at t = 1.15 s, 1.9 cm "
-                   "(after the rounded far end fix: 2.37 -> 1.92 cm); not yet classified",
+    "mixed_pairs": "circle-mesh polygon_over_circle_2 (the L) / circle_under_sdf_3 at t = "
+                   "1.15 s, 1.9 cm: found too late (b): a circle and a concave polygon get "
+                   "one contact, at the field's nearest feature to the centre; the L's bottom "
+                   "face at 2.8 mm, and the next step its side face 1.9 cm deep (brute force "
+                   "1.92), which had no contact; a fix: a contact per outline edge within "
+                   "the margin for concave meshes. Next: circle_under_box_1 / "
+                   "box_over_circle_1 1.5 cm, circle_under_sdf_3 / sdf_over_circle_3 1.2 cm, "
+                   "push-out too weak (c): depth exact, contact present from 1.1 and 0.7 cm, "
+                   "growing about 1 mm a step under a body spinning at 6.5-7 rad/s",
     "ragdoll": "shin_l / shin_r at t = 2.37 s, 2.2 cm: a shin spinning at 38 rad/s; "
                "speculative contact 15 cm away the step before, another corner hits "
                "(0.63 rad a step): contact found at the wrong feature, too late",
-    "sdf_primitives": "mesh-sdf ground / ellipse at t = 1.43 s, 2.7 cm, depth exact (brute "
-                      "force), an ellipse rolling at 3 m/s and 8.9 rad/s; not yet "
-                      "classified (moon / hexagram, 3.6 cm before the far end fix: the "
-                      "field-field depth where f_a = f_b underestimates a corner's, "
-                      "brute force 3.9-5.0 cm)",
+    "sdf_primitives": "mesh-sdf ground / ellipse at t = 1.43 s, 2.7 cm: found too late (b): "
+                      "depth exact (brute force), one contact at the lowest point of an "
+                      "ellipse rolling at 3 m/s and 9 rad/s, 0.2, 0.6, 1.2, 2.0, 2.6 cm over "
+                      "five steps while that point slides 10-20 cm a step: the material point "
+                      "that comes down next has no contact; heart / ellipse 1.95 cm likewise "
+                      "(4.6 mm, then 14.7 mm in one step). moon / hexagram 2.3 cm at t = "
+                      "2.12 s: wrong depth (a): the field-field depth where f_a = f_b lags "
+                      "the horn's (0.88 vs 1.46 cm, 1.09 vs 1.93 cm brute force) and its "
+                      "normal jumps (0.84, 0.54) <-> (0.03, 1.0); vesica / rounded_cross "
+                      "1.9 cm: depth 7 % short, normal flipping step to step between "
+                      "(-0.96, 0.28) and (-0.23, 0.97) under one key; a fix: the support "
+                      "search of mesh_sdf from the field-field points on each body",
     "showcase": "circle-sdf sdf_moon / body21 at t = 2.27 s, 6.1 cm (after the reduction "
                 "fix: 11.3 -> 6.1 cm): the moon's horn presses a circle on the terrain, "
                 "depth exact (brute force) and growing 2-3 mm a step over 15 steps while "
