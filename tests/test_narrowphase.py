@@ -620,6 +620,26 @@ def test_two_crossing_corners_get_the_face_the_overlap_runs_along():
     np.testing.assert_allclose(c.normal[k], outward, atol=1e-9)
 
 
+def test_a_circle_in_the_notch_of_a_concave_polygon_touches_both_faces():
+    """A disc of radius 0.5 in the L's notch (faces y = 1 and x = 1 meet at the reflex
+    corner (1, 1)), centre (1.45, 1.48): it overlaps the bottom face by 0.02 and the
+    side face by 0.05 (closed form), each its own contact with that face's normal
+    (circle toward L); the field at the centre saw the nearest face only. Beside
+    them, a convex corner of the L (3, 1) gives its vertex contact, and a centre
+    0.6 from both faces none."""
+    ball = {"type": "circle", "radius": 0.5}
+    c = collide(ball, (1.45, 1.48, 0.0), L_SHAPE, (0.0, 0.0, 0.0), margin=0.02)
+    order = np.argsort(c.depth)
+    np.testing.assert_allclose(c.depth[order], [0.02, 0.05], atol=1e-12)
+    np.testing.assert_allclose(c.normal[order], [[0.0, -1.0], [-1.0, 0.0]], atol=1e-12)
+    np.testing.assert_allclose(c.point[order], [[1.45, 0.99], [0.975, 1.48]], atol=1e-12)
+    corner = collide(ball, (3.3, 1.2, 0.0), L_SHAPE, (0.0, 0.0, 0.0))
+    gap = math.hypot(0.3, 0.2)
+    np.testing.assert_allclose(corner.depth, [0.5 - gap], atol=1e-12)
+    np.testing.assert_allclose(corner.normal, [[-0.3 / gap, -0.2 / gap]], atol=1e-12)
+    assert len(collide(ball, (1.6, 1.6, 0.0), L_SHAPE, (0.0, 0.0, 0.0), margin=0.05)) == 0
+
+
 def test_sdfphys_collide_is_the_subpackage_and_callable():
     """``import sdfphys.collide`` reaches the subpackage (no function shadows it), and
     ``sdfphys.collide(...)`` is still the two-shape query of the API."""

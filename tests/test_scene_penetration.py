@@ -53,15 +53,12 @@ OPEN: dict[str, str] = {
     "marble_run": "circle-field track / marble9 at t = 3.28 s, 1.6 cm reported where the "
                   "marble is 2.1-5.4 cm above the track (brute force): the smooth "
                   "union's field is a bound (|grad| 0.80 there), r - f(c) a false depth",
-    "mixed_pairs": "circle-mesh polygon_over_circle_2 (the L) / circle_under_sdf_3 at t = "
-                   "1.15 s, 1.9 cm: found too late (b): a circle and a concave polygon get "
-                   "one contact, at the field's nearest feature to the centre; the L's bottom "
-                   "face at 2.8 mm, and the next step its side face 1.9 cm deep (brute force "
-                   "1.92), which had no contact; a fix: a contact per outline edge within "
-                   "the margin for concave meshes. Next: circle_under_box_1 / "
-                   "box_over_circle_1 1.5 cm, circle_under_sdf_3 / sdf_over_circle_3 1.2 cm, "
-                   "push-out too weak (c): depth exact, contact present from 1.1 and 0.7 cm, "
-                   "growing about 1 mm a step under a body spinning at 6.5-7 rad/s",
+    "mixed_pairs": "circle-box circle_under_box_1 / box_over_circle_1 at t = 0.73 s, 1.5 cm "
+                   "(after the concave circle fix: the L / circle_under_sdf_3, 1.9 cm, now "
+                   "under 3 mm): push-out too weak (c): depth exact (brute force), contact "
+                   "present from 1.1 cm five steps before, growing about 1 mm a step under the "
+                   "box spinning at 6.5-7 rad/s; circle_under_sdf_3 / sdf_over_circle_3 "
+                   "1.2 cm likewise",
     "ragdoll": "shin_l / shin_r at t = 2.37 s, 2.2 cm: a shin spinning at 38 rad/s; "
                "speculative contact 15 cm away the step before, another corner hits "
                "(0.63 rad a step): contact found at the wrong feature, too late",
