@@ -31,13 +31,15 @@ OPEN: dict[str, str] = {
                       "too weak in the 150-body pile (one solver pass per substep above "
                       "stiff_island_limit)",
     "concave_polygons": "poly11 / poly12 at t = 2.10 s, 1.9 cm (after the kink-face fix: "
-                        "poly7 / poly12 4.4 cm -> under 0.8 cm): contact present the steps "
-                        "before with the depth exact (brute force), 0.7, 0.8, 1.1, 1.9 cm "
-                        "while the L falls at 2.5 m/s: push-out too weak (solver); next "
-                        "poly10 / poly15 1.45 cm at t = 1.25 s: a vertex near the arrow's "
-                        "corner measured against one face (normal (0.79, 0.62), +0.3 mm) "
-                        "sinks 1.4 cm through the other face (-0.24, 0.97) in one step: "
-                        "found too late, no speculative contact on the second face",
+                        "poly7 / poly12 4.4 cm -> under 0.8 cm): the L's reflex corner in the "
+                        "arrow, depth exact (brute force) and present the steps before, 0.7, "
+                        "0.8, 1.1, 1.9 cm, while the normal speed at the contact after each "
+                        "step is within 0.02 m/s (the L pivots about it, its centre falling at "
+                        "2.6 m/s): not narrowphase, solver side; next poly10 / poly15 1.45 cm "
+                        "at t = 1.25 s: a vertex near the arrow's corner measured against one "
+                        "face (normal (0.79, 0.62), +0.3 mm) sinks 1.4 cm through the other "
+                        "face (-0.24, 0.97) in one step: found too late, no speculative "
+                        "contact on the second face",
     "csg_bodies": "sdf-sdf csg2 / csg6 at t = 1.0 s, 1.26 cm (after the rounded far end fix: "
                   "4.36 -> 1.26 cm): push-out too weak (c): depth exact (brute force 1.25 cm), "
                   "contact present from 4 mm five steps before, then 11.2, 12.3, 12.5, 12.1, "
