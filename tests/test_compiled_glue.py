@@ -130,3 +130,25 @@ def test_field_field_contacts_compiled_tail_equals_numpy(monkeypatch):
         contacts += len(reference[0])
         patch_ends += int(np.sum(reference[4] >= 16))
     assert contacts > 500 and patch_ends > 100
+
+
+def test_mesh_in_field_kink_on_a_face_compiled_equals_numpy(monkeypatch):
+    """Two crossing corners (scenes/concave_polygons.toml, poly7 and poly12 at t = 2.30
+    s): a descent minimum on the L's medial axis takes the face the arrow's edge runs
+    along (``mesh_contacts._face_normals``), and the L's corner is measured below the
+    arrow's side, 1.8 cm: both paths give the same rows, bit for bit."""
+    arrow = shape_from_spec({"type": "polygon", "points": [
+        [-0.65, 0.25], [0.15, 0.25], [0.15, 0.5], [0.65, 0.0], [0.15, -0.5], [0.15, -0.25],
+        [-0.65, -0.25]]})
+    piece = shape_from_spec({"type": "polygon", "points": [
+        [-0.6, -0.6], [0.6, -0.6], [0.6, -0.2], [-0.2, -0.2], [-0.2, 0.6], [-0.6, 0.6]]})
+    pose_arrow = np.array([[-0.44188065759161116, 1.4314755117100781, 2.569280654727023]])
+    pose_l = np.array([[-0.3104870539715962, 2.082024956753468, 3.5972444198103384]])
+    deepest = 0.0
+    for mesh, other, pose_mesh, pose_other in [(arrow, piece, pose_arrow, pose_l),
+                                               (piece, arrow, pose_l, pose_arrow)]:
+        reference, got = _both(monkeypatch, mesh_contacts, mesh_contacts.mesh_in_field, mesh,
+                               other, pose_mesh, pose_other, 0.01, Settings(), True)
+        assert _same(reference, got)
+        deepest = max(deepest, float(np.max(reference[3], initial=0.0)))
+    assert deepest > 0.0179

@@ -127,6 +127,63 @@ def test_mesh_corner_into_an_sdf_face_is_unchanged():
         np.testing.assert_allclose(c.point, [[0.2, 0.095]], atol=1e-9)
 
 
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_mesh_corner_in_an_sdf_face_gives_no_reverse_point_on_its_medial_axis(
+        monkeypatch, compiled):
+    """A mesh box's corner 0.01 into an sdf ground, at 45 deg (the case above) and
+    tilted: the reverse direction's search ends on the box's medial axis, the ground's
+    face point on the corner's bisector (at 45 deg (0.2, 0.1), 0.01 sin 45 deg from
+    both bottom sides), with one side's normal. It is dropped: the forward direction
+    holds the vertex (the sdf corners pressing into mesh faces above keep theirs)."""
+    from sdfphys.collide.narrowphase import _overlap_region, _to_local
+    from sdfphys.shapes import shape_from_spec
+
+    monkeypatch.setattr(mesh_sdf, "USE_COMPILED", compiled)
+    ground = shape_from_spec({"type": "sdf", "field": {"type": "box", "size": [4.0, 0.2]}})
+    mesh = shape_from_spec({"type": "box", "size": [0.5, 0.5]})
+    pose_sdf = np.array([[0.0, 0.0, 0.0]])
+    rows = []
+    for tilt in (0.0, 0.02, -0.3):
+        y = 0.1 - 0.01 + 0.25 * math.sqrt(2.0) * math.cos(tilt)
+        pose_mesh = np.array([[0.2, y, math.pi / 4 + tilt]])
+        region = _overlap_region(ground.bounds(), mesh.bounds(), pose_mesh[:, 2],
+                                 _to_local(pose_mesh[:, :2], pose_sdf), 0.0)
+        rows.append(mesh_sdf.sdf_in_mesh(mesh, ground, pose_mesh, pose_sdf, region, 0.0,
+                                         Settings()))
+    assert [len(row[0]) for row in rows] == [0, 0, 0]
+
+
+def test_a_box_corner_in_a_baked_terrain_keeps_the_terrain_normal():
+    """grid_terrain's box19 at t = 1.03 s and 1.13 s (poses from the scene): its corner
+    in the baked terrain, whose field is a bound there (|grad f| 0.63), so the forward
+    depth -f(v) is short of the reverse view's medial-axis point (3.07 vs 2.75 cm), which
+    was the pair's deepest contact, with a box side's normal flipping from step to step.
+    Now the deepest contact is the corner's: depth -f(v), normal -grad f(v) / |grad f(v)|
+    (terrain toward box, a = terrain), point v + f(v) / 2 normal, as ``mesh_contacts``."""
+    terrain = {"type": "sdf", "field": {
+        "op": "bake", "cell": 0.1, "band": 1.0, "of": {"op": "smooth_union", "k": 1.0, "of": [
+            {"type": "box", "size": [24.0, 2.0], "offset": [0.0, -1.0]},
+            {"type": "circle", "radius": 2.5, "offset": [-6.0, -1.2]},
+            {"type": "circle", "radius": 1.8, "offset": [1.0, -0.8]},
+            {"type": "ellipse", "size": [6.0, 2.0], "offset": [6.5, 0.0]}]}}}
+    f = build_field(terrain["field"])
+    box = {"type": "box", "size": [0.6, 0.6]}
+    for pose in [(3.0685218758548705, 0.6190136002320614, 0.9710631157320789),
+                 (2.976460479533133, 0.5755262114670766, 1.162341565593501)]:
+        c = collide(terrain, (0.0, 0.0, 0.0), box, pose)
+        corners = np.array([[-0.3, -0.3], [0.3, -0.3], [0.3, 0.3], [-0.3, 0.3]])
+        v = corners @ rotation(pose[2]).T + pose[:2]
+        value, grad = f.evaluate(v)
+        k = np.argmin(value)
+        unit = grad[k] / np.linalg.norm(grad[k])
+        assert np.linalg.norm(grad[k]) < 0.7
+        deepest = np.argmax(c.depth)
+        np.testing.assert_allclose(c.depth[deepest], -value[k], atol=TOL)
+        np.testing.assert_allclose(c.normal[deepest], unit, atol=TOL)
+        sides = rotation(pose[2]) @ np.array([[0.0, -1.0], [-1.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).T
+        assert np.max(np.abs(c.normal[c.depth > 0.0] @ sides)) < 0.99
+
+
 def test_mesh_box_on_an_unbounded_sdf_half_plane():
     """The reverse direction is solved in the sdf's frame: a half-plane ground works."""
     ground = {"type": "sdf", "field": {"type": "half_plane", "normal": [0.0, 1.0]}}

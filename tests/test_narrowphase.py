@@ -570,6 +570,76 @@ def test_a_spike_tip_in_a_notch_is_found_at_its_exact_depth():
     assert len(c) > 0 and c.depth.max() == pytest.approx(deepest, abs=1e-3)
 
 
+L_PIECE = {"type": "polygon", "points": [[-0.6, -0.6], [0.6, -0.6], [0.6, -0.2], [-0.2, -0.2],
+                                         [-0.2, 0.6], [-0.6, 0.6]]}
+
+
+def test_two_crossing_corners_get_the_face_the_overlap_runs_along():
+    """scenes/concave_polygons.toml at t = 2.30 s (poly7, poly12): the arrow's tip and
+    the L's arm-end corner cross, each vertex only 3.4 and 0.9 mm inside the other, the
+    overlap a 7 cm sliver between the arrow's side [0.65, 0]-[0.15, -0.5] and the L's
+    arm side, 14 deg apart (brute force over a 0.5 mm grid: 1.4 cm deep each way). Its
+    deepest point lies on a medial axis, where the field's normal is either face's; such
+    minima were dropped and the pair's deepest contact was the tip's 3.4 mm. The face
+    the sliver runs along is taken: the L's corner [0.6, -0.2] is measured below the
+    arrow's side (closed form), normal that side's outward normal (arrow toward L)."""
+    pose_arrow = (-0.44188065759161116, 1.4314755117100781, 2.569280654727023)
+    pose_l = (-0.3104870539715962, 2.082024956753468, 3.5972444198103384)
+    arrow, piece = shape_from_spec(ARROW), shape_from_spec(L_PIECE)
+
+    def to_world(shape, pose, points):
+        """User-frame points of ``shape`` at the centre-of-mass pose ``pose``."""
+        c_, s_ = np.cos(pose[2]), np.sin(pose[2])
+        rot = np.array([[c_, -s_], [s_, c_]])
+        return (np.asarray(points) + shape.origin) @ rot.T + pose[:2]
+
+    def user(shape, pose):
+        return (*to_world(shape, pose, [[0.0, 0.0]])[0], pose[2])
+
+    c = collide(ARROW, user(arrow, pose_arrow), L_PIECE, user(piece, pose_l))
+    tip, end = to_world(arrow, pose_arrow, [[0.65, 0.0], [0.15, -0.5]])
+    corner = to_world(piece, pose_l, [[0.6, -0.2]])[0]
+    along = (tip - end) / np.linalg.norm(tip - end)           # counter-clockwise
+    outward = np.array([along[1], -along[0]])
+    expected = -np.dot(corner - tip, outward)
+
+    def brute(a, pose_a, b, pose_b):
+        lo, hi = a.bounds()[:2], a.bounds()[2:]
+        grid = np.stack(np.meshgrid(*(np.arange(lo[i], hi[i], 5e-4) for i in range(2))),
+                        -1).reshape(-1, 2)
+        grid = grid[a.field.distance(grid) <= 0.0]
+        c_, s_ = np.cos(pose_b[2]), np.sin(pose_b[2])
+        rot = np.array([[c_, -s_], [s_, c_]])
+        world = to_world(a, pose_a, grid - a.origin)
+        return -b.field.distance((world - pose_b[:2]) @ rot).min()
+
+    deepest = max(brute(arrow, pose_arrow, piece, pose_l), brute(piece, pose_l, arrow, pose_arrow))
+    assert 0.014 < deepest < expected
+    k = np.argmax(c.depth)
+    assert c.depth[k] == pytest.approx(expected, abs=1e-9)
+    np.testing.assert_allclose(c.normal[k], outward, atol=1e-9)
+
+
+def test_a_circle_in_the_notch_of_a_concave_polygon_touches_both_faces():
+    """A disc of radius 0.5 in the L's notch (faces y = 1 and x = 1 meet at the reflex
+    corner (1, 1)), centre (1.45, 1.48): it overlaps the bottom face by 0.02 and the
+    side face by 0.05 (closed form), each its own contact with that face's normal
+    (circle toward L); the field at the centre saw the nearest face only. Beside
+    them, a convex corner of the L (3, 1) gives its vertex contact, and a centre
+    0.6 from both faces none."""
+    ball = {"type": "circle", "radius": 0.5}
+    c = collide(ball, (1.45, 1.48, 0.0), L_SHAPE, (0.0, 0.0, 0.0), margin=0.02)
+    order = np.argsort(c.depth)
+    np.testing.assert_allclose(c.depth[order], [0.02, 0.05], atol=1e-12)
+    np.testing.assert_allclose(c.normal[order], [[0.0, -1.0], [-1.0, 0.0]], atol=1e-12)
+    np.testing.assert_allclose(c.point[order], [[1.45, 0.99], [0.975, 1.48]], atol=1e-12)
+    corner = collide(ball, (3.3, 1.2, 0.0), L_SHAPE, (0.0, 0.0, 0.0))
+    gap = math.hypot(0.3, 0.2)
+    np.testing.assert_allclose(corner.depth, [0.5 - gap], atol=1e-12)
+    np.testing.assert_allclose(corner.normal, [[-0.3 / gap, -0.2 / gap]], atol=1e-12)
+    assert len(collide(ball, (1.6, 1.6, 0.0), L_SHAPE, (0.0, 0.0, 0.0), margin=0.05)) == 0
+
+
 def test_sdfphys_collide_is_the_subpackage_and_callable():
     """``import sdfphys.collide`` reaches the subpackage (no function shadows it), and
     ``sdfphys.collide(...)`` is still the two-shape query of the API."""

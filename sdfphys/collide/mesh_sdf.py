@@ -41,10 +41,16 @@ face point and the start id (+ ``FAR_END`` for a far end), for the feature key
 
 Where a vertex of the mesh presses into the sdf's face instead, the descent ends
 on the mesh's medial axis (the sdf face's point deepest in the mesh's corner
-wedge): depth underestimated, normal a mesh side's. The forward direction reports
-that vertex exactly and deeper within less than its depth, which shadows this
-point in the reduction (``reduce``), as it shadows the forward direction's wedge
-points when an sdf corner presses into a mesh face.
+wedge): depth underestimated, normal a mesh side's, whichever side the search
+ended on. The forward direction reports that vertex, with the sdf's normal, and
+for an exact field deeper within less than its depth, which would shadow this
+point in the reduction (``reduce``). Where the sdf's field is a bound (|grad f| < 1:
+a smooth union, a grid baked from one), the forward depth -f is short and this
+point can be the deeper one: the pair's only contact, with a side's normal that
+flips between the corner's two sides from step to step (a box spins up and sinks
+into a baked terrain). So such a point (``_on_medial_axis``: equally near two
+adjacent outline edges at a convex vertex that lies below the sdf's tangent there)
+is dropped, and the vertex's own contact holds the corner.
 
 Cost: one ``field_field_contacts`` call (each of its rounds one evaluation of each
 field for all pairs), then ``1 + REFINE_ROUNDS`` evaluations of the mesh field and
@@ -120,6 +126,9 @@ SDF_CALLS = REFINE_ROUNDS + 5
 #: Run stages 2 and 3 in one compiled kernel (``_support``) when both fields compile
 #: (``sdf.compiled``); False forces the numpy stages (the tests compare the two).
 USE_COMPILED = True
+#: A point of the sdf inside the mesh whose two nearest outline edges are within this
+#: fraction of its depth of each other is on the mesh's medial axis (``_on_medial_axis``).
+_MEDIAL = 1e-2
 #: Relative tolerance of the support search's decrease test (4 ulps).
 _FALL = 4.0 * np.finfo(float).eps
 
@@ -162,13 +171,14 @@ def _project(sdf: Field, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _deepest_on_sdf(sdf: Field, mesh: _MeshInSdfFrame, pair: np.ndarray, start: np.ndarray,
                     step: np.ndarray, min_step: np.ndarray
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Local minimum of f_mesh over the sdf's surface from K starts (sdf frame).
 
     pair: (K,) pair of each start; start: (K, 2) points near the sdf's surface;
     step: (K,) initial step scale (m); min_step: (K,) m, the search of a contact
     ends when its step scale falls below it. Returns (z (K, 2) on the sdf's
-    surface, f_mesh(z) (K,), n = unit grad f_mesh(z) (K, 2)).
+    surface, f_mesh(z) (K,), n = unit grad f_mesh(z) (K, 2), g = the sdf's unit
+    normal at z (K, 2)).
 
     Each round, for every running contact at z (sdf normal g): the direction
     t = -n + (n.g) g (the tangent of the sdf's surface along which the mesh's
@@ -213,7 +223,7 @@ def _deepest_on_sdf(sdf: Field, mesh: _MeshInSdfFrame, pair: np.ndarray, start: 
         lost = rows[~better]
         step[lost] /= _SHRINK
         active[lost] = step[lost] >= min_step[lost]
-    return z, phi, n
+    return z, phi, n, g
 
 
 def _far_ends(sdf: Field, z: np.ndarray, n: np.ndarray, diagonal: np.ndarray
@@ -312,6 +322,44 @@ def _nearest_edges(vertices: np.ndarray, points: np.ndarray) -> np.ndarray:
     return np.argmin(np.sum(gap * gap, axis=2), axis=1)
 
 
+def _on_medial_axis(vertices: np.ndarray, z: np.ndarray, depth: np.ndarray, g: np.ndarray
+                    ) -> np.ndarray:
+    """True (K,) where the sdf's deepest point z lies on the mesh's medial axis at a corner.
+
+    vertices: (M, 2) the mesh's outline (counter-clockwise); z: (K, 2) the sdf's
+    points in the mesh's frame, depth: (K,) m, -f_mesh(z) (> 0 inside the mesh);
+    g: (K, 2) the sdf's unit outward normal at z, in the mesh's frame. True where z is
+    inside the mesh, its two nearest outline edges are adjacent at a convex vertex v
+    and equally near (within ``_MEDIAL`` of the depth: the support search converges
+    onto the kink of f_mesh from one side), and v lies below the sdf's tangent at z
+    by at least z's depth ((z - v).g >= depth): a mesh corner pressing into the sdf's
+    face. Such a point's normal is one of the corner's sides', whichever the search
+    ended on, and the forward view reports the vertex itself with the sdf's normal.
+    """
+    m = len(vertices)
+    a = vertices[None, :, :]
+    e = np.roll(vertices, -1, axis=0)[None, :, :] - a                    # (1, M, 2)
+    rel = z[:, None, :] - a                                               # (K, M, 2)
+    t = np.clip(np.sum(rel * e, axis=2) / np.sum(e * e, axis=2), 0.0, 1.0)
+    gap = rel - t[:, :, None] * e
+    distance = np.sqrt(np.sum(gap * gap, axis=2))                        # (K, M)
+    rows = np.arange(len(z))
+    first = np.argmin(distance, axis=1)
+    d1 = distance[rows, first]
+    distance[rows, first] = np.inf
+    second = np.argmin(distance, axis=1)
+    d2 = distance[rows, second]
+    vertex = np.where(second == (first + 1) % m, second, first)          # the shared one
+    adjacent = (second == (first + 1) % m) | (first == (second + 1) % m)
+    before, after = vertices[(vertex - 1) % m], vertices[(vertex + 1) % m]
+    v = vertices[vertex]
+    turn = ((v[:, 0] - before[:, 0]) * (after[:, 1] - v[:, 1])
+            - (v[:, 1] - before[:, 1]) * (after[:, 0] - v[:, 0]))
+    below = np.einsum("kd,kd->k", z - v, g)
+    return ((depth > 0.0) & adjacent & (turn > 0.0) & (d2 - d1 <= _MEDIAL * depth)
+            & (below >= depth))
+
+
 def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.ndarray,
                 region: np.ndarray, margin: float, settings: Settings
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
@@ -364,10 +412,12 @@ def _support_numpy(mesh: Shape, sdf: Shape, pose_sdf: np.ndarray, angle: np.ndar
     in_sdf = _MeshInSdfFrame(mesh.field, angle, offset)
     extent = region[pair, 2:] - region[pair, :2]
     diagonal = np.hypot(extent[:, 0], extent[:, 1])
-    z, phi, n = _deepest_on_sdf(sdf.field, in_sdf, pair, point,
-                                np.abs(depth) + 1e-3 * diagonal, _MIN_STEP * diagonal)
+    z, phi, n, g = _deepest_on_sdf(sdf.field, in_sdf, pair, point,
+                                   np.abs(depth) + 1e-3 * diagonal, _MIN_STEP * diagonal)
     depth = -phi
-    keep = depth > -margin
+    medial = _on_medial_axis(mesh.vertices, in_sdf.to_mesh(z, pair), depth,
+                             in_sdf.to_mesh(g + in_sdf.offset[pair], pair))   # rotation only
+    keep = (depth > -margin) & ~medial
     pair, z, depth, n, start = pair[keep], z[keep], depth[keep], n[keep], start[keep]
     face = in_sdf.to_mesh(z + depth[:, None] * n, pair)                  # mesh surface point
     edge = _nearest_edges(mesh.vertices, face)
@@ -529,11 +579,40 @@ def _support(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting_s: 
             else:
                 step[i] /= _SHRINK
                 active[i] = step[i] >= min_step[i]
-    # Contacts within the margin and their outline edges (``_nearest_edges``).
+    # Contacts within the margin and off the mesh's medial axis (``_on_medial_axis``).
     keep = np.empty(n_c, dtype=np.int64)
     n_k = 0
     for i in range(n_c):
-        if -phi[i] > -margin:
+        d = -phi[i]
+        medial = False
+        if d > 0.0:
+            k = pair[i]
+            zx, zy = _to_mesh(z[i, 0], z[i, 1], k, cos, sin, offset)
+            gx, gy = _to_mesh(g[i, 0] + offset[k, 0], g[i, 1] + offset[k, 1], k, cos, sin,
+                              offset)
+            d1, d2, first, second = np.inf, np.inf, 0, 0
+            for j in range(m):
+                ax, ay = vertices[j, 0], vertices[j, 1]
+                q = (j + 1) % m
+                ex, ey = vertices[q, 0] - ax, vertices[q, 1] - ay
+                rx, ry = zx - ax, zy - ay
+                along = min(max((rx * ex + ry * ey) / (ex * ex + ey * ey), 0.0), 1.0)
+                hx, hy = rx - along * ex, ry - along * ey
+                distance = math.sqrt(hx * hx + hy * hy)
+                if distance < d1:
+                    d2, second, d1, first = d1, first, distance, j
+                elif distance < d2:
+                    d2, second = distance, j
+            vertex = second if second == (first + 1) % m else first
+            adjacent = second == (first + 1) % m or first == (second + 1) % m
+            bx, by = vertices[(vertex - 1) % m, 0], vertices[(vertex - 1) % m, 1]
+            vx, vy = vertices[vertex, 0], vertices[vertex, 1]
+            cx, cy = vertices[(vertex + 1) % m, 0], vertices[(vertex + 1) % m, 1]
+            turn = (vx - bx) * (cy - vy) - (vy - by) * (cx - vx)
+            below = 0.0 + (zx - vx) * gx + (zy - vy) * gy
+            medial = (adjacent and turn > 0.0 and d2 - d1 <= _MEDIAL * d
+                      and below >= d)
+        if d > -margin and not medial:
             keep[n_k] = i
             n_k += 1
     edge = np.empty(n_k, dtype=np.int64)

@@ -17,7 +17,9 @@ No reduction here: ``collide.reduce`` keeps a few points per pair.
 
 Feature key layout (int64): ``source << 56 | element << 8 | start``
 
-    source   0  analytic (circle-circle, circle-any): element = start = 0
+    source   0  analytic (circle-circle, circle-any): element = start = 0; a
+                circle outside a concave mesh: element = outline edge e (start 254)
+                or vertex (start 255)
              1  a's mesh inside b's field
              2  b's mesh inside a's field
              3  field-field descent (sdf pairs), start = start id
@@ -145,17 +147,75 @@ def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray
     inside b, g is the direction to b's nearest boundary point, as pymunk's
     circle-polygon (least-penetrating face). f_b runs as its compiled program
     (``sdf.compiled.evaluate``; the numpy field where it does not compile).
+
+    A centre outside a concave mesh gets instead a contact per outline feature (edge
+    or convex vertex) within r + margin (``_circle_outside_concave_mesh``; the
+    nearest is the field's contact): a circle in a notch touches two faces, as it
+    touches two of Box2D's convex pieces.
     """
     r = circle_a.radius
     centre = _to_local(pose_a[:, :2], pose_b)
     d, g = compiled.evaluate(shape_b.field, centre)
     depth = r - d
     keep = depth > -margin
+    concave = shape_b.kind == "mesh" and not shape_b.convex
+    if concave:
+        outside = d > 0.0            # these get a contact per outline feature within reach
+        keep &= ~outside
     g_world = _rotate(safe_normalize(g[keep]), pose_b[keep, 2])
-    depth = depth[keep]
     point = pose_a[keep, :2] - (0.5 * (d[keep] + r))[:, None] * g_world
-    return Contacts(body_a[keep], body_b[keep], point, -g_world, depth,
-                    np.full(len(depth), feature_key(SOURCE_ANALYTIC, 0, 0), np.int64))
+    contacts = Contacts(body_a[keep], body_b[keep], point, -g_world, depth[keep],
+                        np.full(int(np.sum(keep)), feature_key(SOURCE_ANALYTIC, 0, 0), np.int64))
+    if not concave:
+        return contacts
+    row, out, s, element, start = _circle_outside_concave_mesh(shape_b.vertices,
+                                                               centre[outside], r, margin)
+    rows = np.flatnonzero(outside)[row]
+    normal = _rotate(out, pose_b[rows, 2])
+    point = pose_a[rows, :2] - (0.5 * (s + r))[:, None] * normal
+    return Contacts.concatenate([contacts, Contacts(
+        body_a[rows], body_b[rows], point, -normal, r - s,
+        feature_key(SOURCE_ANALYTIC, element, start))])
+
+
+def _circle_outside_concave_mesh(vertices: np.ndarray, centre: np.ndarray, radius: float,
+                                 margin: float) -> tuple[np.ndarray, ...]:
+    """The outline features of a concave mesh a circle outside it may touch.
+
+    vertices: (M, 2) the counter-clockwise outline; centre: (K, 2) circle centres
+    outside it, in its frame; radius, margin: m. A circle in a concave mesh's notch
+    touches two faces, but the field at the centre gives the nearest one only (the
+    L's side face met a circle 1.9 cm deep a step after its bottom face was the
+    contact). Each outline edge whose nearest point to the centre is inside it, with
+    the centre on the edge's outer side, and each convex vertex whose region holds
+    the centre (nearest point of both its edges) is a feature; those with distance
+    s < radius + margin are returned. The nearest feature is the field's contact
+    (distance d(c), normal grad f(c)); the others are the faces the circle may meet
+    next. Returns (row into centre (F,), unit normal out of the mesh toward the
+    centre (F, 2), distance s (F,), key element (F,): edge or vertex index, key start
+    (F,): ``mesh_contacts.EDGE_START`` for an edge, ``VERTEX_START`` for a vertex).
+    """
+    from .mesh_contacts import EDGE_START, VERTEX_START
+
+    m = len(vertices)
+    edge = np.roll(vertices, -1, axis=0) - vertices                      # (M, 2)
+    rel = centre[:, None, :] - vertices[None, :, :]                      # (K, M, 2)
+    along = np.sum(rel * edge[None], axis=2)                              # (K, M)
+    t = along / np.sum(edge * edge, axis=1)[None, :]
+    outer = rel[:, :, 0] * edge[None, :, 1] - rel[:, :, 1] * edge[None, :, 0]
+    foot = rel - t[:, :, None] * edge[None]
+    face = (t > 0.0) & (t < 1.0) & (outer > 0.0)
+    previous = np.roll(edge, 1, axis=0)                                   # edge into vertex j
+    convex = previous[:, 0] * edge[:, 1] - previous[:, 1] * edge[:, 0] > 0.0
+    corner = (convex[None, :] & (along <= 0.0)
+              & (np.sum(rel * previous[None], axis=2) >= 0.0))
+    offset = np.where(face[:, :, None], foot, rel)
+    distance = np.hypot(offset[:, :, 0], offset[:, :, 1])
+    row, j = np.nonzero((face | corner) & (distance < radius + margin))
+    s = distance[row, j]
+    normal = offset[row, j] / s[:, None]
+    start = np.where(face[row, j], EDGE_START, VERTEX_START)
+    return row, normal, s, j % m, start
 
 
 def collide_meshes(mesh_a: Shape, mesh_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
