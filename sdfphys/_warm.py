@@ -8,12 +8,13 @@ in the on-disk cache forks a child (``start``): it runs the stages after the con
 rows' preparation on no contacts, last stage first (``World._compile_ahead``), which
 compiles the same kernels with the same argument types into the same cache, and exits.
 The parent goes on with the collisions and the preparation, then waits for the child
-(``join``) and loads the rest instead of compiling it (numba checks the cache before
-compiling, and writes a cache file under a temporary name and renames it, so a reader
-never sees half of one). The trajectory is the same either way, only the wait shorter.
-Racing the child instead of waiting for it compiled much of the substep kernels twice,
-in both processes at once; running the collision stage's pair groups in reverse in the
-child gained nothing on the showcase: the groups share the descent's kernels.
+(``join``, at most JOIN_SECONDS) and loads the rest instead of compiling it (numba
+checks the cache before compiling, and writes a cache file under a temporary name and
+renames it, so a reader never sees half of one). The trajectory is the same either
+way, only the wait shorter. Racing the child instead of waiting for it compiled much of
+the substep kernels twice, in both processes at once; running the collision stage's
+pair groups in reverse in the child gained nothing on the showcase: the groups share
+the descent's kernels.
 
 The child writes nothing but cache files: its standard streams go to the null device,
 it closes every other inherited descriptor (a video encoder's pipe must see its end of
@@ -31,7 +32,7 @@ import signal
 import threading
 from typing import Any
 
-__all__ = ["CHILD_SECONDS", "join", "start"]
+__all__ = ["CHILD_SECONDS", "JOIN_SECONDS", "join", "start"]
 
 _started = False
 #: Set while no child runs (``join``).
@@ -40,6 +41,9 @@ _done.set()
 #: The child ends itself after this long whatever it is doing (SIGALRM's default
 #: action): a lock another thread of the parent held at the fork cannot keep it alive.
 CHILD_SECONDS = 900
+#: The parent waits at most this long for the child, then compiles what is left itself
+#: (a child several times slower than the joint scenes' 45 s on this machine).
+JOIN_SECONDS = 240
 
 
 def _cold() -> bool:
@@ -91,7 +95,8 @@ def _reap(pid: int) -> None:
         _done.set()
 
 
-def join(timeout: float = CHILD_SECONDS) -> None:
-    """Wait until the child (if any) has exited: the parent calls it where it would start
-    compiling what the child compiles (``World.step``, before the substeps)."""
+def join(timeout: float = JOIN_SECONDS) -> None:
+    """Wait until the child (if any) has exited, at most ``timeout`` s: the parent calls
+    it where it would start compiling what the child compiles (``World.step``, before
+    the substeps)."""
     _done.wait(timeout)

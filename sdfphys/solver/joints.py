@@ -444,9 +444,9 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out, direct):
 
     g: (rax, ray, rbx, rby, dx, dy, qa, qb) the arms, the separation d = pB - pA (m) and
     the angles (rad) now. soft: (J, 2, 3) the rigid rows' coefficients, linear and
-    angular (``stiffened_softness``). direct: the equality rows (``joint_direct`` bits
-    POINT, ANGLE, PERP, AXIAL) this pass leaves to the island's direct solve. Returns
-    the new velocities."""
+    angular (``stiffened_softness``). direct: the equality rows (bits POINT_ROWS,
+    ANGLE_ROW, PERP_ROW, AXIAL_ROW) this pass leaves to the island's direct solve
+    (``joint_direct``). Returns the new velocities."""
     rax, ray, rbx, rby, dx, dy, qa, qb = g
     kind = r.kind[j]
     lin = soft[j, 0]

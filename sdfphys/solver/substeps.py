@@ -462,7 +462,7 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
     stiffening parameters (6,), the joint islands' ``joint_direct.DirectPlan``), an
     Output). The joint
     rows are warm started, solved and relaxed before the contacts in each phase (Box2D
-    v3's order), each phase in passes until converged (``joints.joint_passes``), and
+    v3's order), each phase in passes until converged (``joint_direct.joint_passes``), and
     once more after the contacts when there are both: a contact's single pass must not
     open a loaded joint (a folding chain's links touching each other).
 
