@@ -480,6 +480,19 @@ def _to_mesh(x: float, y: float, k: int, cos: np.ndarray, sin: np.ndarray,
 
 
 @njit(cache=True, error_model="numpy")
+def _from_edge(vertices: np.ndarray, j: int, x: float, y: float) -> tuple[float, float]:
+    """(x, y) less its nearest point on the mesh's closed outline's edge j, from vertex
+    j to vertex j + 1 (m, mesh frame)."""
+    m = vertices.shape[0]
+    ax, ay = vertices[j, 0], vertices[j, 1]
+    q = (j + 1) % m
+    ex, ey = vertices[q, 0] - ax, vertices[q, 1] - ay
+    rx, ry = x - ax, y - ay
+    along = min(max((rx * ex + ry * ey) / (ex * ex + ey * ey), 0.0), 1.0)
+    return rx - along * ex, ry - along * ey
+
+
+@njit(cache=True, error_model="numpy")
 def _mesh_compiled(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int,
                    cos: np.ndarray, sin: np.ndarray, offset: np.ndarray, points: np.ndarray,
                    pair: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -592,12 +605,7 @@ def _support(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting_s: 
                               offset)
             d1, d2, first, second = np.inf, np.inf, 0, 0
             for j in range(m):
-                ax, ay = vertices[j, 0], vertices[j, 1]
-                q = (j + 1) % m
-                ex, ey = vertices[q, 0] - ax, vertices[q, 1] - ay
-                rx, ry = zx - ax, zy - ay
-                along = min(max((rx * ex + ry * ey) / (ex * ex + ey * ey), 0.0), 1.0)
-                hx, hy = rx - along * ex, ry - along * ey
+                hx, hy = _from_edge(vertices, j, zx, zy)
                 distance = math.sqrt(hx * hx + hy * hy)
                 if distance < d1:
                     d2, second, d1, first = d1, first, distance, j
@@ -623,12 +631,7 @@ def _support(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting_s: 
                           offset)
         nearest, arg = np.inf, 0
         for j in range(m):
-            ax, ay = vertices[j, 0], vertices[j, 1]
-            q = (j + 1) % m
-            ex, ey = vertices[q, 0] - ax, vertices[q, 1] - ay
-            rx, ry = fx - ax, fy - ay
-            along = min(max((rx * ex + ry * ey) / (ex * ex + ey * ey), 0.0), 1.0)
-            gx, gy = rx - along * ex, ry - along * ey
+            gx, gy = _from_edge(vertices, j, fx, fy)
             gap = gx * gx + gy * gy
             if gap < nearest or (j == 0 and math.isnan(gap)):
                 nearest, arg = gap, j

@@ -59,6 +59,7 @@ from .joints import (
     WELD,
     WHEEL,
     Output,
+    joint_geometry,
     solve_joints,
     stiffen,
 )
@@ -243,13 +244,7 @@ def _row_geometry(com, angle, rows, j, code):
         cax, cay, qa = com[a, 0], com[a, 1], angle[a]
     if b >= 0:
         cbx, cby, qb = com[b, 0], com[b, 1], angle[b]
-    c, s = math.cos(qa), math.sin(qa)
-    rax = c * rows.local_a[j, 0] - s * rows.local_a[j, 1]
-    ray = s * rows.local_a[j, 0] + c * rows.local_a[j, 1]
-    c2, s2 = math.cos(qb), math.sin(qb)
-    rbx = c2 * rows.local_b[j, 0] - s2 * rows.local_b[j, 1]
-    rby = s2 * rows.local_b[j, 0] + c2 * rows.local_b[j, 1]
-    dx, dy = cbx + rbx - cax - rax, cby + rby - cay - ray
+    rax, ray, rbx, rby, dx, dy, qa, qb = joint_geometry(cax, cay, qa, cbx, cby, qb, rows, j)
     if code == _X:
         return 1.0, 0.0, -ray, -rby, dx
     if code == _Y:
@@ -262,6 +257,7 @@ def _row_geometry(com, angle, rows, j, code):
             return 0.0, 0.0, 0.0, 0.0, 0.0
         ux, uy = dx / length, dy / length
         return ux, uy, rax * uy - ray * ux, rbx * uy - rby * ux, length - rows.length[j]
+    c, s = math.cos(qa), math.sin(qa)
     ux = c * rows.local_axis[j, 0] - s * rows.local_axis[j, 1]
     uy = s * rows.local_axis[j, 0] + c * rows.local_axis[j, 1]
     if code == _PERP:

@@ -51,6 +51,7 @@ __all__ = [
     "POINT_ROWS",
     "JointRows",
     "Output",
+    "joint_geometry",
     "joint_reactions",
     "solve_joints",
     "spring_softness",
@@ -550,6 +551,20 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out, direct):
 
 
 @njit(cache=True)
+def joint_geometry(cax, cay, qa, cbx, cby, qb, rows, j):
+    """(rax, ray, rbx, rby, dx, dy, qa, qb) of joint j with body a at (cax, cay) m, angle qa
+    rad and body b at (cbx, cby), qb (zeros for the world): the arms rA = R(qa) local_a,
+    rB = R(qb) local_b, the separation d = (xb + rB) - (xa + rA) (m) and the angles."""
+    c, s = math.cos(qa), math.sin(qa)
+    rax = c * rows.local_a[j, 0] - s * rows.local_a[j, 1]
+    ray = s * rows.local_a[j, 0] + c * rows.local_a[j, 1]
+    c, s = math.cos(qb), math.sin(qb)
+    rbx = c * rows.local_b[j, 0] - s * rows.local_b[j, 1]
+    rby = s * rows.local_b[j, 0] + c * rows.local_b[j, 1]
+    return rax, ray, rbx, rby, cbx + rbx - cax - rax, cby + rby - cay - ray, qa, qb
+
+
+@njit(cache=True)
 def solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows, phase,
                  soft, spring, inv_h, out, direct):
     """One pass of ``phase`` (WARM, SOLVE, RELAX, REACTION) over every joint, in order.
@@ -576,13 +591,7 @@ def solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, 
             mb, ib = inv_mass[b], inv_inertia[b]
         if ma == 0.0 and ia == 0.0 and mb == 0.0 and ib == 0.0 and phase != REACTION:
             continue
-        c, s = math.cos(qa), math.sin(qa)
-        rax = c * rows.local_a[j, 0] - s * rows.local_a[j, 1]
-        ray = s * rows.local_a[j, 0] + c * rows.local_a[j, 1]
-        c, s = math.cos(qb), math.sin(qb)
-        rbx = c * rows.local_b[j, 0] - s * rows.local_b[j, 1]
-        rby = s * rows.local_b[j, 0] + c * rows.local_b[j, 1]
-        g = (rax, ray, rbx, rby, cbx + rbx - cax - rax, cby + rby - cay - ray, qa, qb)
+        g = joint_geometry(cax, cay, qa, cbx, cby, qb, rows, j)
         v = _joint((vax, vay, wa, vbx, vby, wb), (ma, ia, mb, ib), g, rows, j, phase, soft,
                    spring, inv_h, out,
                    direct[j] if phase == SOLVE or phase == RELAX else 0)
