@@ -26,8 +26,8 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from numba import njit
 
+from ._jit import njit
 from .errors import SpecError, check_number, check_points
 from .sdf.base import Field
 

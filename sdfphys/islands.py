@@ -12,7 +12,8 @@ body index, so the labels are deterministic and independent of the contact order
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ._jit import njit
 
 __all__ = ["island_roots"]
 

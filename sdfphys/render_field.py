@@ -15,8 +15,8 @@ from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numba import njit
 
+from ._jit import njit
 from .sdf import compiled
 from .sdf.compiled import run, scratch
 

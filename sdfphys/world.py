@@ -367,19 +367,24 @@ class World(WorldJoints):
         if self.step_count == 0:
             _warm.start(self)
         sleeping = self.settings.sleeping
-        if not sleeping or np.any(self._active()):
+        # What moves this step (awake dynamic bodies, moving kinematic ones), None
+        # without sleeping: changed within a step only by waking islands.
+        active = self._active() if sleeping else None
+        if not sleeping or np.any(active):
             bodies = self._body_state()
             start_com, start_angle = bodies.com.copy(), bodies.angle.copy()
-            contacts = self._collide(bodies)
+            contacts = self._collide(bodies, active)
             if sleeping:
-                if self._wake_reached(contacts):
+                if self._wake_reached(contacts, active):
+                    active = self._active()
                     bodies = self._body_state()
-                    contacts = self._collide(bodies)
+                    contacts = self._collide(bodies, active)
                 # Kinematic-static pairs, found because moving kinematic bodies were
                 # movable for the wake test, carry no row.
                 awake = self._awake()
-                self._contacts = contacts = contacts.take(awake[contacts.body_a]
-                                                          | awake[contacts.body_b])
+                keep = awake[contacts.body_a] | awake[contacts.body_b]
+                if not np.all(keep):
+                    self._contacts = contacts = contacts.take(keep)
             constraints = self._prepare(contacts, bodies)
             if self.step_count == 0:
                 _warm.join()
@@ -388,7 +393,7 @@ class World(WorldJoints):
             self._time_of_impact(bodies, start_com, start_angle)
             self._store_impulses(constraints)
             if sleeping:
-                self._fall_asleep(bodies, constraints, start_com, start_angle)
+                self._fall_asleep(bodies, constraints, start_com, start_angle, awake, active)
         self.time += self.settings.dt
         self.step_count += 1
 
@@ -400,7 +405,8 @@ class World(WorldJoints):
         bodies = self._body_state()
         constraints = ContactConstraints.empty()
         if self.settings.sleeping:
-            self._fall_asleep(bodies, constraints, bodies.com.copy(), bodies.angle.copy())
+            self._fall_asleep(bodies, constraints, bodies.com.copy(), bodies.angle.copy(),
+                              self._awake(), self._active())
         apply_restitution(bodies, constraints, self.settings)
         self._substeps(constraints, bodies)
 
@@ -430,12 +436,12 @@ class World(WorldJoints):
         moving = (v[:, 0] != 0.0) | (v[:, 1] != 0.0) | (w != 0.0)
         return self._awake() | ((self._view("kind") == _KINEMATIC) & moving)
 
-    def _wake_reached(self, contacts: Contacts) -> bool:
-        """Wake the sleeping islands that an active body has a contact with; True if any."""
+    def _wake_reached(self, contacts: Contacts, active: np.ndarray) -> bool:
+        """Wake the sleeping islands that an active body (``active`` (B,) bool,
+        ``_active``) has a contact with; True if any."""
         asleep = self._view("asleep")
         if len(contacts) == 0 or not np.any(asleep):
             return False
-        active = self._active()
         a, b = contacts.body_a, contacts.body_b
         reached = np.r_[b[active[a] & asleep[b]], a[asleep[a] & active[b]]]
         if len(reached) == 0:
@@ -472,19 +478,20 @@ class World(WorldJoints):
         self._sleep_contacts = c.take(~(woken[c.body_a] | woken[c.body_b]))
 
     def _fall_asleep(self, bodies: BodyState, constraints: ContactConstraints,
-                     start_com: np.ndarray, start_angle: np.ndarray) -> None:
+                     start_com: np.ndarray, start_angle: np.ndarray, awake: np.ndarray,
+                     active: np.ndarray) -> None:
         """Count each awake body's rest (``sleep.rest_times``) and put to sleep the
         islands that have rested ``time_to_sleep``: velocities zeroed, their contacts and
         impulses moved to the sleeping caches. start_com, start_angle: the poses at the
-        start of the step (a body pushed out of overlap moves without velocity)."""
+        start of the step (a body pushed out of overlap moves without velocity); awake,
+        active: (B,) bool, ``_awake`` and ``_active`` of this step."""
         s = self.settings
-        awake = self._awake()
         sleep_time = self._view("sleep_time")
         rest_times(bodies.velocity, bodies.angular_velocity, bodies.com, bodies.angle,
                    start_com, start_angle, self._view("radius"), awake, sleep_time, s.dt,
                    s.sleep_speed)
         c = constraints
-        kinematic = self._active() & (self._view("kind") == _KINEMATIC)
+        kinematic = active & (self._view("kind") == _KINEMATIC)
         sleep_time[c.body_b[kinematic[c.body_a]]] = 0.0
         sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
         root = island_roots(bodies.inv_mass, *self._joints.linked(c.body_a, c.body_b))
@@ -516,12 +523,14 @@ class World(WorldJoints):
         return [collision_shape(shape, s.gradient, s.field_representation, s.grid_cell)
                 for shape in self._shapes]
 
-    def _collide(self, bodies: BodyState) -> Contacts:
+    def _collide(self, bodies: BodyState, active: np.ndarray | None) -> Contacts:
         """Stage 1: every contact closer than the speculative distance plus the pair's
         reach at the step's starting velocities (``sdfphys.collide``), once per step;
-        each pair kind whose narrowphase ran is counted (PAIR_STAGES)."""
+        each pair kind whose narrowphase ran is counted (PAIR_STAGES). active: (B,)
+        bool, the bodies that move (``_active``) with sleeping, None without: the
+        dynamic ones."""
         ran: set[tuple[str, str]] = set()
-        movable = self._active() if self.settings.sleeping else self._view("kind") == _DYNAMIC
+        movable = self._view("kind") == _DYNAMIC if active is None else active
         self._contacts = find_contacts(self._collision_shapes(), self._view("shape_id"),
                                        bodies.com, bodies.angle, movable, self.settings,
                                        bodies.velocity, bodies.angular_velocity, ran,

@@ -32,8 +32,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from ..sdf.compiled import run, scratch
 from ._descent_kernels import (
     accept,

@@ -44,8 +44,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from ._descent_paths import (
     ALT,
     AT_BEST,

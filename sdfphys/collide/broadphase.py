@@ -53,7 +53,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from .._jit import njit
 
 __all__ = ["SWEEP_BODIES", "candidate_pairs", "world_bounds"]
 

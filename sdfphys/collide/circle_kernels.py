@@ -48,8 +48,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from .broadphase import body_box
 from .polygons import clip_pair
 

@@ -51,8 +51,8 @@ import math
 from dataclasses import dataclass, fields
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from ..sdf import Field, compiled, safe_normalize
 from ..sdf.compiled import run, scratch
 from ..settings import Settings

@@ -67,8 +67,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from ..sdf import Field, compiled, safe_normalize
 from ..settings import Settings
 from ..shapes import Shape

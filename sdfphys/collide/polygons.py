@@ -40,7 +40,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from .._jit import njit
 
 __all__ = ["SOURCE_CLIP", "clip_pair", "polygon_contacts", "polygon_table"]
 

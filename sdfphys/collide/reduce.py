@@ -42,7 +42,8 @@ contacts); the input order fixes every tie, so the result is deterministic.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from .._jit import njit
 
 __all__ = ["reduce_contacts"]
 

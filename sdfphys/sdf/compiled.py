@@ -66,8 +66,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from . import conics, curved, folded, grid, operators, polygonal
 from .base import Field, safe_normalize
 from .opcodes import (

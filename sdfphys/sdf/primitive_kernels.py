@@ -14,8 +14,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from .opcodes import (
     _EXP_SCALE,
     _POLYGON_EDGE,

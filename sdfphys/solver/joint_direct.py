@@ -44,8 +44,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from .joints import (
     ANGLE_ROW,
     AXIAL_ROW,

@@ -38,8 +38,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from .softness import soft_coefficients
 
 __all__ = [

@@ -13,8 +13,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from ..collide.contacts import Contacts
 from .warm_start import ImpulseCache
 
@@ -130,12 +130,15 @@ def _effective_mass(ma: float, ia: float, mb: float, ib: float, rax: float, ray:
 
 
 @njit(cache=True)
-def _prepare_kernel(com, velocity, angular_velocity, inv_mass, inv_inertia, body_friction,
-                    body_restitution, body_a, body_b, point, normal, depth,
-                    anchor_a, anchor_b, arm_a, arm_b, base_separation, normal_mass,
-                    tangent_mass, friction, restitution, relative_velocity, stiff, pair_start,
-                    gravity):
-    """Fill the per-contact arrays (see ContactConstraints); returns the number of pairs."""
+def _prepare_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
+                    body_friction, body_restitution, body_a, body_b, point, normal, depth,
+                    anchor_a, anchor_b, arm_a, arm_b, local_anchor, base_separation,
+                    normal_mass, tangent_mass, friction, restitution, relative_velocity, stiff,
+                    pair_start, gravity):
+    """Fill the per-contact arrays (see ContactConstraints); returns the number of pairs.
+
+    local_anchor (K, 2): the contact point in body a's frame, R(-angle_a) (point - com_a).
+    """
     n_pairs = 0
     for k in range(depth.shape[0]):
         a = body_a[k]
@@ -170,6 +173,10 @@ def _prepare_kernel(com, velocity, angular_velocity, inv_mass, inv_inertia, body
         arm_a[k, 1] = ray
         arm_b[k, 0] = rbx
         arm_b[k, 1] = rby
+        cos_a = math.cos(angle[a])
+        sin_a = math.sin(angle[a])
+        local_anchor[k, 0] = cos_a * rax + sin_a * ray
+        local_anchor[k, 1] = cos_a * ray - sin_a * rax
         normal_mass[k] = _effective_mass(ma, ia, mb, ib, rax, ray, rbx, rby, nx, ny)
         tangent_mass[k] = _effective_mass(ma, ia, mb, ib, rax, ray, rbx, rby, ny, -nx)
         friction[k] = math.sqrt(body_friction[a] * body_friction[b])
@@ -206,26 +213,20 @@ def prepare_contacts(contacts: Contacts, bodies: BodyState, friction: np.ndarray
     """
     k = len(contacts)
     anchor_a, anchor_b = np.empty((k, 2)), np.empty((k, 2))
-    arm_a, arm_b = np.empty((k, 2)), np.empty((k, 2))
+    arm_a, arm_b, local_anchor = np.empty((k, 2)), np.empty((k, 2)), np.empty((k, 2))
     base_separation, normal_mass, tangent_mass = np.empty(k), np.empty(k), np.empty(k)
     mixed_friction, mixed_restitution, relative_velocity = np.empty(k), np.empty(k), np.empty(k)
     stiff = np.empty(k, np.int64)
     pair_start = np.empty(k + 1, np.int64)
     normal = np.ascontiguousarray(contacts.normal, dtype=np.float64)
     n_pairs = _prepare_kernel(
-        bodies.com, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
+        bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
         bodies.inv_inertia, friction, restitution, contacts.body_a, contacts.body_b,
         np.ascontiguousarray(contacts.point, dtype=np.float64), normal,
         np.ascontiguousarray(contacts.depth, dtype=np.float64),
-        anchor_a, anchor_b, arm_a, arm_b, base_separation, normal_mass, tangent_mass,
-        mixed_friction,
-        mixed_restitution, relative_velocity, stiff, pair_start,
+        anchor_a, anchor_b, arm_a, arm_b, local_anchor, base_separation, normal_mass,
+        tangent_mass, mixed_friction, mixed_restitution, relative_velocity, stiff, pair_start,
         np.zeros(2) if gravity is None else np.asarray(gravity, np.float64))
-    # Contact points in body a's frame: R(-angle_a) (point - com_a).
-    angle_a = bodies.angle[contacts.body_a]
-    cos_a, sin_a = np.cos(angle_a), np.sin(angle_a)
-    local_anchor = np.column_stack([cos_a * arm_a[:, 0] + sin_a * arm_a[:, 1],
-                                    cos_a * arm_a[:, 1] - sin_a * arm_a[:, 0]])
     if warm_starting:
         normal_impulse, tangent_impulse = cache.match(contacts.body_a, contacts.body_b,
                                                       contacts.feature, local_anchor,

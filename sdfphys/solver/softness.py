@@ -13,8 +13,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from ..islands import island_roots
 from ..settings import Settings
 

@@ -39,8 +39,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from ..settings import Settings
 from .joint_direct import joint_passes, plan
 from .joints import (

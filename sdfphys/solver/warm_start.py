@@ -10,7 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
+
+from .._jit import njit
 
 __all__ = ["ImpulseCache"]
 
@@ -98,12 +99,20 @@ class ImpulseCache:
         normal, tangent = np.zeros(k), np.zeros(k)
         if k == 0 or len(self) == 0:
             return normal, tangent
-        nb = int(max(self.body_b.max(), body_b.max(), self.body_a.max(), body_a.max())) + 1
+        by_place = anchor is not None and tolerance > 0.0 and len(self.anchor) == len(self)
         source = np.full(k, -1, np.int64)
         if _merge_keys(self.body_a, self.body_b, self.feature, body_a, body_b, feature,
                        source):
-            pair_order = np.arange(len(self))           # already sorted by pair
+            if by_place and np.any(source < 0):
+                # Both sorted by pair: each new row's pair is a range of the old rows.
+                lo, hi = np.empty(k, np.int64), np.empty(k, np.int64)
+                _pair_ranges(self.body_a, self.body_b, body_a, body_b, lo, hi)
+                _match_by_place(source, lo, hi, np.arange(len(self)),
+                                np.ascontiguousarray(self.anchor, dtype=np.float64),
+                                np.ascontiguousarray(anchor, dtype=np.float64), tolerance)
         else:
+            nb = int(max(self.body_b.max(), body_b.max(), self.body_a.max(),
+                         body_a.max())) + 1
             ranks = np.unique(np.concatenate([self.feature, feature]), return_inverse=True)[1]
             nf = int(ranks.max()) + 1
             old_key = (self.body_a * nb + self.body_b) * nf + ranks[:len(self)]
@@ -113,18 +122,15 @@ class ImpulseCache:
             where = np.minimum(np.searchsorted(sorted_key, new_key), len(sorted_key) - 1)
             hit = sorted_key[where] == new_key
             source[hit] = order[where[hit]]
-            pair_order = None
-        if anchor is not None and tolerance > 0.0 and len(self.anchor) == len(self) \
-                and np.any(source < 0):
-            old_pair = self.body_a * nb + self.body_b
-            if pair_order is None:
+            if by_place and np.any(source < 0):
+                old_pair = self.body_a * nb + self.body_b
                 pair_order = np.argsort(old_pair, kind="stable")
-            new_pair = body_a * nb + body_b
-            lo = np.searchsorted(old_pair[pair_order], new_pair, side="left")
-            hi = np.searchsorted(old_pair[pair_order], new_pair, side="right")
-            _match_by_place(source, lo, hi, pair_order,
-                            np.ascontiguousarray(self.anchor, dtype=np.float64),
-                            np.ascontiguousarray(anchor, dtype=np.float64), tolerance)
+                new_pair = body_a * nb + body_b
+                lo = np.searchsorted(old_pair[pair_order], new_pair, side="left")
+                hi = np.searchsorted(old_pair[pair_order], new_pair, side="right")
+                _match_by_place(source, lo, hi, pair_order,
+                                np.ascontiguousarray(self.anchor, dtype=np.float64),
+                                np.ascontiguousarray(anchor, dtype=np.float64), tolerance)
         found = source >= 0
         normal[found] = self.normal_impulse[source[found]]
         tangent[found] = self.tangent_impulse[source[found]]
@@ -151,6 +157,23 @@ def _merge_keys(old_a, old_b, old_f, new_a, new_b, new_f, source):
         if u < n_old and (old_a[u], old_b[u], old_f[u]) == key:
             source[k] = u
     return True
+
+
+@njit(cache=True)
+def _pair_ranges(old_a, old_b, new_a, new_b, lo, hi):
+    """lo[k], hi[k]: the old rows [lo, hi) of new row k's pair (body_a, body_b), both
+    lists sorted by pair (a merge; an empty range where the old list has no such pair)."""
+    u = 0
+    n_old = old_a.shape[0]
+    for k in range(new_a.shape[0]):
+        pair = (new_a[k], new_b[k])
+        while u < n_old and (old_a[u], old_b[u]) < pair:
+            u += 1
+        lo[k] = u
+        end = u
+        while end < n_old and old_a[end] == pair[0] and old_b[end] == pair[1]:
+            end += 1
+        hi[k] = end
 
 
 @njit(cache=True)
