@@ -25,6 +25,8 @@ from sdfphys.sweep import Run, run_one, split_values
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ["scenes/box_stack.toml", "scenes/ball_drop.toml"]
 SWEEP = [*SCENES, "--set", "sim.substeps=2,4", "--seconds", "0.5"]
+#: 12 runs of 2 s: a sweep to interrupt.
+LONGER = [*SCENES, "--set", "sim.substeps=2,4", "--seconds", "2", "--repeat", "3"]
 #: Columns that depend on the machine's load, not on the physics.
 TIMINGS = ("wall_s", "ms_per_step")
 BIN = Path(sys.executable).parent
@@ -33,6 +35,20 @@ BIN = Path(sys.executable).parent
 def sweep(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "sdfphys", "sweep", *map(str, args)],
                           capture_output=True, text=True, cwd=ROOT, check=False, timeout=300)
+
+
+def start_sweep(*args: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "sdfphys", "sweep", *map(str, args)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=ROOT)
+
+
+def wait_for_a_row(out: Path, process: subprocess.Popen) -> None:
+    """Until the sweep ``process`` has written its first row to ``out``."""
+    deadline = time.monotonic() + 120
+    while not out.exists() or len(out.read_text().splitlines()) < 2:
+        assert time.monotonic() < deadline and process.poll() is None
+        time.sleep(0.05)
 
 
 def table(path: Path) -> list[dict[str, str]]:
@@ -140,6 +156,7 @@ def test_resume_of_a_complete_file_runs_nothing(local_table, capsys):
     assert local_table.read_bytes() == before
 
 
+@pytest.mark.slow
 def test_resume_runs_only_the_missing_rows(local_table, tmp_path):
     out = tmp_path / "part.csv"
     lines = local_table.read_text().splitlines(keepends=True)
@@ -189,15 +206,8 @@ def test_a_worker_killed_mid_sweep_loses_no_row(tmp_path):
     try:
         first = cluster.add_worker()
         cluster.wait_for_workers(1)
-        args = [*SWEEP[:-1], "2", "--repeat", "3", "--scheduler", cluster.address,
-                "-o", out]
-        process = subprocess.Popen([sys.executable, "-m", "sdfphys", "sweep", *args],
-                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                   text=True, cwd=ROOT)
-        deadline = time.monotonic() + 120
-        while not out.exists() or len(out.read_text().splitlines()) < 2:
-            assert time.monotonic() < deadline and process.poll() is None
-            time.sleep(0.05)
+        process = start_sweep(*LONGER, "--scheduler", cluster.address, "-o", out)
+        wait_for_a_row(out, process)
         cluster.add_worker()
         first.kill()
         first.wait()
@@ -216,6 +226,24 @@ def test_a_worker_killed_mid_sweep_loses_no_row(tmp_path):
             hashes = {r["state_hash"] for r in rows
                       if (r["scene"], r["sim.substeps"]) == (scene, value)}
             assert len(hashes) == 1
+
+
+@pytest.mark.slow
+def test_an_interrupted_sweep_keeps_its_rows_and_resumes(tmp_path):
+    out = tmp_path / "interrupted.csv"
+    process = start_sweep(*LONGER, "--workers", "1", "-o", out)
+    wait_for_a_row(out, process)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 130, stderr
+    assert "sdfphys: interrupted (SIGINT)" in stderr
+    kept = table(out)
+    assert 1 <= len(kept) < 12 and all(r["state_hash"] for r in kept)
+    result = sweep(*LONGER, "--workers", "1", "-o", out, "--resume")
+    assert result.returncode == 0, result.stderr
+    rows = table(out)
+    assert len(rows) == 12 and len({tuple(r.values()) for r in rows}) == 12
+    assert all(r in rows for r in kept)
 
 
 @pytest.mark.slow
