@@ -70,8 +70,8 @@ CONNECT_SECONDS = 10
 def cluster_options(parser: argparse.ArgumentParser) -> None:
     """``--workers N | --scheduler ADDRESS`` (sweep and bench)."""
     where = parser.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, metavar="N", help="worker processes of a "
-                       "local Dask cluster (default: one per core)")
+    where.add_argument("--workers", type=int, metavar="N", help="run on a local Dask "
+                       "cluster of N worker processes (sweep's default: one per core)")
     where.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask cluster's "
                        "scheduler, e.g. tcp://host:8786")
 
