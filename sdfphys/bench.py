@@ -49,6 +49,11 @@ Outputs in ``out_dir``: ``bench.csv`` (one row per (scene, setting)), ``bench.md
 (the knob table, the presets per scene, the sweep) and, with matplotlib (the
 ``plot`` extra), ``bench.png``: error against cost per scene with the presets
 marked. ``run_bench(out_dir, quick=True)`` runs a reduced suite for tests.
+
+The scenes run one after the other in this process, or with ``--workers N`` /
+``--scheduler ADDRESS`` (``run_bench(client=...)``) as one task each on a Dask
+cluster, through the machinery of ``sdfphys sweep`` (``sweep.run_tasks``): the same
+rows, in the same order; each cost is still timed within one worker process.
 """
 
 from __future__ import annotations
@@ -62,6 +67,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable, Sequence
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -73,6 +79,7 @@ from .errors import SpecError
 from .interrupt import check as check_interrupt
 from .interrupt import deferred
 from .settings import PRESETS, Settings, preset
+from .sweep import cluster, cluster_options, run_tasks
 
 __all__ = ["COLUMNS", "QUICK_SCENES", "QUICK_SWEEPS", "REFERENCE", "SAMPLE_TIMES", "SCENES",
            "SWEEPS", "BenchResults", "BenchScene", "bench_main", "bench_scene", "markdown",
@@ -322,25 +329,38 @@ def bench_scene(name: str, sweeps: dict[str, tuple[Any, ...]], preset_runs: int,
     return rows
 
 
+def _bench_task(job: tuple[str, bool]) -> tuple[list[dict[str, Any]], list[str]]:
+    """The rows and notes of one scene (a task of ``run_bench``): ``job`` is its name and
+    whether the bench is the quick one."""
+    name, quick = job
+    notes: list[str] = []
+    rows = bench_scene(name, QUICK_SWEEPS if quick else SWEEPS, 1 if quick else 5,
+                       1 if quick else 3, None if quick else notes)
+    return rows, notes
+
+
 def run_bench(out_dir: str | Path, quick: bool = False,
-              progress: Callable[[str], None] | None = None) -> BenchResults:
+              progress: Callable[[str], None] | None = None,
+              client: Any = None) -> BenchResults:
     """Run the study and write ``bench.csv``, ``bench.md`` and ``bench.png`` in ``out_dir``.
 
     quick: the QUICK_SCENES with QUICK_SWEEPS and one timed run per setting (for
     tests); otherwise every scene, every sweep, presets timed as the median of 5
     runs and sweep settings of 3, and the references checked against finer ones.
-    progress: called with one line per scene.
+    progress: called with one line per scene as it finishes. client: a Dask client
+    (``sweep.cluster``) to run the scenes on as tasks; None: in this process.
     """
     start = time.perf_counter()
     out = _output_directory(out_dir)
-    rows: list[dict[str, Any]] = []
-    notes: list[str] = []
-    for name in QUICK_SCENES if quick else tuple(SCENES):
-        rows += bench_scene(name, QUICK_SWEEPS if quick else SWEEPS, 1 if quick else 5,
-                            1 if quick else 3, None if quick else notes)
+    names = QUICK_SCENES if quick else tuple(SCENES)
+    scenes: dict[str, tuple[list[dict[str, Any]], list[str]]] = {}
+    for (name, _), (rows, notes) in run_tasks(_bench_task, [(n, quick) for n in names],
+                                               client):
+        scenes[name] = rows, notes
         if progress is not None:
-            progress(f"{name}: {sum(r['scene'] == name for r in rows)} settings, "
-                     f"{time.perf_counter() - start:.0f} s")
+            progress(f"{name}: {len(rows)} settings, {time.perf_counter() - start:.0f} s")
+    rows = [r for name in names for r in scenes[name][0]]
+    notes = [n for name in names for n in scenes[name][1]]
     csv_path, md_path = out / "bench.csv", out / "bench.md"
     created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
@@ -542,16 +562,19 @@ def _plot(rows: list[dict[str, Any]], path: Path, notes: list[str]) -> Path | No
 
 
 def bench_main(argv: Sequence[str] | None = None) -> int:
-    """``sdfphys bench [-o DIR] [--quick]``: run the study, print the markdown report.
+    """``sdfphys bench [-o DIR] [--quick] [--workers N | --scheduler ADDRESS]``: run the
+    study (on a Dask cluster with either option), print the markdown report.
 
-    Exit 0, or 2 for bad usage (argparse) or an output directory that cannot be one (an
-    existing file: one line saying so, before the study runs). bench.csv, bench.md and
+    Exit 0, or 2 for bad usage (argparse), an output directory that cannot be one (an
+    existing file: one line saying so, before the study runs) or a cluster that cannot
+    be had (no Dask, a scheduler that does not answer). bench.csv, bench.md and
     bench.png in an existing directory are replaced.
     """
     parser = argparse.ArgumentParser(prog="sdfphys bench", description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--output", default="bench-out", metavar="DIR",
                         help="directory for bench.csv, bench.md and bench.png")
     parser.add_argument("--quick", action="store_true", help="the reduced suite (~1 min)")
+    cluster_options(parser)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exit_:
@@ -561,8 +584,16 @@ def bench_main(argv: Sequence[str] | None = None) -> int:
     except SpecError as err:
         print(f"sdfphys bench: error: -o {err}", file=sys.stderr)
         return 2
-    results = run_bench(args.output, quick=args.quick,
-                        progress=lambda line: print(line, flush=True))
+    with ExitStack() as stack:
+        client = None
+        if args.workers is not None or args.scheduler is not None:
+            try:
+                client = stack.enter_context(cluster(args.workers, args.scheduler))
+            except SpecError as err:
+                print(f"sdfphys bench: error: {err}", file=sys.stderr)
+                return 2
+        results = run_bench(args.output, quick=args.quick,
+                            progress=lambda line: print(line, flush=True), client=client)
     print(results.markdown_path.read_text())
     print(f"wrote {results.csv_path}, {results.markdown_path}"
           + (f", {results.png_path}" if results.png_path else " (no PNG: see Details)"))

@@ -1,17 +1,18 @@
-"""The ``sdfphys`` command line (DESIGN.md): run | play | record | check | bench | compare.
+"""The ``sdfphys`` command line (DESIGN.md): run | play | record | check | bench | compare |
+sweep.
 
 Exit status: 0 ok, 1 a check failed, 2 bad input or usage, 130 after SIGINT (Ctrl-C)
 and 143 after SIGTERM. Bad input prints one line ``sdfphys: error: <file>: <key
 path>: <what is wrong>`` and no traceback, a signal one line ``sdfphys: interrupted
 (SIGTERM)``; nothing half-written is left behind (video sinks, trajectory files and
-bench outputs are written under a temporary name and renamed when complete).
+bench outputs are written under a temporary name and renamed when complete; a sweep's
+results file keeps the rows of the runs that finished, for ``--resume``).
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
-import hashlib
 import math
 import os
 import signal
@@ -20,12 +21,11 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-import numpy as np
-
 from . import __version__, interrupt
 from .errors import SpecError
 from .limits import MAX_DURATION, MAX_STEPS, check_steps
 from .progress import Progress
+from .summary import simulate, state_hash, steps_for
 from .trajectory import TOLERANCES
 
 # pygame prints a banner when imported unless this is set; the commands import it late.
@@ -38,15 +38,9 @@ class UsageError(Exception):
     """Bad command-line usage that argparse cannot see (exit 2)."""
 
 
-def state_hash(world) -> str:
-    """SHA-256 (first 16 hex digits) of the bodies' positions, angles and velocities."""
-    digest = hashlib.sha256()
-    for array in (world.position, world.angle, world.velocity, world.angular_velocity):
-        digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
-    return digest.hexdigest()[:16]
-
-
 def _parser() -> argparse.ArgumentParser:
+    from .sweep import cluster_options
+
     parser = argparse.ArgumentParser(prog="sdfphys", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"sdfphys {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -75,7 +69,7 @@ def _parser() -> argparse.ArgumentParser:
                        + ")")
 
     sub.add_parser("bench", help="the speed/accuracy study: CSV, markdown table and plot "
-                   "(options: -o DIR, --quick)", add_help=False)
+                   "(options: -o DIR, --quick, --workers N | --scheduler ADDRESS)", add_help=False)
 
     compare = sub.add_parser("compare", help="the same scene in pymunk: contact and "
                              "trajectory differences (exit 2 if pymunk cannot model it)")
@@ -85,6 +79,25 @@ def _parser() -> argparse.ArgumentParser:
     compare.add_argument("--set", dest="overrides", action="append", default=[],
                          metavar="KEY=VALUE", help="override a scene value")
     _max_steps_option(compare)
+
+    sweep = sub.add_parser("sweep", help="scenes x settings x repeats on a Dask cluster, "
+                           "one CSV row per run (needs the cluster extra)")
+    sweep.add_argument("scenes", nargs="+", metavar="SCENE")
+    sweep.add_argument("--set", dest="sets", action="append", default=[],
+                       metavar="KEY=V1,V2,...", help="a swept scene value, e.g. "
+                       "sim.substeps=4,8 (one column per key; the cross product is run)")
+    sweep.add_argument("--quality", metavar="Q1,Q2", help="quality presets to sweep "
+                       "(default: each scene's own)")
+    sweep.add_argument("--seconds", type=float, help="simulated seconds (default: each "
+                       "scene's sim.duration)")
+    _max_steps_option(sweep)
+    sweep.add_argument("--repeat", type=int, default=1, metavar="R",
+                       help="runs of each setting (default 1)")
+    sweep.add_argument("-o", "--output", required=True, metavar="RESULTS.csv",
+                       help="CSV written row by row as runs finish")
+    sweep.add_argument("--resume", action="store_true",
+                       help="continue RESULTS.csv: skip the runs it already has")
+    cluster_options(sweep)
     return parser
 
 
@@ -131,7 +144,7 @@ def _dispatch(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     try:
         commands = {"run": _run, "play": _play, "record": _record, "check": _check,
-                    "compare": _compare}
+                    "compare": _compare, "sweep": _sweep}
         return commands[args.command](args)
     except (SpecError, UsageError) as err:
         print(f"sdfphys: error: {err}", file=sys.stderr)
@@ -150,17 +163,22 @@ def _read(args):
     return read_scene(args.scene, args.overrides, quality=args.quality)
 
 
-def _seconds(args, scene) -> float:
-    """``--seconds`` if given (checked > 0, finite, at most ``MAX_DURATION``), else the
-    scene's duration."""
-    seconds = scene.duration if args.seconds is None else args.seconds
-    if not (math.isfinite(seconds) and seconds > 0):
-        raise UsageError(f"--seconds: must be a positive number, got {args.seconds}")
-    if seconds > MAX_DURATION:
-        raise UsageError(f"--seconds: must be <= {MAX_DURATION:g}, got {seconds:g}")
+def _check_seconds(args) -> None:
+    """``--seconds`` if given: > 0, finite, at most ``MAX_DURATION``; ``--max-steps`` if
+    given: >= 1 (a scene's own duration is checked when it is read)."""
+    if args.seconds is not None:
+        if not (math.isfinite(args.seconds) and args.seconds > 0):
+            raise UsageError(f"--seconds: must be a positive number, got {args.seconds}")
+        if args.seconds > MAX_DURATION:
+            raise UsageError(f"--seconds: must be <= {MAX_DURATION:g}, got {args.seconds:g}")
     if args.max_steps is not None and args.max_steps < 1:
         raise UsageError(f"--max-steps: must be >= 1, got {args.max_steps}")
-    return seconds
+
+
+def _seconds(args, scene) -> float:
+    """``--seconds`` if given (checked), else the scene's duration."""
+    _check_seconds(args)
+    return scene.duration if args.seconds is None else args.seconds
 
 
 def _run(args) -> int:
@@ -173,17 +191,25 @@ def _run(args) -> int:
     scene = _read(args)
     seconds = _seconds(args, scene)
     dt, fps = scene.settings.dt, scene.render.fps
-    steps = max(1, round(seconds / dt))
+    steps = steps_for(seconds, dt)
     frames = round(seconds * fps) if args.output else 0
     check_steps(steps, "steps", args.max_steps)
     check_steps(frames, "frames", args.max_steps)
     world = scene.build()
     sink = renderer = surface = None
     progress = Progress(steps, "steps", "sdfphys run")
-    energy0 = world.kinetic_energy() + world.potential_energy()
-    max_depth = 0.0
     frame = 0
-    start = time.perf_counter()
+
+    def draw_due(step: int) -> None:
+        """Frame k shows the state at time k / fps: draw every frame due by now (after
+        the last step, the rest: rounding leaves them showing the final state)."""
+        nonlocal frame
+        while sink is not None and frame < frames and (
+                step == steps or frame / fps <= step * dt + 1e-9):
+            renderer.draw(surface, world, hud=scene.render.hud)
+            sink.write(surface)
+            frame += 1
+
     try:
         if args.output:
             import pygame
@@ -195,43 +221,34 @@ def _run(args) -> int:
             renderer = Renderer(Camera(scene.render.center, scene.render.scale, size))
             surface = pygame.Surface(size)
             sink = open_sink(args.output, size, fps)
-        for step in range(steps + 1):
-            # Frame k shows the state at time k / fps: draw every frame due by now.
-            while sink is not None and frame < frames and frame / fps <= step * dt + 1e-9:
-                renderer.draw(surface, world, hud=scene.render.hud)
-                sink.write(surface)
-                frame += 1
-            if step == steps:
-                break
-            world.step()
-            interrupt.check()
-            if len(world.contacts):
-                max_depth = max(max_depth, float(world.contacts.depth.max()))
-            progress.update(step + 1)
+        summary = simulate(world, steps, draw_due, progress.update)
         if sink is not None:
-            while frame < frames:     # rounding: the last frames show the final state
-                renderer.draw(surface, world, hud=scene.render.hud)
-                sink.write(surface)
-                frame += 1
             sink.close()
     except BaseException:
         progress.close()
         if sink is not None:
             sink.abort()
         raise
-    wall = time.perf_counter() - start
     progress.close()
-    energy1 = world.kinetic_energy() + world.potential_energy()
     print(f"steps          {steps}")
-    print(f"wall time      {wall:.3f} s")
-    print(f"steps/s        {steps / wall:.1f}")
-    print(f"max penetration {max_depth:.6f} m")
-    print(f"energy         {energy0:.6g} J -> {energy1:.6g} J")
-    print(f"state hash     {state_hash(world)}")
+    print(f"wall time      {summary.wall_s:.3f} s")
+    print(f"steps/s        {steps / summary.wall_s:.1f}")
+    print(f"max penetration {summary.max_penetration:.6f} m")
+    print(f"energy         {summary.energy_start:.6g} J -> {summary.energy_end:.6g} J")
+    print(f"state hash     {summary.state_hash}")
     if sink is not None:
         print(f"wrote          {args.output} ({sink.frames_written} frames at "
               f"{sink.fps_written:g} fps)")
     return 0
+
+
+def _sweep(args) -> int:
+    _check_seconds(args)
+    from .sweep import sweep_main
+
+    return sweep_main(args.scenes, args.sets, args.quality, args.seconds, args.repeat,
+                      args.output, resume=args.resume, workers=args.workers,
+                      scheduler=args.scheduler, max_steps=args.max_steps)
 
 
 def _play(args) -> int:
@@ -251,7 +268,7 @@ def _record(args) -> int:
         raise UsageError(f"{args.output}: no such directory {str(output.parent)!r}")
     scene = _read(args)
     seconds = _seconds(args, scene)
-    steps = max(1, round(seconds / scene.settings.dt))
+    steps = steps_for(seconds, scene.settings.dt)
     check_steps(steps, "steps", args.max_steps)
     start = time.perf_counter()
     progress = Progress(steps, "steps", "sdfphys record")

@@ -36,7 +36,8 @@ from .sdf.build import suggest
 from .settings import Settings, preset
 from .shapes import shape_from_spec
 
-__all__ = ["BodySpec", "RenderSpec", "Scene", "apply_overrides", "load_scene", "read_scene"]
+__all__ = ["BodySpec", "RenderSpec", "Scene", "apply_overrides", "load_scene", "read_scene",
+           "read_scene_file"]
 
 TOP_KEYS = ("version", "world", "sim", "render", "body", "joint")
 WORLD_KEYS = ("gravity",)
@@ -128,17 +129,7 @@ def read_scene(scene: str | Path | Mapping, overrides: Sequence[str] = (),
         data = _deep_copy(scene) if overrides or quality is not None else dict(scene)
     else:
         source = str(scene)
-        try:
-            with open(scene, "rb") as handle:
-                data = tomllib.load(handle)
-        except FileNotFoundError:
-            raise SpecError("", "no such scene file", source) from None
-        except IsADirectoryError:
-            raise SpecError("", "is a directory, not a scene file", source) from None
-        except tomllib.TOMLDecodeError as err:
-            raise SpecError("", f"not valid TOML: {err}", source) from None
-        except (OSError, UnicodeDecodeError) as err:
-            raise SpecError("", f"cannot be read: {err}", source) from None
+        data = read_scene_file(scene)
     try:
         data = apply_overrides(data, overrides)
         if quality is not None:
@@ -150,6 +141,23 @@ def read_scene(scene: str | Path | Mapping, overrides: Sequence[str] = (),
         raise err.in_file(source) from None
     parsed.data = data
     return parsed
+
+
+def read_scene_file(path: str | Path) -> dict:
+    """The TOML of the scene file at ``path``, not yet validated (a SpecError naming the
+    file if it cannot be read or parsed)."""
+    source = str(path)
+    try:
+        with open(path, "rb") as handle:
+            return tomllib.load(handle)
+    except FileNotFoundError:
+        raise SpecError("", "no such scene file", source) from None
+    except IsADirectoryError:
+        raise SpecError("", "is a directory, not a scene file", source) from None
+    except tomllib.TOMLDecodeError as err:
+        raise SpecError("", f"not valid TOML: {err}", source) from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise SpecError("", f"cannot be read: {err}", source) from None
 
 
 def apply_overrides(data: dict, overrides: Sequence[str]) -> dict:
