@@ -22,6 +22,9 @@ The ranges, and why (SI units):
 - density ``DENSITY`` (1e-6 to 1e6 kg/m^2), mass ``MASS`` (1e-9 to 1e12 kg): every
   product a step forms (m v^2, m g h, impulses, inverse masses) stays finite by many
   decades; mass ratios beyond 1000:1 lose accuracy long before (stability study);
+- collision filter: ``category`` and ``mask`` 64-bit fields (0 to 2^64 - 1), ``group``
+  a signed 64-bit integer (``collide.filter``); ``gravity_scale`` within
+  +-``MAX_GRAVITY_SCALE`` (1e3: 1e3 g is the largest gravity, ``MAX_GRAVITY``);
 - friction 0 to ``MAX_FRICTION`` (100: a friction cone of 89.4 degrees already holds
   whatever it touches); restitution 0 to 1; damping 0 to ``MAX_DAMPING`` (1e6 1/s);
 - time: ``settings.dt`` from ``MIN_DT`` (1 us) to 1 s; a duration at most
@@ -34,13 +37,13 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
-from .errors import SpecError, check_number, check_vec2
+from .errors import SpecError, check_int, check_number, check_vec2
 
 __all__ = ["DENSITY", "FAR", "KINDS", "MASS", "MAX_ANGULAR_SPEED", "MAX_DAMPING",
-           "MAX_DURATION", "MAX_FRICTION", "MAX_GRAVITY", "MAX_SIZE", "MAX_SPEED",
-           "MAX_STEPS", "MIN_DT", "MIN_SIZE", "BodyValues", "check_angle", "check_angular_velocity",
-           "check_body", "check_gravity", "check_position", "check_positive", "check_steps",
-           "check_velocity"]
+           "MAX_DURATION", "MAX_FRICTION", "MAX_GRAVITY", "MAX_GRAVITY_SCALE", "MAX_SIZE",
+           "MAX_SPEED", "MAX_STEPS", "MIN_DT", "MIN_SIZE", "BodyValues", "check_angle",
+           "check_angular_velocity", "check_body", "check_flag", "check_gravity",
+           "check_position", "check_positive", "check_steps", "check_velocity"]
 
 #: Largest |coordinate| of a position (m) and |angle| (rad): 2^17, see the module docstring.
 FAR = 2.0 ** 17
@@ -57,6 +60,11 @@ MAX_SPEED = 1e4
 MAX_ANGULAR_SPEED = 1e4
 #: Largest |gravity|, m/s^2.
 MAX_GRAVITY = 1e4
+#: Largest |gravity_scale| of a body (1e3 g ~ MAX_GRAVITY).
+MAX_GRAVITY_SCALE = 1e3
+#: Largest category or mask (64 bits) and group (signed 64 bits).
+MAX_BITS = (1 << 64) - 1
+MAX_GROUP = (1 << 63) - 1
 #: Density range, kg/m^2.
 DENSITY = (1e-6, 1e6)
 #: Mass range, kg.
@@ -157,17 +165,25 @@ class BodyValues(NamedTuple):
     kind: str
     linear_damping: float
     angular_damping: float
+    category: int = 1
+    mask: int = MAX_BITS
+    group: int = 0
+    sensor: bool = False
+    gravity_scale: float = 1.0
 
 
 def check_body(prefix: str = "", *, position: Any = (0.0, 0.0), angle: Any = 0.0,
                velocity: Any = (0.0, 0.0), angular_velocity: Any = 0.0,
                density: Any = 1.0, mass: Any = None, friction: Any = 0.5,
                restitution: Any = 0.0, kind: Any = "dynamic", linear_damping: Any = 0.0,
-               angular_damping: Any = 0.0) -> BodyValues:
+               angular_damping: Any = 0.0, category: Any = 1, mask: Any = MAX_BITS,
+               group: Any = 0, sensor: Any = False, gravity_scale: Any = 1.0) -> BodyValues:
     """Every value of a body checked against the ranges above.
 
     ``prefix`` is the key path of the body (``body[2]`` in a scene, empty for the API):
     errors name ``{prefix}.{key}``. A static body may not be given a velocity.
+    category, mask: 0 to 2^64 - 1; group: a signed 64-bit integer (``collide.filter``);
+    sensor: a bool; gravity_scale: within +-MAX_GRAVITY_SCALE.
     """
     if kind not in KINDS:
         raise SpecError(_under(prefix, "kind"),
@@ -194,4 +210,17 @@ def check_body(prefix: str = "", *, position: Any = (0.0, 0.0), angle: Any = 0.0
         linear_damping=check_number(linear_damping, _under(prefix, "linear_damping"),
                                     low=0.0, high=MAX_DAMPING),
         angular_damping=check_number(angular_damping, _under(prefix, "angular_damping"),
-                                     low=0.0, high=MAX_DAMPING))
+                                     low=0.0, high=MAX_DAMPING),
+        category=check_int(category, _under(prefix, "category"), low=0, high=MAX_BITS),
+        mask=check_int(mask, _under(prefix, "mask"), low=0, high=MAX_BITS),
+        group=check_int(group, _under(prefix, "group"), low=-MAX_GROUP, high=MAX_GROUP),
+        sensor=check_flag(sensor, _under(prefix, "sensor")),
+        gravity_scale=check_number(gravity_scale, _under(prefix, "gravity_scale"),
+                                   low=-MAX_GRAVITY_SCALE, high=MAX_GRAVITY_SCALE))
+
+
+def check_flag(value: Any, path: str) -> bool:
+    """A bool (true or false in a scene)."""
+    if not isinstance(value, bool):
+        raise SpecError(path, f"must be true or false, got {value!r}")
+    return value

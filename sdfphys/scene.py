@@ -7,7 +7,8 @@ The format is the DESIGN.md contract::
     [sim]     quality = "balanced", duration = 5.0, and any Settings knob by name
     [render]  size = [960, 540], center = [0.0, 4.0], scale = 50.0, fps = 60
     [[body]]  name, shape, position, angle, velocity, angular_velocity,
-              density | mass, friction, restitution, static, kinematic
+              density | mass, friction, restitution, static, kinematic,
+              category, mask, group, sensor, gravity_scale (docs/toolkit.md)
     [[joint]] type, name, bodies, anchor | anchors, axis, length, limits, motor,
               spring, collide_connected (``sdfphys.joints``)
 
@@ -31,7 +32,7 @@ from typing import Any, NamedTuple
 
 from .errors import SpecError, check_int, check_number, check_vec2
 from .joints import JointSpec, check_joint
-from .limits import MAX_DURATION, BodyValues, check_body, check_gravity
+from .limits import MAX_BITS, MAX_DURATION, BodyValues, check_body, check_flag, check_gravity
 from .sdf.build import suggest
 from .settings import Settings, preset
 from .shapes import shape_from_spec
@@ -43,7 +44,8 @@ TOP_KEYS = ("version", "world", "sim", "render", "body", "joint")
 WORLD_KEYS = ("gravity",)
 RENDER_KEYS = ("size", "center", "scale", "fps", "hud")
 BODY_KEYS = ("name", "shape", "position", "angle", "velocity", "angular_velocity",
-             "density", "mass", "friction", "restitution", "static", "kinematic")
+             "density", "mass", "friction", "restitution", "static", "kinematic",
+             "category", "mask", "group", "sensor", "gravity_scale")
 SIM_EXTRA_KEYS = ("quality", "duration")
 
 
@@ -73,6 +75,11 @@ class BodySpec(NamedTuple):
     friction: float = 0.5
     restitution: float = 0.0
     kind: str = "dynamic"
+    category: int = 1
+    mask: int = MAX_BITS
+    group: int = 0
+    sensor: bool = False
+    gravity_scale: float = 1.0
 
 
 @dataclass
@@ -104,7 +111,7 @@ class Scene:
 
         world = World(gravity=self.gravity, settings=self.settings)
         for b in self.bodies:
-            values = BodyValues(*b[2:], linear_damping=0.0, angular_damping=0.0)
+            values = BodyValues(*b[2:11], 0.0, 0.0, *b[11:])
             try:     # an SDF shape integrates its mass properties on first use, here
                 world._add(b.shape, values, b.name)     # values checked by _parse_body
             except SpecError as err:
@@ -346,16 +353,14 @@ def _parse_body(data: Any, i: int) -> BodySpec:
         raise SpecError(f"{path}.mass", "give density or mass, not both")
     values = check_body(path, kind=kind, **{key: body[key] for key in _VALUE_KEYS
                                             if key in body})
-    return BodySpec(name, shape, *values[:9])
+    return BodySpec(name, shape, *values[:9], *values[11:])
 
 
 #: Body keys whose values ``limits.check_body`` validates.
 _VALUE_KEYS = ("position", "angle", "velocity", "angular_velocity", "density", "mass",
-               "friction", "restitution")
+               "friction", "restitution", "category", "mask", "group", "sensor",
+               "gravity_scale")
 
 
 def _flag(body: dict, key: str, path: str) -> bool:
-    value = body.get(key, False)
-    if not isinstance(value, bool):
-        raise SpecError(f"{path}.{key}", f"must be true or false, got {value!r}")
-    return value
+    return check_flag(body.get(key, False), f"{path}.{key}")

@@ -116,6 +116,10 @@ class Settings:
         high=10.0)
     restitution_threshold: float = _knob(
         1.0, "m/s", "Approach speed below which restitution is ignored.", low=0.0)
+    hit_speed: float = _knob(
+        1.0, "m/s", "Approach speed above which a contact that carried impulse is "
+        "reported as a hit (World.events; Box2D v3's hit event threshold). No effect "
+        "on the motion.", low=0.0)
     restitution_passes: int = _knob(
         2, "", "Restitution velocity passes after the substeps (one overshoots at "
         "e = 1; 0 disables restitution).", low=0, high=64)

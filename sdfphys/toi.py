@@ -108,24 +108,32 @@ def _candidate_pairs(fast: np.ndarray, start: np.ndarray, end: np.ndarray,
 
 
 def _distance(fields: list[Field], shape_id: np.ndarray, com: np.ndarray,
-              angle: np.ndarray, target: np.ndarray, points: np.ndarray) -> np.ndarray:
+              angle: np.ndarray, target: np.ndarray, points: np.ndarray,
+              gradient: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """f_target(points): each point (P, 2, world) in the body frame of its target (P,).
 
     One field evaluation per distinct target shape (instancing), through the field's
     compiled program where it compiles (``sdf.compiled.distance``; the numpy
     ``distance`` otherwise): the same values as the numpy fields, bit for bit but for
     the kinds listed in ``sdf.compiled``'s "Rounding" (an ulp or so), and the values
-    the contact pipeline's compiled queries see.
+    the contact pipeline's compiled queries see. gradient: also return the field's
+    gradient (P, 2) turned into the world frame (``sdf.compiled.evaluate``).
     """
     rel = points - com[target]
     c, s = np.cos(angle[target]), np.sin(angle[target])
     local = np.column_stack([c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1]])
     d = np.empty(len(points))
+    g = np.empty((len(points), 2))
     ids = shape_id[target]
     for sid in np.unique(ids):
         rows = np.flatnonzero(ids == sid)
-        d[rows] = compiled.distance(fields[sid], local[rows])
-    return d
+        if gradient:
+            d[rows], g[rows] = compiled.evaluate(fields[sid], local[rows])
+        else:
+            d[rows] = compiled.distance(fields[sid], local[rows])
+    if not gradient:
+        return d
+    return d, np.column_stack([c * g[:, 0] - s * g[:, 1], s * g[:, 0] + c * g[:, 1]])
 
 
 def _advance(gap: np.ndarray, speed: np.ndarray, slop: float,
@@ -259,9 +267,11 @@ def step_fractions(fields: list[Field], vertices: list[np.ndarray | None],
                    shape_id: np.ndarray, start: np.ndarray, end: np.ndarray,
                    start_angle: np.ndarray, end_angle: np.ndarray, radius: np.ndarray,
                    core_radius: np.ndarray, fast: np.ndarray, slop: float,
-                   group: np.ndarray | None = None) -> np.ndarray:
+                   group: np.ndarray | None = None, pair_filter=None) -> np.ndarray:
     """The world's stage: min of ``time_of_impact`` and ``vertex_time_of_impact`` (F,),
-    the candidate pairs found once for both (arguments as theirs). group: (B,) labels
+    the candidate pairs found once for both (arguments as theirs). pair_filter: the
+    bodies' ``collide.filter.PairFilter`` or None: pairs it filters out, and pairs with a
+    sensor, are not traced. group: (B,) labels
     of bodies joined by joints (``joints.JointTable.groups``), or None: a fast body is
     not stopped against a body of its own group (the group stops as one, and rewinding
     one member against another would open their joints).
@@ -279,6 +289,9 @@ def step_fractions(fields: list[Field], vertices: list[np.ndarray | None],
     if len(fast) == 0:
         return np.ones(0)
     pairs = _candidate_pairs(fast, start, end, radius)
+    if pair_filter is not None:
+        keep = pair_filter.allows(fast[pairs[0]], pairs[1], solid=True)
+        pairs = (pairs[0][keep], pairs[1][keep])
     if group is not None:
         keep = group[fast[pairs[0]]] != group[pairs[1]]
         pairs = (pairs[0][keep], pairs[1][keep])

@@ -28,12 +28,15 @@ import numpy as np
 
 from . import _warm
 from .collide import Contacts, find_contacts
+from .collide.filter import PairFilter
 from .collide.narrowphase import PAIR_FUNCTIONS
-from .errors import SpecError
+from .errors import SpecError, check_number
+from .events import Events, StepReport, WorldContacts, sensor_overlaps
 from .islands import island_roots
 from .joints import JointTable, WorldJoints
 from .limits import (
     KINDS,
+    MAX_BITS,
     BodyValues,
     check_angle,
     check_angular_velocity,
@@ -54,7 +57,7 @@ from .solver import (
     solve_substeps,
     store_impulses,
 )
-from .toi import fast_bodies, step_fractions
+from .toi import _distance, fast_bodies, step_fractions
 
 __all__ = ["KINDS", "PAIR_STAGES", "STAGES", "World"]
 
@@ -95,6 +98,13 @@ _ARRAYS: dict[str, tuple[tuple[int, ...], Any]] = {
     "sleep_time": ((), np.float64),
     "asleep": ((), np.bool_),
     "island": ((), np.int64),
+    "category": ((), np.uint64),
+    "mask": ((), np.uint64),
+    "group": ((), np.int64),
+    "sensor": ((), np.bool_),
+    "gravity_scale": ((), np.float64),
+    "force": ((2,), np.float64),
+    "torque": ((), np.float64),
 }
 
 
@@ -110,6 +120,20 @@ def _rotate_one(v: np.ndarray, angle: float) -> np.ndarray:
     a = np.array([angle], dtype=np.float64)
     c, s = float(np.cos(a)[0]), float(np.sin(a)[0])
     return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def _width(shape: Shape, across: np.ndarray) -> np.ndarray:
+    """(N,) m: ``shape``'s extent along the body-frame unit directions ``across`` (N, 2):
+    2 r for a circle, the vertices' spread for a polygon, the body-frame bounding box's
+    corners' spread otherwise."""
+    if shape.kind == "circle":
+        return np.full(len(across), 2.0 * shape.radius)
+    points = getattr(shape, "vertices", None)
+    if points is None:
+        x0, y0, x1, y1 = shape.bounds()
+        points = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    projection = across @ np.asarray(points, np.float64).T
+    return projection.max(axis=1) - projection.min(axis=1)
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
@@ -146,13 +170,19 @@ class World(WorldJoints):
         self._name_set: set[str] = set()
         self._shape_rows: dict[int, tuple] = {}
         self._created = 0
-        self._contacts = Contacts.empty()
+        self._contacts = WorldContacts.empty()
         self._impulses = ImpulseCache.empty()
         # Sleeping islands' contacts and impulses, kept for their warm start (``sleep``).
-        self._sleep_contacts = Contacts.empty()
+        self._sleep_contacts = WorldContacts.empty()
         self._sleep_impulses = ImpulseCache.empty()
         self._islands_made = 0
         self._joints = JointTable()     # ``joints.WorldJoints``
+        self._filter: PairFilter | None = None   # ``_pair_filter``
+        self._filter_stale = False
+        self._scaled = False            # some gravity_scale is not 1 (``_pair_filter``)
+        self._forces = False            # some force or torque held for the next step
+        self._report = StepReport()     # ``events``
+        self._sensor_pass: tuple[Contacts, np.ndarray] | None = None
 
     # ----------------------------------------------------------------------------------
     # Bodies
@@ -186,7 +216,9 @@ class World(WorldJoints):
                  velocity: Any = (0.0, 0.0), angular_velocity: float = 0.0,
                  density: float = 1.0, mass: float | None = None, friction: float = 0.5,
                  restitution: float = 0.0, kind: str = "dynamic", name: str | None = None,
-                 linear_damping: float = 0.0, angular_damping: float = 0.0) -> int:
+                 linear_damping: float = 0.0, angular_damping: float = 0.0,
+                 category: int = 1, mask: int = MAX_BITS, group: int = 0,
+                 sensor: bool = False, gravity_scale: float = 1.0) -> int:
         """Add a body and return its index.
 
         shape: a Shape or a scene shape dict (``{"type": "circle", "radius": 0.5}``).
@@ -196,6 +228,9 @@ class World(WorldJoints):
         friction >= 0, restitution in [0, 1]. kind: dynamic | static | kinematic.
         name: unique; default ``body<k>`` with k counting every body ever added.
         linear_damping, angular_damping: 1/s (v / (1 + h c) per substep).
+        category, mask (64-bit fields), group (signed): the collision filter, Box2D's
+        rule (``collide.filter``); sensor: reports overlaps (``events``), takes no
+        contact response; gravity_scale: the body feels gravity_scale * gravity.
         Every value is checked as a scene's (``limits``: finite, within the documented
         ranges); a bad one raises SpecError naming the argument, e.g.
         ``position[0]: must be finite, got nan``.
@@ -204,7 +239,9 @@ class World(WorldJoints):
         values = check_body(position=position, angle=angle, velocity=velocity,
                             angular_velocity=angular_velocity, density=density, mass=mass,
                             friction=friction, restitution=restitution, kind=kind,
-                            linear_damping=linear_damping, angular_damping=angular_damping)
+                            linear_damping=linear_damping, angular_damping=angular_damping,
+                            category=category, mask=mask, group=group, sensor=sensor,
+                            gravity_scale=gravity_scale)
         if name is not None and (not isinstance(name, str) or not name):
             raise SpecError("name", f"must be a non-empty string, got {name!r}")
         if kind == "dynamic" and not math.isfinite(shape.radius):
@@ -254,6 +291,14 @@ class World(WorldJoints):
         d["sleep_time"][i] = 0.0
         d["asleep"][i] = False
         d["island"][i] = 0
+        d["category"][i] = values.category
+        d["mask"][i] = values.mask
+        d["group"][i] = values.group
+        d["sensor"][i] = values.sensor
+        d["gravity_scale"][i] = values.gravity_scale
+        d["force"][i] = 0.0
+        d["torque"][i] = 0.0
+        self._filter_stale = True
         self._names.append(name)
         self._name_set.add(name)
         self._created += 1
@@ -289,6 +334,8 @@ class World(WorldJoints):
         self._contacts = self._contacts.without_body(i)
         self._sleep_contacts = self._sleep_contacts.without_body(i)
         self._joints.without_body(i)
+        self._report = self._report.without_body(i)
+        self._filter_stale = True
 
     def set_state(self, index: int, *, position: Any = None, angle: float | None = None,
                   velocity: Any = None, angular_velocity: float | None = None) -> None:
@@ -363,6 +410,8 @@ class World(WorldJoints):
         with ``settings.sleeping``, islands at rest fall asleep (``sdfphys.sleep``): a
         step with no awake dynamic and no moving kinematic body only advances the time,
         and sleeping islands within contact range of an active body wake first.
+        Afterwards ``contacts`` carry the step's impulses and ``events`` its events;
+        forces and torques held by ``apply_force`` and ``apply_torque`` are released.
         """
         if self.step_count == 0:
             _warm.start(self)
@@ -392,10 +441,187 @@ class World(WorldJoints):
             self._restitution(constraints, bodies)
             self._time_of_impact(bodies, start_com, start_angle)
             self._store_impulses(constraints)
+            self._contacts = rows = WorldContacts.of(contacts, constraints.total_normal_impulse,
+                                                     constraints.total_tangent_impulse)
             if sleeping:
                 self._fall_asleep(bodies, constraints, start_com, start_angle, awake, active)
+            self._record(rows, constraints.relative_velocity)
+        else:
+            self._report = self._report.idle()
+        if self._forces:
+            self._data["force"][:self._n] = 0.0
+            self._data["torque"][:self._n] = 0.0
+            self._forces = False
         self.time += self.settings.dt
         self.step_count += 1
+
+    def _pair_filter(self) -> PairFilter | None:
+        """The bodies' collision filter, or None while every body has the default
+        category, mask and group and none is a sensor (then nothing is filtered and
+        nothing computed); rebuilt, with ``_scaled``, after bodies are added or removed."""
+        if self._filter_stale:
+            v = self._view
+            special = (np.any(v("category") != 1) or np.any(v("mask") != MAX_BITS)
+                       or np.any(v("group") != 0) or np.any(v("sensor")))
+            self._filter = (PairFilter(v("category"), v("mask"), v("group"), v("sensor"))
+                            if special else None)
+            self._scaled = bool(np.any(v("gravity_scale") != 1.0))
+            self._filter_stale = False
+        return self._filter
+
+    def _accelerations(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Per body, (linear (B, 2) m/s^2, angular (B,) rad/s^2): gravity_scale * gravity
+        plus the held force / mass and torque / inertia, for the substeps; None while
+        every gravity scale is 1 and no force is held (gravity alone, as before)."""
+        self._pair_filter()                     # refreshes _scaled
+        if not (self._forces or self._scaled):
+            return None
+        scale = self._view("gravity_scale")
+        inv_mass = self._view("inv_mass")
+        linear = scale[:, None] * self._gravity + self._view("force") * inv_mass[:, None]
+        return linear, self._view("torque") * self._view("inv_inertia")
+
+    def _record(self, rows: WorldContacts, relative_velocity: np.ndarray) -> None:
+        """Keep what ``events`` needs of this step (references; sensor overlaps, if any
+        sensor took part, resolved now: they carry over steps that do not test them)."""
+        s = self.settings
+        before = self._report
+        sensors = before.sensors[:0]
+        if self._sensor_pass is not None:
+            found, movable = self._sensor_pass
+            sensors = sensor_overlaps(found, self._view("sensor"), before.sensors, movable)
+            self._sensor_pass = None
+        self._report = StepReport([self._contacts, self._sleep_contacts], before.touching,
+                                  sensors, before.sensors, rows, relative_velocity,
+                                  s.linear_slop, s.hit_speed)
+
+    @property
+    def events(self) -> Events:
+        """The last step's events (``events.Events``, docs/toolkit.md): ``begin``,
+        ``end`` (K, 2) body pairs (lower index first) that started / stopped touching,
+        ``sensor_begin``, ``sensor_end`` (K, 2) (sensor, visitor) rows, ``hit``
+        (``events.Hits``: body_a, body_b, point, normal, speed > ``Settings.hit_speed``).
+        Empty before the first step and after a step that moved nothing. Computed on
+        first request from what the step kept (a step costs nothing for it)."""
+        return self._report.events(self._n)
+
+    @property
+    def sensor_overlaps(self) -> np.ndarray:
+        """(K, 2) int64 (sensor, visitor) pairs overlapping after the last step."""
+        return _read_only(self._report.sensors.copy())
+
+    # ----------------------------------------------------------------------------------
+    # Forces and impulses
+    # ----------------------------------------------------------------------------------
+
+    def _targets(self, index: Any, vectors: Any, name: str,
+                 width: int = 2) -> tuple[np.ndarray, np.ndarray]:
+        """(bodies (N,), values (N, width) or (N,)): ``index`` an int or index array
+        (negative counts from the end), ``vectors`` one value or one per body; checked
+        (SpecError naming ``name``, IndexError for a bad index)."""
+        idx = np.atleast_1d(np.asarray(index))
+        if idx.ndim != 1 or not (np.issubdtype(idx.dtype, np.integer) or len(idx) == 0):
+            raise SpecError("i", f"must be a body index or an array of them, got {index!r}")
+        idx = idx.astype(np.int64)
+        if np.any((idx < -self._n) | (idx >= self._n)):
+            bad = idx[(idx < -self._n) | (idx >= self._n)][0]
+            raise IndexError(f"body index {bad} out of range ({self._n} bodies)")
+        idx = idx % max(self._n, 1)
+        try:
+            values = np.asarray(vectors, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise SpecError(name, f"must be numbers, got {vectors!r}") from None
+        shape = (width,) if width > 1 else ()
+        if values.shape not in (shape, (len(idx),) + shape):
+            want = "(2,) or (N, 2)" if width > 1 else "a number or (N,)"
+            raise SpecError(name, f"must be {want} for N = {len(idx)} bodies, "
+                                  f"got shape {values.shape}")
+        if not np.all(np.isfinite(values)):
+            raise SpecError(name, "must be finite")
+        return idx, np.broadcast_to(values, (len(idx),) + shape)
+
+    def _lever(self, idx: np.ndarray, vectors: np.ndarray, point: Any) -> np.ndarray:
+        """(N,) the torque arm cross product (point - com) x vector, 0 without a point."""
+        if point is None:
+            return np.zeros(len(idx))
+        _, p = self._targets(idx, point, "point")
+        r = p - self._view("com")[idx]
+        return r[:, 0] * vectors[:, 1] - r[:, 1] * vectors[:, 0]
+
+    def _wake_bodies(self, idx: np.ndarray) -> None:
+        """Wake the sleeping islands of bodies ``idx``."""
+        asleep = self._view("asleep")[idx]
+        if np.any(asleep):
+            self._wake_islands(self._view("island")[idx[asleep]])
+
+    def apply_force(self, i: Any, force: Any, point: Any = None) -> None:
+        """Hold ``force`` (N, (2,) or (N, 2)) on body ``i`` (an index or (N,) indices)
+        for the next step, at world ``point`` (m, (2,) or (N, 2); None: the centre of
+        mass, no torque): every substep adds h F / m to the velocity and h (r x F) / I to
+        the angular velocity (r = point - centre of mass when applied). Forces add up
+        (repeated indices too) and are released after the step. Static and kinematic
+        bodies ignore them; sleeping ones wake."""
+        idx, f = self._targets(i, force, "force")
+        torque = self._lever(idx, f, point)
+        np.add.at(self._data["force"], idx, f)
+        np.add.at(self._data["torque"], idx, torque)
+        self._forces = True
+        self._wake_bodies(idx)
+
+    def apply_torque(self, i: Any, torque: Any) -> None:
+        """Hold ``torque`` (N m, counter-clockwise; a number or (N,)) on body ``i`` (an
+        index or (N,) indices) for the next step (as ``apply_force``)."""
+        idx, t = self._targets(i, torque, "torque", width=1)
+        np.add.at(self._data["torque"], idx, t)
+        self._forces = True
+        self._wake_bodies(idx)
+
+    def apply_impulse(self, i: Any, impulse: Any, point: Any = None) -> None:
+        """Apply ``impulse`` (N s, (2,) or (N, 2)) to body ``i`` (an index or (N,)
+        indices) now, at world ``point`` (m; None: the centre of mass): v += J / m,
+        w += (r x J) / I. Static and kinematic bodies ignore it; sleeping ones wake."""
+        idx, j = self._targets(i, impulse, "impulse")
+        torque = self._lever(idx, j, point)
+        self._wake_bodies(idx)
+        np.add.at(self._data["velocity"], idx, j * self._view("inv_mass")[idx, None])
+        np.add.at(self._data["angular_velocity"], idx, torque * self._view("inv_inertia")[idx])
+
+    def explode(self, center: Any, radius: float, impulse: float) -> np.ndarray:
+        """A blast at ``center`` (2,) m: every dynamic body whose surface is within
+        ``radius`` (m, > 0) of it gets, at its surface point nearest the centre, an
+        impulse pointing away from the centre of ``impulse`` (N s per metre, >= 0) times
+        the body's width facing the blast (its extent across the blast direction; Box2D
+        v3's impulse per length). A circle of radius r at distance d gets 2 r impulse
+        along its centre's direction, no spin. A body the centre lies inside is pushed
+        from its centre of mass. Widths: exact for circles and polygons, the body-frame
+        bounding box's for SDF bodies. Returns the indices of the bodies pushed (sleeping
+        ones wake)."""
+        c = np.array(check_position(center, "center"))
+        radius = check_number(radius, "radius", low=0.0, low_open=True)
+        impulse = check_number(impulse, "impulse", low=0.0)
+        body = np.flatnonzero(self._view("kind") == _DYNAMIC)
+        if len(body) == 0:
+            return body
+        com, angle = self._view("com"), self._view("angle")
+        shape_id = self._view("shape_id")
+        d, g = _distance([shape.field for shape in self._shapes], shape_id, com, angle, body,
+                         np.broadcast_to(c, (len(body), 2)), gradient=True)
+        near = d < radius
+        body, d, g = body[near], d[near], g[near]
+        inside = d <= 0.0
+        point = np.where(inside[:, None], com[body], c - d[:, None] * g)
+        away = point - c
+        length = np.hypot(away[:, 0], away[:, 1])
+        away = np.where(length[:, None] > 0.0, away / np.where(length > 0.0, length, 1.0)[:, None],
+                        np.array([1.0, 0.0]))
+        # Width across the blast: the body's extent along the perpendicular, in its frame.
+        across = _rotate(np.column_stack([-away[:, 1], away[:, 0]]), -angle[body])
+        width = np.empty(len(body))
+        for sid in np.unique(shape_id[body]):
+            rows = np.flatnonzero(shape_id[body] == sid)
+            width[rows] = _width(self._shapes[sid], across[rows])
+        self.apply_impulse(body, (impulse * width)[:, None] * away, point)
+        return body
 
     def _compile_ahead(self) -> None:
         """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
@@ -513,8 +739,8 @@ class World(WorldJoints):
         self._impulses = cache.take(~rows)
         contacts = self._contacts
         rows = falling[contacts.body_a] | falling[contacts.body_b]
-        self._sleep_contacts = Contacts.concatenate([self._sleep_contacts,
-                                                     contacts.take(rows)])
+        self._sleep_contacts = WorldContacts.concatenate([self._sleep_contacts,
+                                                          contacts.take(rows)])
         self._contacts = contacts.take(~rows)
 
     def _collision_shapes(self) -> list[Shape]:
@@ -528,13 +754,23 @@ class World(WorldJoints):
         reach at the step's starting velocities (``sdfphys.collide``), once per step;
         each pair kind whose narrowphase ran is counted (PAIR_STAGES). active: (B,)
         bool, the bodies that move (``_active``) with sleeping, None without: the
-        dynamic ones."""
+        dynamic ones. Pairs the collision filter rejects never reach the narrowphase;
+        contacts with a sensor are kept aside (``_sensor_pass``, for ``events``) and get
+        no row."""
         ran: set[tuple[str, str]] = set()
         movable = self._view("kind") == _DYNAMIC if active is None else active
-        self._contacts = find_contacts(self._collision_shapes(), self._view("shape_id"),
-                                       bodies.com, bodies.angle, movable, self.settings,
-                                       bodies.velocity, bodies.angular_velocity, ran,
-                                       exclude=self._joints.excluded_pairs(self._n))
+        pair_filter = self._pair_filter()
+        contacts = find_contacts(self._collision_shapes(), self._view("shape_id"),
+                                 bodies.com, bodies.angle, movable, self.settings,
+                                 bodies.velocity, bodies.angular_velocity, ran,
+                                 exclude=self._joints.excluded_pairs(self._n),
+                                 pair_filter=pair_filter)
+        if pair_filter is not None and pair_filter.has_sensors:
+            sensor = pair_filter.sensor
+            touches = sensor[contacts.body_a] | sensor[contacts.body_b]
+            self._sensor_pass = (contacts.take(touches), movable)
+            contacts = contacts.take(~touches)
+        self._contacts = contacts
         self.stage_counts["collide"] += 1
         for a, b in ran:
             self.stage_counts[f"{a}_{b}"] += 1
@@ -559,7 +795,8 @@ class World(WorldJoints):
         s = self.settings
         use_friction = bool(np.any(constraints.friction > 0.0))
         extra, push_outs = solve_substeps(bodies, constraints, self._gravity, s, use_friction,
-                                          (self._joints.rows, self._joints.stiffness_cap))
+                                          (self._joints.rows, self._joints.stiffness_cap),
+                                          self._accelerations())
         counts = self.stage_counts
         counts["converge"] += extra
         counts["push_out"] += push_outs
@@ -596,7 +833,8 @@ class World(WorldJoints):
         fraction = step_fractions([shape.field for shape in self._shapes],
                                   [getattr(shape, "vertices", None) for shape in self._shapes],
                                   self._view("shape_id"), start_com, bodies.com, start_angle,
-                                  bodies.angle, radius, core, fast, s.linear_slop, group)
+                                  bodies.angle, radius, core, fast, s.linear_slop, group,
+                                  self._pair_filter())
         fast, fraction = self._joints.spread_fractions(group, fast, fraction)
         t = fraction[:, None]
         bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])
@@ -649,7 +887,7 @@ class World(WorldJoints):
         feature)."""
         if len(self._sleep_contacts) == 0:
             return self._contacts
-        c = Contacts.concatenate([self._contacts, self._sleep_contacts])
+        c = WorldContacts.concatenate([self._contacts, self._sleep_contacts])
         return c.take(np.lexsort((c.feature, c.body_b, c.body_a)))
 
     @property

@@ -69,6 +69,7 @@ from .circle_kernels import (
     reach_and_boxes,
 )
 from .contacts import Contacts
+from .filter import PairFilter
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .polygons import SOURCE_CLIP, polygon_table
 from .reduce import reduce_contacts
@@ -214,12 +215,20 @@ def _without(pairs: np.ndarray, exclude: np.ndarray | None, n: int) -> np.ndarra
                           assume_unique=False)]
 
 
+def _candidates(boxes: np.ndarray, movable: np.ndarray, exclude: np.ndarray | None, n: int,
+                pair_filter: PairFilter | None) -> np.ndarray:
+    """The broadphase's pairs (P, 2) without the excluded and the filtered ones."""
+    pairs = _without(candidate_pairs(boxes, movable), exclude, n)
+    return pairs if pair_filter is None else pair_filter.pairs(pairs)
+
+
 def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.ndarray,
                   angle: np.ndarray, movable: np.ndarray, settings: Settings,
                   velocity: np.ndarray | None = None,
                   angular_velocity: np.ndarray | None = None,
                   ran: set[tuple[str, str]] | None = None,
-                  fast_circles: bool = True, exclude: np.ndarray | None = None) -> Contacts:
+                  fast_circles: bool = True, exclude: np.ndarray | None = None,
+                  pair_filter: PairFilter | None = None) -> Contacts:
     """All contacts of B bodies this step, sorted by (body_a, body_b, feature).
 
     shapes: Shape objects; shape_id: (B,) int index into ``shapes`` per body;
@@ -233,6 +242,9 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     every stage in numpy and every pair through ``_narrowphase`` (same result).
     exclude: sorted int64 keys i * B + j (i < j) of body pairs that never collide (bodies
     joined by a joint), dropped from the candidate pairs; None: none.
+    pair_filter: the bodies' collision filter (``filter.PairFilter``: category, mask,
+    group, sensors), applied to the candidate pairs before any narrowphase; None: every
+    pair may collide.
     Returns contacts with body_a < body_b, depth > -(settings.speculative_distance +
     reach_a + reach_b), at most settings.contacts_per_pair per pair.
     """
@@ -254,7 +266,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                                   settings.dt)
         boxes = world_bounds(local_bounds[body_shape], radius[body_shape], position, angle,
                              0.5 * margin + reach)
-        pairs = _without(candidate_pairs(boxes, movable), exclude, n)
+        pairs = _candidates(boxes, movable, exclude, n, pair_filter)
         pose = np.column_stack([position, angle])
         return _narrowphase(distinct, body_shape, pairs, pose, margin, reach, settings, ran)
 
@@ -262,7 +274,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     reach_and_boxes(local_bounds, radius, body_shape, position, angle, velocity,
                     angular_velocity, float(settings.dt), 0.5 * margin,
                     UNBOUNDED_RADIUS, REACH_CAP_RADII, reach, boxes)
-    pairs = _without(candidate_pairs(boxes, movable), exclude, n)
+    pairs = _candidates(boxes, movable, exclude, n, pair_filter)
     shape_class = tables.shape_class
     trig = np.empty((n, 4))
     box_body = shape_class[body_shape] == BOX

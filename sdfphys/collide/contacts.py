@@ -40,7 +40,7 @@ class Contacts:
 
     def take(self, index: np.ndarray) -> Contacts:
         """The rows selected by ``index`` (an index or boolean array)."""
-        return Contacts(*(getattr(self, f.name)[index] for f in fields(self)))
+        return type(self)(*(getattr(self, f.name)[index] for f in fields(self)))
 
     @classmethod
     def concatenate(cls, parts: list[Contacts]) -> Contacts:

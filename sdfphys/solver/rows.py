@@ -72,6 +72,8 @@ class ContactConstraints:
     stiff: (K,) int64, 1 if a body is static or kinematic (stiffer softness), else 0.
     normal_impulse, tangent_impulse: (K,) N s, accumulated per substep.
     total_normal_impulse: (K,) N s, sum of the normal impulses applied this step.
+    total_tangent_impulse: (K,) N s, sum of the friction impulses applied this step
+        (along t = (n_y, -n_x)).
     pair_start: (P + 1,) int64, rows pair_start[p]:pair_start[p+1] share one body pair.
     local_anchor: (K, 2) m, the contact point in body a's frame at the start of the
         step (stored for the next step's match by place, ``ImpulseCache.match``).
@@ -96,6 +98,7 @@ class ContactConstraints:
     normal_impulse: np.ndarray
     tangent_impulse: np.ndarray
     total_normal_impulse: np.ndarray
+    total_tangent_impulse: np.ndarray
     pair_start: np.ndarray
     local_anchor: np.ndarray
 
@@ -241,7 +244,8 @@ def prepare_contacts(contacts: Contacts, bodies: BodyState, friction: np.ndarray
         normal_mass=normal_mass, tangent_mass=tangent_mass, friction=mixed_friction,
         restitution=mixed_restitution, relative_velocity=relative_velocity, stiff=stiff,
         normal_impulse=normal_impulse, tangent_impulse=tangent_impulse,
-        total_normal_impulse=np.zeros(k), pair_start=pair_start[:n_pairs + 1],
+        total_normal_impulse=np.zeros(k), total_tangent_impulse=np.zeros(k),
+        pair_start=pair_start[:n_pairs + 1],
         local_anchor=local_anchor)
 
 

@@ -77,6 +77,20 @@ def _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
         angular_velocity[i] = angular_velocity[i] / (1.0 + h * angular_damping[i])
 
 
+@njit(cache=True)
+def _integrate_accelerations(velocity, angular_velocity, inv_mass, linear_damping,
+                             angular_damping, linear, angular, h):
+    """``_integrate_velocities`` with a per-body acceleration in place of gravity:
+    v <- v / (1 + h c) + h a_i, w <- w / (1 + h c_w) + h alpha_i (dynamic bodies)."""
+    for i in range(inv_mass.shape[0]):
+        if inv_mass[i] == 0.0:
+            continue
+        lin = 1.0 / (1.0 + h * linear_damping[i])
+        velocity[i, 0] = velocity[i, 0] * lin + h * linear[i, 0]
+        velocity[i, 1] = velocity[i, 1] * lin + h * linear[i, 1]
+        angular_velocity[i] = angular_velocity[i] / (1.0 + h * angular_damping[i]) + h * angular[i]
+
+
 #: Largest rotation of a body in one substep, rad (Box2D v3's B2_MAX_ROTATION).
 MAX_ROTATION = 0.25 * math.pi
 
@@ -217,8 +231,10 @@ def _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib, rax, ray, rbx, rby, px, py
 
 @njit(cache=True)
 def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pair_start,
-                normal, anchor_a, anchor_b, normal_impulse, tangent_impulse, total_normal_impulse):
-    """Apply the accumulated impulses P = l_n n + l_t t at the current anchors."""
+                normal, anchor_a, anchor_b, normal_impulse, tangent_impulse, total_normal_impulse,
+                total_tangent_impulse):
+    """Apply the accumulated impulses P = l_n n + l_t t at the current anchors; add them to
+    the step's totals (the tangent total is completed by ``solve_substeps``)."""
     for p in range(pair_start.shape[0] - 1):
         first = pair_start[p]
         a = body_a[first]
@@ -234,6 +250,7 @@ def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_
             px = normal_impulse[k] * nx + tangent_impulse[k] * ny
             py = normal_impulse[k] * ny - tangent_impulse[k] * nx
             total_normal_impulse[k] += normal_impulse[k]
+            total_tangent_impulse[k] += tangent_impulse[k]
             vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
                                                anchor_a[k, 0], anchor_a[k, 1],
                                                anchor_b[k, 0], anchor_b[k, 1], px, py)
@@ -452,8 +469,9 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
                      pair_start, loaded, normal, anchor_a0, anchor_b0, anchor_a, anchor_b,
                      base_separation, separation, normal_mass, tangent_mass, friction,
                      bias_rate, mass_scale, impulse_scale, normal_impulse, tangent_impulse,
-                     total_normal_impulse, h, substeps, relax_passes, max_push_out, max_speed,
-                     use_friction, extra_passes, rest_passes, soft_depth, joints):
+                     total_normal_impulse, total_tangent_impulse, h, substeps, relax_passes,
+                     max_push_out, max_speed, use_friction, extra_passes, rest_passes, soft_depth,
+                     joints, accel):
     """All substeps of one step: integrate v, warm start, solve, integrate x, relax.
 
     joints: None (no joints: no joint code is compiled, numba prunes the branches on the
@@ -471,6 +489,9 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
     Rows deeper than ``soft_depth`` (m) are split: their overlap moves the positions
     through pseudo-velocities, integrated after the velocities and then discarded
     (``_integrate_pseudo``; see "Split push-out").
+    accel: None (gravity alone), or per-body accelerations (linear (B, 2) m/s^2,
+    angular (B,) rad/s^2) that replace gravity in the velocity integration
+    (``_integrate_accelerations``: gravity scales, applied forces and torques).
     Returns (the number of those extra passes run, the number of substeps that had a
     split row).
     """
@@ -497,14 +518,18 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
     for _ in range(substeps):
         split = has_contacts and _any_below(separation, -soft_depth)
         push_outs += split
-        _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
-                              angular_damping, gravity, h)
+        if accel is None:
+            _integrate_velocities(velocity, angular_velocity, inv_mass, linear_damping,
+                                  angular_damping, gravity, h)
+        else:
+            _integrate_accelerations(velocity, angular_velocity, inv_mass, linear_damping,
+                                     angular_damping, accel[0], accel[1], h)
         if joints is not None:
             _joint_phase(joints, WARM, inv_h, 1, False)
         if has_contacts:
             _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
                         pair_start, normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
-                        total_normal_impulse)
+                        total_normal_impulse, total_tangent_impulse)
         if joints is not None:
             _joint_phase(joints, SOLVE, inv_h, joint_passes_max, False)
         if has_contacts:
@@ -529,8 +554,13 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
 
 def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: np.ndarray,
                    settings: Settings, use_friction: bool,
-                   joints: tuple[JointRows, np.ndarray] | None = None) -> tuple[int, int]:
+                   joints: tuple[JointRows, np.ndarray] | None = None,
+                   accel: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[int, int]:
     """Run every substep of one step in place (one compiled call).
+
+    accel: None, or (linear (B, 2) m/s^2, angular (B,) rad/s^2): each dynamic body's
+    acceleration, integrated every substep in place of gravity (the world's gravity
+    scales, forces and torques; ``World.apply_force``).
 
     joints: (the joint rows, the cap on their load stiffening (1,)) (``solver.joints``),
     solved with the contacts; the rows' accumulated impulses and the cap are updated in
@@ -561,6 +591,7 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     moving = v[:, 0] ** 2 + v[:, 1] ** 2 + spin * spin > REST_SPEED ** 2
     bias_rate, mass_scale, impulse_scale, loaded_pairs, small = row_softness(
         bodies.inv_mass, c, gravity, settings, moving)
+    start_tangent = c.tangent_impulse.copy()
     passes, push_outs = _substeps_kernel(
         bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
         bodies.inv_inertia, bodies.linear_damping, bodies.angular_damping, bodies.round_body,
@@ -568,12 +599,16 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         c.normal,
         c.anchor_a0, c.anchor_b0, c.anchor_a, c.anchor_b, c.base_separation, c.separation,
         c.normal_mass, c.tangent_mass, c.friction, bias_rate, mass_scale, impulse_scale,
-        c.normal_impulse, c.tangent_impulse, c.total_normal_impulse,
+        c.normal_impulse, c.tangent_impulse, c.total_normal_impulse, c.total_tangent_impulse,
         h, settings.substeps, settings.relax_passes, settings.max_push_out,
         settings.max_linear_speed, use_friction, settings.stiff_iterations - 1,
-        settings.rest_iterations - 1, settings.soft_depth, joint_args)
+        settings.rest_iterations - 1, settings.soft_depth, joint_args, accel)
     if joint_args is not None:
         cap[0] = stiffening[4]
+    # Friction applied in substep s is its accumulated value at the substep's end, l_s:
+    # the warm starts added l_0 .. l_(S-1), and l_S - l_0 completes the sum l_1 .. l_S
+    # (no extra work in the friction rows' passes).
+    c.total_tangent_impulse += c.tangent_impulse - start_tangent
     return int(passes), int(push_outs)
 
 
