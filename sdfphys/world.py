@@ -4,7 +4,8 @@ Body state is a struct of arrays, split hot and cold as in Box2D v3: the solver 
 and writes the centre-of-mass position, angle, velocities and inverse masses; shapes,
 materials, kinds and names are bookkeeping. Arrays grow by doubling, so adding B bodies
 costs O(B). Body indices are the order of ``add_body`` calls (scene order);
-``remove_body(i)`` shifts the later bodies down by one.
+``remove_body(i)`` shifts the later bodies down by one. ``add_body`` returns a ``Body``
+handle that follows its body's index through removals (``World.body(name)`` too).
 
 Frames: a body's frame has its origin at the centre of mass; the shape's ``origin`` is
 where the user's frame origin (a scene's ``position``) sits in it, so the centre of
@@ -21,6 +22,7 @@ Materials mix per contact: friction sqrt(f_a f_b), restitution max(e_a, e_b).
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Mapping
 from typing import Any
 
@@ -45,6 +47,7 @@ from .limits import (
     check_position,
     check_velocity,
 )
+from .sdf.build import suggest
 from .settings import Settings
 from .shapes import Shape, collision_shape, shape_from_spec
 from .sleep import falling_asleep, rest_times
@@ -59,7 +62,7 @@ from .solver import (
 )
 from .toi import _distance, fast_bodies, step_fractions
 
-__all__ = ["KINDS", "PAIR_STAGES", "STAGES", "World"]
+__all__ = ["KINDS", "PAIR_STAGES", "STAGES", "Body", "World"]
 
 #: Body kinds, in the order of their integer codes (``limits.KINDS``).
 _DYNAMIC, _STATIC, _KINEMATIC = range(3)
@@ -105,6 +108,7 @@ _ARRAYS: dict[str, tuple[tuple[int, ...], Any]] = {
     "gravity_scale": ((), np.float64),
     "force": ((2,), np.float64),
     "torque": ((), np.float64),
+    "uid": ((), np.int64),
 }
 
 
@@ -120,6 +124,62 @@ def _rotate_one(v: np.ndarray, angle: float) -> np.ndarray:
     a = np.array([angle], dtype=np.float64)
     c, s = float(np.cos(a)[0]), float(np.sin(a)[0])
     return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+class Body:
+    """A stable handle on one body of a World (``World.add_body``, ``World.body``).
+
+    ``id``: the body's creation number in its world (the k of its default name
+    ``body<k>``), never reused. The handle stands for the body's current index wherever
+    an index goes (``__index__``, ``__array__``: numpy indexing, also by lists of
+    handles, ``set_state``, ``remove_body``, ``apply_force``, ...), so it stays valid
+    while other bodies are removed; after its
+    own body is removed, using it raises IndexError. It equals its current index and the
+    handles of the same body, and hashes by ``id``.
+    """
+
+    __slots__ = ("_world", "id")
+
+    def __init__(self, world: World, uid: int):
+        self._world = world
+        self.id = uid
+
+    @property
+    def index(self) -> int:
+        """The body's current index (scene order); IndexError once it is removed."""
+        return self._world._index_of(self.id)
+
+    def __index__(self) -> int:
+        return self.index
+
+    __int__ = __index__
+
+    def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
+        """The index as a 0-d int64 array: numpy takes lists of handles as indices."""
+        return np.array(self.index, dtype=np.int64 if dtype is None else dtype)
+
+    @property
+    def name(self) -> str:
+        return self._world._names[self.index]
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Body):
+            return self._world is other._world and self.id == other.id
+        if isinstance(other, (int, np.integer)) and not isinstance(other, bool):
+            try:
+                return self.index == other
+            except IndexError:
+                return False
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(("Body", self.id))
+
+    def __repr__(self) -> str:
+        try:
+            return f"Body(id={self.id}, index={self.index}, name={self.name!r})"
+        except IndexError:
+            return f"Body(id={self.id}, removed)"
 
 
 def _width(shape: Shape, across: np.ndarray) -> np.ndarray:
@@ -218,8 +278,9 @@ class World(WorldJoints):
                  restitution: float = 0.0, kind: str = "dynamic", name: str | None = None,
                  linear_damping: float = 0.0, angular_damping: float = 0.0,
                  category: int = 1, mask: int = MAX_BITS, group: int = 0,
-                 sensor: bool = False, gravity_scale: float = 1.0) -> int:
-        """Add a body and return its index.
+                 sensor: bool = False, gravity_scale: float = 1.0) -> Body:
+        """Add a body and return its handle (``Body``: its index now, and wherever an
+        index goes, valid while other bodies are removed).
 
         shape: a Shape or a scene shape dict (``{"type": "circle", "radius": 0.5}``).
         position: (2,) m, where the user frame origin goes; angle: rad.
@@ -246,7 +307,40 @@ class World(WorldJoints):
             raise SpecError("name", f"must be a non-empty string, got {name!r}")
         if kind == "dynamic" and not math.isfinite(shape.radius):
             raise SpecError("shape", "an unbounded shape can only be static")
-        return self._add(shape, values, name)
+        i = self._add(shape, values, name)      # may grow the arrays: index them after
+        return Body(self, int(self._data["uid"][i]))
+
+    def body(self, name: str) -> Body:
+        """The handle of the body named ``name`` (KeyError, with the nearest name, if
+        there is none)."""
+        if name not in self._name_set:
+            raise KeyError(f"no body named {name!r}" + suggest(str(name), self._names))
+        i = self._names.index(name)
+        return Body(self, int(self._data["uid"][i]))
+
+    def _index_of(self, uid: int) -> int:
+        """The current index of the body created as number ``uid`` (ids increase with
+        the index: one binary search); IndexError if it was removed."""
+        uids = self._view("uid")
+        k = int(np.searchsorted(uids, uid))
+        if k == len(uids) or uids[k] != uid:
+            raise IndexError(f"body {uid} was removed from this world")
+        return k
+
+    def __getstate__(self) -> dict:
+        """``pickle`` and ``copy.deepcopy``: everything but the caches keyed by object
+        identity (rebuilt by ``__setstate__``); the copy steps on bit for bit as the
+        original."""
+        state = self.__dict__.copy()
+        state["_shape_rows"] = {}
+        state["_shape_index"] = None
+        state["_filter"] = None
+        state["_filter_stale"] = True
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._shape_index = {id(shape): k for k, shape in enumerate(self._shapes)}
 
     def _add(self, shape: Shape, values: BodyValues, name: str | None) -> int:
         """Add a body whose values ``limits.check_body`` validated (``Scene.build`` calls
@@ -298,6 +392,7 @@ class World(WorldJoints):
         d["gravity_scale"][i] = values.gravity_scale
         d["force"][i] = 0.0
         d["torque"][i] = 0.0
+        d["uid"][i] = self._created
         self._filter_stale = True
         self._names.append(name)
         self._name_set.add(name)
@@ -318,7 +413,7 @@ class World(WorldJoints):
             self._shape_rows[id(shape)] = row
         return row
 
-    def remove_body(self, index: int) -> None:
+    def remove_body(self, index: int | Body) -> None:
         """Remove body ``index``; later bodies move down one index (their contacts too).
         Sleeping islands it belonged to or touched wake up."""
         i = self._check(index)
@@ -337,7 +432,7 @@ class World(WorldJoints):
         self._report = self._report.without_body(i)
         self._filter_stale = True
 
-    def set_state(self, index: int, *, position: Any = None, angle: float | None = None,
+    def set_state(self, index: int | Body, *, position: Any = None, angle: float | None = None,
                   velocity: Any = None, angular_velocity: float | None = None) -> None:
         """Set a body's pose (user frame origin, m; rad) and/or velocities (m/s, rad/s).
 
@@ -389,7 +484,8 @@ class World(WorldJoints):
             grown[:self._n] = array[:self._n]
             self._data[name] = grown
 
-    def _check(self, index: int) -> int:
+    def _check(self, index: int | Body) -> int:
+        index = operator.index(index)
         if not -self._n <= index < self._n:
             raise IndexError(f"body index {index} out of range ({self._n} bodies)")
         return index % self._n
@@ -519,7 +615,7 @@ class World(WorldJoints):
         """(bodies (N,), values (N, width) or (N,)): ``index`` an int or index array
         (negative counts from the end), ``vectors`` one value or one per body; checked
         (SpecError naming ``name``, IndexError for a bad index)."""
-        idx = np.atleast_1d(np.asarray(index))
+        idx = np.atleast_1d(np.asarray(index))          # Body handles: their __array__
         if idx.ndim != 1 or not (np.issubdtype(idx.dtype, np.integer) or len(idx) == 0):
             raise SpecError("i", f"must be a body index or an array of them, got {index!r}")
         idx = idx.astype(np.int64)
