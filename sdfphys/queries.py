@@ -64,6 +64,7 @@ from ._jit import njit
 from .collide.broadphase import candidate_pairs, world_bounds
 from .errors import SpecError, check_number
 from .sdf.compiled import compile_field, run
+from .sdf.opcodes import POP_T, PUSH_T
 
 __all__ = ["COARSE", "MAX_STEPS", "ROOT_TOLERANCE", "TOUCH", "PointHits", "RayHits",
            "cast", "nearest", "overlapping"]
@@ -76,6 +77,10 @@ COARSE = 1e-4
 ROOT_TOLERANCE = 1e-13
 #: A closest approach with f above this (m) is a near miss; at or below, a touch.
 TOUCH = 1e-10
+#: Over-relaxation of the sphere-tracing steps (Keinert et al. 2014, "Enhanced sphere
+#: tracing"): t <- t + OMEGA f while the discs of radius f about consecutive points
+#: overlap (then no surface lies between them); the first gap falls back to plain steps.
+OMEGA = 1.6
 #: Sphere-tracing steps per (ray, body) before the trace gives up (a miss).
 MAX_STEPS = 1000
 #: Root-solve iterations per hit.
@@ -187,8 +192,9 @@ def _rays(origins: Any, directions: Any, max_distance: Any
 class _Packed:
     """Per-shape tables: kind (S,), radius (S,), local AABB (S, 4), vertex rows
     [vstart, vstart + vcount) of ``vertices`` (V, 2), program rows [cstart, cstart +
-    ccount) of ``code`` (I, 4) with const offsets shifted into ``consts`` (F,), and
-    the largest stack ``depth`` and ``nesting``."""
+    ccount) of ``code`` (I, 4) with const offsets shifted into ``consts`` (F,), the
+    translation ``shift`` (S, 2) taken out of each program (``_outer_shift``), and the
+    largest stack ``depth`` and ``nesting``."""
 
     kind: np.ndarray
     radius: np.ndarray
@@ -200,6 +206,7 @@ class _Packed:
     ccount: np.ndarray
     code: np.ndarray
     consts: np.ndarray
+    shift: np.ndarray
     depth: int
     nesting: int
 
@@ -207,7 +214,7 @@ class _Packed:
 def _pack(shapes: list) -> _Packed:
     """The kernel's tables for ``shapes`` (each field compiled once, cached on it)."""
     kinds, radius, bounds, vstart, vcount, verts = [], [], [], [], [], []
-    cstart, ccount, codes, consts = [], [], [], []
+    cstart, ccount, codes, consts, shift = [], [], [], [], []
     nv = nc = nk = 0
     depth = nesting = 1
     for shape in shapes:
@@ -225,6 +232,9 @@ def _pack(shapes: list) -> _Packed:
             raise SpecError("shape", f"{shape!r}: its field does not compile "
                                      "(sdf.compiled), which queries need")
         code = program.code.copy()
+        shift.append(_outer_shift(code, program.consts))
+        if shift[-1] is not None:
+            code = code[1:-1]
         code[:, 1] += nk
         cstart.append(nc)
         ccount.append(len(code))
@@ -238,7 +248,28 @@ def _pack(shapes: list) -> _Packed:
                    np.array(vcount, np.int64), np.concatenate(verts + [np.zeros((0, 2))]),
                    np.array(cstart, np.int64), np.array(ccount, np.int64),
                    np.concatenate(codes + [np.zeros((0, 4), np.int64)]),
-                   np.concatenate(consts + [np.zeros(1)]), depth, nesting)
+                   np.concatenate(consts + [np.zeros(1)]),
+                   np.array([(0.0, 0.0) if o is None else o for o in shift],
+                            np.float64).reshape(-1, 2), depth, nesting)
+
+
+def _outer_shift(code: np.ndarray, consts: np.ndarray) -> tuple[float, float] | None:
+    """(ox, oy) if the program is one pure translation (PUSH_T ... POP_T with c = 1,
+    s = 0: an SDF shape's centroid shift) around the rest, else None. The kernel then
+    runs the rest at x - ox, which are the bits PUSH_T computes (c x' + s y' = x' for
+    c = 1, s = 0), and the gradient is POP_T's (c gx - s gy = gx): the same numbers,
+    two instructions fewer per evaluation."""
+    if len(code) < 3 or code[0, 0] != PUSH_T or code[-1, 0] != POP_T:
+        return None
+    depth = 0
+    for op in code[:-1, 0]:
+        depth += int(op == PUSH_T) - int(op == POP_T)
+        if depth == 0:
+            return None                  # the first frame closes before the end
+    o = code[0, 1]
+    if consts[o + 2] != 1.0 or consts[o + 3] != 0.0:
+        return None
+    return float(consts[o]), float(consts[o + 1])
 
 
 def _packed(world) -> _Packed:
@@ -316,8 +347,8 @@ def _slab(px, py, dx, dy, b, top):
 
 
 @njit(cache=True, error_model="numpy")
-def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_bounds, vstart, vcount,
-         verts, cstart, ccount, code, consts, pt, stack, frames, cur, value, grad):
+def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_radius, pk_bounds, vstart,
+         vcount, verts, cstart, ccount, code, consts, shift, pt, stack, frames, cur, value, grad):
     """First hit (t, nx, ny) of the ray o + t d (unit d), 0 <= t <= top, on ``body``;
     t = inf for none. Normal in world axes. See the module docstring."""
     s = sid[body]
@@ -367,14 +398,28 @@ def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_bounds, vstart,
         elif first < math.inf:
             t = first
     else:
+        # The shape's local box and bounding disc (radius R about the centre of mass)
+        # clip the stretch traced.
         t0, t1 = _slab(px, py, ex, ey, pk_bounds[s], top)
+        big = pk_radius[s]
+        if big < math.inf:
+            b = px * ex + py * ey
+            disc = b * b - (px * px + py * py - big * big)
+            if disc < 0.0:
+                t1 = -1.0
+            else:
+                root = math.sqrt(disc)
+                t0, t1 = max(t0, -b - root), min(t1, -b + root)
         if t0 <= t1:
             cs = code[cstart[s]:cstart[s] + ccount[s]]
-            t, nx, ny, inside = _trace(px, py, ex, ey, t0, t1, cs, consts, pt, stack,
-                                       frames, cur, value, grad)
+            t, nx, ny, inside = _trace(px, py, ex, ey, shift[s, 0], shift[s, 1], t0, t1,
+                                       cs, consts, pt, stack, frames, cur, value, grad)
+            if inside:
+                return 0.0, c * nx - sn * ny, sn * nx + c * ny
     if inside:
         cs = code[cstart[s]:cstart[s] + ccount[s]]
-        _, gx, gy = _field(cs, consts, px, py, pt, stack, frames, cur, value, grad)
+        _, gx, gy = _field(cs, consts, px - shift[s, 0], py - shift[s, 1], pt, stack,
+                           frames, cur, value, grad)
         norm = math.hypot(gx, gy)
         nx, ny = (gx / norm, gy / norm) if norm > 0.0 else (1.0, 0.0)
         t = 0.0
@@ -384,69 +429,82 @@ def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_bounds, vstart,
 
 
 @njit(cache=True, error_model="numpy")
-def _trace(px, py, ex, ey, t0, t1, code, consts, pt, stack, frames, cur, value, grad):
-    """Sphere trace then root solve (module docstring) of p + t e on [t0, t1]; returns
-    (t, nx, ny, inside) in the body frame, t = inf for a miss."""
-    t = t0
-    last = t0                      # the last point known outside
-    for _ in range(MAX_STEPS):
-        f, gx, gy = _field(code, consts, px + t * ex, py + t * ey, pt, stack, frames, cur,
-                           value, grad)
-        if f <= 0.0 and t == 0.0:
-            return 0.0, gx, gy, True
-        if f >= COARSE:
-            last = t
-            t += f
-            if t > t1:
-                return math.inf, 0.0, 0.0, False
-            continue
-        # Root solve on [lo, hi]: lo outside (f > 0), hi inside once found.
-        if f <= 0.0 and t == last:     # inside where the ray enters the shape's box
-            norm = math.hypot(gx, gy)
-            return (t, gx / norm, gy / norm, False) if norm > 0.0 else (t, 1.0, 0.0, False)
-        if f > 0.0:
-            lo, flo, slo, hi = t, f, gx * ex + gy * ey, math.inf
-        else:
-            lo, hi = last, t
-            flo, g1, g2 = _field(code, consts, px + lo * ex, py + lo * ey, pt, stack,
-                                 frames, cur, value, grad)
-            slo = g1 * ex + g2 * ey
-        for _ in range(_ROOT_STEPS):
-            if flo <= ROOT_TOLERANCE or hi - lo <= ROOT_TOLERANCE:
-                break
-            step = -flo / slo if slo < 0.0 else math.inf
-            x = lo + step
-            if not (x < hi) or step > 1e3 * COARSE:
-                if hi == math.inf:
-                    break              # no inside point near: a near miss or a graze
-                x = 0.5 * (lo + hi)
-            f, g1, g2 = _field(code, consts, px + x * ex, py + x * ey, pt, stack, frames,
-                               cur, value, grad)
-            if f > 0.0:
-                lo, flo, slo = x, f, g1 * ex + g2 * ey
-            else:
-                hi = x
-                if f == 0.0:
-                    lo, flo = x, 0.0
-        if hi < math.inf or flo <= TOUCH:
-            f, gx, gy = _field(code, consts, px + lo * ex, py + lo * ey, pt, stack, frames,
-                               cur, value, grad)
-            norm = math.hypot(gx, gy)
-            if norm > 0.0:
-                return lo, gx / norm, gy / norm, False
-            return lo, 1.0, 0.0, False
-        # A near miss: go on past the closest approach.
-        last = lo
-        t = lo + max(flo, COARSE)
-        if t > t1:
-            return math.inf, 0.0, 0.0, False
-    return math.inf, 0.0, 0.0, False
+def _unit(t, gx, gy, inside):
+    """(t, unit gradient, inside); (1, 0) for a zero gradient (the fields' fallback)."""
+    norm = math.hypot(gx, gy)
+    if norm > 0.0:
+        return t, gx / norm, gy / norm, inside
+    return t, 1.0, 0.0, inside
 
 
 @njit(cache=True, error_model="numpy")
-def _cast(origin, direction, top, every, com, angle, sid, box, pk_kind, pk_bounds, vstart,
-          vcount, verts, cstart, ccount, code, consts, depth, nesting, g_lo, h, g_shape,
-          g_start, g_list, big, out_body, out_t, out_n, out_ray):
+def _trace(px, py, ex, ey, ox, oy, t0, t1, code, consts, pt, stack, frames, cur, value,
+           grad):
+    """Sphere trace then root solve (module docstring) of p + t e on [t0, t1]; returns
+    (t, nx, ny, inside) in the body frame, t = inf for a miss. The program runs at
+    p + t e - (ox, oy) (``_outer_shift``)."""
+    miss = (math.inf, 0.0, 0.0, False)
+    t = t0
+    last, f_last, step = t0, 0.0, 0.0      # the last point known outside, f there, step
+    omega = OMEGA
+    for _ in range(MAX_STEPS):
+        f, gx, gy = _field(code, consts, px + t * ex - ox, py + t * ey - oy, pt, stack, frames, cur,
+                           value, grad)
+        if f <= 0.0 and t == 0.0:
+            return _unit(0.0, gx, gy, True)
+        if step > f_last and f + f_last < step:
+            # The over-relaxed step left a gap between the two empty discs: take the
+            # plain step from the last point instead, and plain steps from now on.
+            omega = 1.0
+            t, step = last + f_last, 0.0
+            continue
+        if f >= COARSE:
+            if t + f > t1:
+                return miss
+            last, f_last, step = t, f, omega * f
+            t = min(t + step, t1)
+            continue
+        # Root solve on [lo, hi]: lo outside (f > 0), hi inside once found.
+        if f <= 0.0 and t == last:     # inside where the ray enters the shape's box
+            return _unit(t, gx, gy, False)
+        if f > 0.0:
+            lo, flo, glx, gly, hi = t, f, gx, gy, math.inf
+        else:
+            lo, hi = last, t
+            flo, glx, gly = _field(code, consts, px + lo * ex - ox, py + lo * ey - oy, pt, stack,
+                                   frames, cur, value, grad)
+        for _ in range(_ROOT_STEPS):
+            if flo <= ROOT_TOLERANCE or hi - lo <= ROOT_TOLERANCE:
+                break
+            slope = glx * ex + gly * ey
+            newton = -flo / slope if slope < 0.0 else math.inf
+            x = lo + newton
+            if not (x < hi) or newton > 1e3 * COARSE:
+                if hi == math.inf:
+                    break              # no inside point near: a near miss or a graze
+                x = 0.5 * (lo + hi)
+            f, g1, g2 = _field(code, consts, px + x * ex - ox, py + x * ey - oy, pt, stack, frames,
+                               cur, value, grad)
+            if f > 0.0:
+                lo, flo, glx, gly = x, f, g1, g2
+            else:
+                hi = x
+                if f == 0.0:
+                    lo, flo, glx, gly = x, 0.0, g1, g2
+        if hi < math.inf or flo <= TOUCH:
+            return _unit(lo, glx, gly, False)
+        # A near miss: go on past the closest approach, with plain steps.
+        last, f_last, step = lo, flo, 0.0
+        t = lo + max(flo, COARSE)
+        if t > t1:
+            return miss
+    return miss
+
+
+@njit(cache=True, error_model="numpy")
+def _cast(origin, direction, top, every, com, angle, sid, box, pk_kind, pk_radius, pk_bounds,
+          vstart, vcount, verts, cstart, ccount, code, consts, shift, depth, nesting, g_lo, h,
+          g_shape, g_start, g_list, big, out_body, out_t, out_n, out_ray):
     """Closest hit per ray (every = False: into out_body (N,), out_t (N,), out_n (N, 2),
     out_ray unused) or every hit (every = True: rows of out_*, out_ray the ray; returns
     the count, rows beyond the capacity counted, not written). See the module docstring.
@@ -504,8 +562,8 @@ def _cast(origin, direction, top, every, com, angle, sid, box, pk_kind, pk_bound
                 if a0 > a1:
                     continue
                 t, nx, ny = _hit(body, ox, oy, dx, dy, best if not every else top, com,
-                                 angle, sid, pk_kind, pk_bounds, vstart, vcount, verts,
-                                 cstart, ccount, code, consts, pt, stack, frames, cur,
+                                 angle, sid, pk_kind, pk_radius, pk_bounds, vstart, vcount, verts,
+                                 cstart, ccount, code, consts, shift, pt, stack, frames, cur,
                                  value, grad)
                 if t == math.inf:
                     continue
@@ -553,8 +611,8 @@ def cast(world, origins: Any, directions: Any, max_distance: Any = math.inf,
     sid = np.ascontiguousarray(world._view("shape_id"))
     box = world_bounds(pk.bounds[sid], pk.radius[sid], com, angle)
     g_lo, h, g_shape, g_start, g_list, big = _grid(box, keep)
-    args = (com, angle, sid, box, pk.kind, pk.bounds, pk.vstart, pk.vcount, pk.vertices,
-            pk.cstart, pk.ccount, pk.code, pk.consts, pk.depth, pk.nesting, g_lo, h,
+    args = (com, angle, sid, box, pk.kind, pk.radius, pk.bounds, pk.vstart, pk.vcount, pk.vertices,
+            pk.cstart, pk.ccount, pk.code, pk.consts, pk.shift, pk.depth, pk.nesting, g_lo, h,
             g_shape, g_start, g_list, big)
     if not every:
         body = np.empty(len(o), np.int64)
