@@ -61,7 +61,7 @@ from typing import Any
 import numpy as np
 
 from ._jit import njit
-from .collide.broadphase import candidate_pairs, world_bounds
+from .collide.broadphase import world_bounds
 from .errors import SpecError, check_number
 from .sdf.compiled import compile_field, run
 from .sdf.opcodes import POP_T, PUSH_T
@@ -323,7 +323,7 @@ def _grid(box: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, ...]:
 # The ray kernel
 # --------------------------------------------------------------------------------------
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _field(code, consts, x, y, pt, stack, frames, cur, value, grad):
     """(f, df/dx, df/dy) of a program at (x, y), body frame."""
     pt[0, 0], pt[0, 1] = x, y
@@ -331,7 +331,7 @@ def _field(code, consts, x, y, pt, stack, frames, cur, value, grad):
     return value[0], grad[0, 0], grad[0, 1]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _slab(px, py, dx, dy, b, top):
     """[t0, t1] of the ray p + t d, 0 <= t <= top, inside the box b (4,); t0 > t1: none."""
     t0, t1 = 0.0, top
@@ -346,7 +346,7 @@ def _slab(px, py, dx, dy, b, top):
     return t0, t1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_radius, pk_bounds, vstart,
          vcount, verts, cstart, ccount, code, consts, shift, pt, stack, frames, cur, value, grad):
     """First hit (t, nx, ny) of the ray o + t d (unit d), 0 <= t <= top, on ``body``;
@@ -428,7 +428,7 @@ def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_radius, pk_boun
     return t, c * nx - sn * ny, sn * nx + c * ny
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _unit(t, gx, gy, inside):
     """(t, unit gradient, inside); (1, 0) for a zero gradient (the fields' fallback)."""
     norm = math.hypot(gx, gy)
@@ -437,7 +437,7 @@ def _unit(t, gx, gy, inside):
     return t, 1.0, 0.0, inside
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _trace(px, py, ex, ey, ox, oy, t0, t1, code, consts, pt, stack, frames, cur, value,
            grad):
     """Sphere trace then root solve (module docstring) of p + t e on [t0, t1]; returns
@@ -648,13 +648,42 @@ def _world_boxes(world, keep: np.ndarray) -> np.ndarray:
     return box
 
 
+def _point_pairs(box: np.ndarray, keep: np.ndarray, p: np.ndarray, top: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """(point, body) candidate pairs, each once: the bodies of the grid cells (``_grid``)
+    that the boxes p +- top cover, and every big body, whose AABB meets the box (every
+    body when a point's box covers more cells than there are bodies)."""
+    g_lo, h, g_shape, g_start, g_list, big = _grid(box, keep)
+    if (2.0 * top / h + 2.0) ** 2 >= np.count_nonzero(keep):
+        # Boxes over more cells than there are bodies: every point with every body.
+        g_start, g_list, big = np.zeros_like(g_start), g_list[:0], np.flatnonzero(keep)
+    c0 = np.clip(np.floor((p - top - g_lo) / h), 0, g_shape - 1).astype(np.int64)
+    c1 = np.clip(np.floor((p + top - g_lo) / h), 0, g_shape - 1).astype(np.int64)
+    wide, tall = c1[:, 0] - c0[:, 0] + 1, c1[:, 1] - c0[:, 1] + 1
+    cells = wide * tall
+    row = np.repeat(np.arange(len(p)), cells)
+    k = np.arange(len(row)) - np.repeat(np.cumsum(cells) - cells, cells)
+    cell = (c0[row, 0] + k % wide[row]) * g_shape[1] + c0[row, 1] + k // wide[row]
+    count = g_start[cell + 1] - g_start[cell]
+    point = np.repeat(row, count)
+    k = np.arange(len(point)) - np.repeat(np.cumsum(count) - count, count)
+    body = g_list[np.repeat(g_start[cell], count) + k]
+    point = np.r_[point, np.repeat(np.arange(len(p)), len(big))]
+    body = np.r_[body, np.tile(big, len(p))]
+    b = box[body]
+    q = p[point]
+    meets = (b[:, 0] <= q[:, 0] + top) & (q[:, 0] - top <= b[:, 2]) \
+        & (b[:, 1] <= q[:, 1] + top) & (q[:, 1] - top <= b[:, 3])
+    key = np.unique(point[meets] * np.int64(len(box)) + body[meets])
+    return key // len(box), key % len(box)
+
+
 def nearest(world, points: Any, max_distance: Any, mask: Any = None,
             bodies: Any = None) -> PointHits:
     """Nearest body within ``max_distance`` (m, finite, >= 0) of each point (N, 2), m.
 
-    Candidates: bodies whose world AABB meets the point's box p +- max_distance
-    (``collide.broadphase.candidate_pairs``, points not movable so that no point pairs
-    with another). Each candidate's field at the point (``toi._distance``: compiled
+    Candidates: bodies entered in the grid cells that the point's box p +- max_distance
+    covers (``_grid``, as the ray casts'), and the big bodies. Each candidate's field at the point (``toi._distance``: compiled
     programs, one batch per distinct shape); the least per point, ties to the lowest
     body index; values above max_distance are dropped. Distances are exact for exact
     fields (circles, meshes, most primitives) and a lower bound for the fields marked
@@ -667,11 +696,7 @@ def nearest(world, points: Any, max_distance: Any, mask: Any = None,
     n = len(world)
     keep = _bodies(bodies, n, mask)
     box = _world_boxes(world, keep)
-    boxes = np.concatenate([box, np.column_stack([p - top, p + top])])
-    movable = np.r_[np.ones(n, np.bool_), np.zeros(len(p), np.bool_)]
-    pairs = candidate_pairs(boxes, movable)
-    pairs = pairs[(pairs[:, 0] < n) & (pairs[:, 1] >= n)]
-    body, point = pairs[:, 0], pairs[:, 1] - n
+    point, body = _point_pairs(box, keep, p, top)
     d = _distance([s.field for s in world._shapes], world._view("shape_id"),
                   world._view("com"), world._view("angle"), body, p[point])
     near = d <= top

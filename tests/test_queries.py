@@ -203,6 +203,22 @@ def test_many_bodies_use_the_grid_and_agree_with_brute_force():
     for k in range(len(every.ray) - 1, -1, -1):
         first[every.ray[k]] = every.body[k]
     np.testing.assert_array_equal(hits.body, first)
+    # Point queries through the grid (small boxes, many bodies) against brute force.
+    near = world.point_query(origins, 0.5)
+    np.testing.assert_array_equal(near.body, brute_nearest(world, origins, 0.5)[0])
+
+
+def brute_nearest(world, points, top):
+    """(body (N,), distance (N,)): every body's field at every point, the least."""
+    table = np.empty((len(world), len(points)))
+    for i in range(len(world)):
+        shape = world.shapes[world.shape_id[i]]
+        a = world.angle[i]
+        rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+        table[i] = shape.field.distance((points - world.center_of_mass[i]) @ rot)
+    best = np.argmin(table, axis=0)
+    d = table[best, np.arange(len(points))]
+    return np.where(d <= top, best, -1), np.where(d <= top, d, np.inf)
 
 
 def test_point_query_matches_brute_force():
@@ -212,18 +228,9 @@ def test_point_query_matches_brute_force():
                    kind="static")
     points = rng.uniform(-11, 11, (500, 2))
     result = world.point_query(points, 2.0)
-    table = np.empty((len(world), len(points)))
-    for i in range(len(world)):
-        shape = world.shapes[world.shape_id[i]]
-        a = world.angle[i]
-        rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
-        table[i] = shape.field.distance((points - world.center_of_mass[i]) @ rot)
-    best = np.argmin(table, axis=0)
-    near = table[best, np.arange(len(points))] <= 2.0
-    np.testing.assert_array_equal(result.body, np.where(near, best, -1))
-    np.testing.assert_allclose(result.distance[near], table[best, np.arange(len(points))][near],
-                               atol=1e-12)
-    assert np.all(np.isinf(result.distance[~near]))
+    body, distance = brute_nearest(world, points, 2.0)
+    np.testing.assert_array_equal(result.body, body)
+    np.testing.assert_allclose(result.distance, distance, atol=1e-12)
 
 
 def test_overlap_box_matches_pymunk_shape_query():
