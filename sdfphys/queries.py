@@ -553,9 +553,12 @@ def _cast(origin, direction, top, every, com, angle, sid, box, pk_kind, pk_radiu
                 lo_i, hi_i, source = g_start[cell], g_start[cell + 1], 1
             else:
                 break
-            for q in range(lo_i, hi_i):
-                body = big[q] if source == 0 else g_list[q]
-                if stamp[body] == r:
+            # Two passes over the cell: closed-form shapes first, whose hits then prune
+            # the (costlier) traces of the SDF shapes behind them.
+            for q in range(lo_i, hi_i + (hi_i - lo_i)):
+                body = q if q < hi_i else q - (hi_i - lo_i)
+                body = big[body] if source == 0 else g_list[body]
+                if stamp[body] == r or (pk_kind[sid[body]] == _SDF) == (q < hi_i):
                     continue
                 stamp[body] = r
                 a0, a1 = _slab(ox, oy, dx, dy, box[body], best if not every else top)
