@@ -10,7 +10,8 @@ uniform over the field grown by 5 m, directions uniform, max_distance ``--length
 
 Printed: the first call (loads the kernels from the numba cache, or compiles them),
 then the mean, min and max of ``--runs`` timed calls after it (wall time, one
-thread), hits per call, and the ``ray_cast_all`` and ``point_query`` times on the same
+thread, and CPU time, less sensitive to other load on the machine; the load average
+is printed), hits per call, and the ``ray_cast_all`` and ``point_query`` times on the same
 input. ``--cold`` also times the compilation with an empty cache, in a fresh process
 (NUMBA_CACHE_DIR a new temporary directory): all kernels a ray cast needs (the query
 kernel, ``sdf.compiled.run`` and the broadphase's ``world_bounds``), and the query
@@ -76,13 +77,15 @@ def rays(count: int, seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
     return origins, np.column_stack([np.cos(a), np.sin(a)])
 
 
-def timed(call, runs: int) -> np.ndarray:
-    out = []
+def timed(call, runs: int) -> tuple[np.ndarray, np.ndarray]:
+    """Wall and CPU seconds (runs,) of ``runs`` calls."""
+    wall, cpu = [], []
     for _ in range(runs):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         call()
-        out.append(time.perf_counter() - t)
-    return np.array(out)
+        wall.append(time.perf_counter() - t)
+        cpu.append(time.process_time() - c)
+    return np.array(wall), np.array(cpu)
 
 
 _FIRST_CALL = """
@@ -137,18 +140,20 @@ def main() -> None:
     t = time.perf_counter()
     hits = world.ray_cast(origins, directions, args.length)
     print(f"first call: {time.perf_counter() - t:.2f} s")
-    times = timed(lambda: world.ray_cast(origins, directions, args.length), args.runs)
+    times, cpu = timed(lambda: world.ray_cast(origins, directions, args.length), args.runs)
     inside = int(np.sum(hits.distance == 0.0))
+    print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print(f"ray_cast, {args.rays} rays, {len(world)} bodies, max_distance {args.length:g} m: "
           f"mean {1e3 * times.mean():.1f} ms (min {1e3 * times.min():.1f}, max "
-          f"{1e3 * times.max():.1f}) over {args.runs} calls; {int(np.sum(hits.body >= 0))} "
+          f"{1e3 * times.max():.1f}; CPU mean {1e3 * cpu.mean():.1f}, min "
+          f"{1e3 * cpu.min():.1f}) over {args.runs} calls; {int(np.sum(hits.body >= 0))} "
           f"hits, {inside} from inside")
-    every = timed(lambda: world.ray_cast_all(origins, directions, args.length), 3)
-    print(f"ray_cast_all: mean {1e3 * every.mean():.1f} ms")
+    every, every_cpu = timed(lambda: world.ray_cast_all(origins, directions, args.length), 3)
+    print(f"ray_cast_all: mean {1e3 * every.mean():.1f} ms (CPU {1e3 * every_cpu.mean():.1f})")
     world.point_query(origins, 1.0)
-    near = timed(lambda: world.point_query(origins, 1.0), 3)
+    near, near_cpu = timed(lambda: world.point_query(origins, 1.0), 3)
     print(f"point_query ({args.rays} points, max_distance 1 m): mean "
-          f"{1e3 * near.mean():.1f} ms")
+          f"{1e3 * near.mean():.1f} ms (CPU {1e3 * near_cpu.mean():.1f})")
     if args.cold:
         cold()
 
