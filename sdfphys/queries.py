@@ -39,6 +39,10 @@ Ray casts (``cast``, one numba kernel ``_cast``, no Python loop over rays or bod
   1-Lipschitz: a step may overshoot the surface by up to the grid's error bound, and
   the bracket [last outside, first inside] is then bisected, so the hit is a zero of
   the interpolant; features thinner than the error bound may be stepped over.
+- Circle casts (``radius`` r > 0): the same walk and tests on every shape grown by r
+  (its Minkowski sum with the disc): circles of radius R + r; meshes by their edges
+  moved out by r and circles of radius r about their vertices (``_rounded``); fields
+  as f - r. The grid and the boxes are grown by r.
 - Inside: a ray whose origin is inside a body (f <= 0; for meshes, the first crossing
   leaves) hits it at distance 0, point = the origin, normal = the normalised field
   gradient at the origin (the outward direction of the nearest boundary for exact
@@ -332,11 +336,13 @@ def _field(code, consts, x, y, pt, stack, frames, cur, value, grad):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _slab(px, py, dx, dy, b, top):
-    """[t0, t1] of the ray p + t d, 0 <= t <= top, inside the box b (4,); t0 > t1: none."""
+def _slab(px, py, dx, dy, b, grow, top):
+    """[t0, t1] of the ray p + t d, 0 <= t <= top, inside the box b (4,) grown by grow
+    all round; t0 > t1: none."""
     t0, t1 = 0.0, top
     for k in range(2):
-        o, d, lo, hi = (px, dx, b[0], b[2]) if k == 0 else (py, dy, b[1], b[3])
+        o, d, lo, hi = (px, dx, b[0] - grow, b[2] + grow) if k == 0 else (
+            py, dy, b[1] - grow, b[3] + grow)
         if d == 0.0:
             if o < lo or o > hi:
                 return 1.0, 0.0
@@ -347,10 +353,11 @@ def _slab(px, py, dx, dy, b, top):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_radius, pk_bounds, vstart,
+def _hit(body, ox, oy, dx, dy, rad, top, com, angle, sid, pk_kind, pk_radius, pk_bounds, vstart,
          vcount, verts, cstart, ccount, code, consts, shift, pt, stack, frames, cur, value, grad):
-    """First hit (t, nx, ny) of the ray o + t d (unit d), 0 <= t <= top, on ``body``;
-    t = inf for none. Normal in world axes. See the module docstring."""
+    """First hit (t, nx, ny) of the ray o + t d (unit d), 0 <= t <= top, on ``body``
+    grown by rad (m; the disc of a circle cast); t = inf for none. Normal in world axes.
+    See the module docstring."""
     s = sid[body]
     c, sn = math.cos(angle[body]), math.sin(angle[body])
     rx, ry = ox - com[body, 0], oy - com[body, 1]
@@ -359,7 +366,7 @@ def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_radius, pk_boun
     t, nx, ny, inside = math.inf, 1.0, 0.0, False
     kind = pk_kind[s]
     if kind == _CIRCLE:
-        r = pk_bounds[s, 2]
+        r = pk_bounds[s, 2] + rad
         b = px * ex + py * ey
         cc = px * px + py * py - r * r
         if cc <= 0.0:
@@ -369,6 +376,10 @@ def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_radius, pk_boun
             if b < 0.0 and disc >= 0.0:
                 t = cc / (-b + math.sqrt(disc))
                 nx, ny = (px + t * ex) / r, (py + t * ey) / r
+    elif kind == _MESH and rad > 0.0:
+        t, nx, ny, inside = _rounded(px, py, ex, ey, rad, vstart[s], vcount[s], verts,
+                                     code[cstart[s]:cstart[s] + ccount[s]], consts, pt,
+                                     stack, frames, cur, value, grad)
     elif kind == _MESH:
         v0, m = vstart[s], vcount[s]
         first, leaving = math.inf, False
@@ -400,8 +411,8 @@ def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_radius, pk_boun
     else:
         # The shape's local box and bounding disc (radius R about the centre of mass)
         # clip the stretch traced.
-        t0, t1 = _slab(px, py, ex, ey, pk_bounds[s], top)
-        big = pk_radius[s]
+        t0, t1 = _slab(px, py, ex, ey, pk_bounds[s], rad, top)
+        big = pk_radius[s] + rad
         if big < math.inf:
             b = px * ex + py * ey
             disc = b * b - (px * px + py * py - big * big)
@@ -412,8 +423,8 @@ def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_radius, pk_boun
                 t0, t1 = max(t0, -b - root), min(t1, -b + root)
         if t0 <= t1:
             cs = code[cstart[s]:cstart[s] + ccount[s]]
-            t, nx, ny, inside = _trace(px, py, ex, ey, shift[s, 0], shift[s, 1], t0, t1,
-                                       cs, consts, pt, stack, frames, cur, value, grad)
+            t, nx, ny, inside = _trace(px, py, ex, ey, shift[s, 0], shift[s, 1], rad, t0,
+                                       t1, cs, consts, pt, stack, frames, cur, value, grad)
             if inside:
                 return 0.0, c * nx - sn * ny, sn * nx + c * ny
     if inside:
@@ -429,6 +440,44 @@ def _hit(body, ox, oy, dx, dy, top, com, angle, sid, pk_kind, pk_radius, pk_boun
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _rounded(px, py, ex, ey, rad, v0, m, verts, code, consts, pt, stack, frames, cur, value,
+             grad):
+    """First hit (t, nx, ny, inside) of p + t e (body frame) on the polygon
+    verts[v0:v0 + m] grown by rad > 0 (its Minkowski sum with a disc: edges moved out by
+    rad, joined by arcs about the vertices). Inside: f(p) <= rad. From outside, every
+    point of a moved edge or an arc is within rad of the polygon, so the first of them
+    along the ray is the entry (the distance to the polygon is continuous): the least t
+    over the moved edges entered (t = ((a - p).n + rad) / e.n, e.n < 0) and the vertex
+    circles (as a circle's closed form)."""
+    f, gx, gy = _field(code, consts, px, py, pt, stack, frames, cur, value, grad)
+    if f <= rad:
+        return _unit(0.0, gx, gy, True)
+    t, nx, ny = math.inf, 1.0, 0.0
+    for i in range(m):
+        ax, ay = verts[v0 + i, 0], verts[v0 + i, 1]
+        j = v0 + (i + 1) % m
+        qx, qy = verts[j, 0] - ax, verts[j, 1] - ay
+        length = math.hypot(qx, qy)
+        enx, eny = qy / length, -qx / length
+        dn = ex * enx + ey * eny
+        if dn < 0.0:
+            ti = ((ax - px) * enx + (ay - py) * eny + rad) / dn
+            hx, hy = px + ti * ex - rad * enx - ax, py + ti * ey - rad * eny - ay
+            u = (hx * qx + hy * qy) / (length * length)
+            if 0.0 <= ti < t and 0.0 <= u <= 1.0:
+                t, nx, ny = ti, enx, eny
+        rx, ry = px - ax, py - ay
+        b = rx * ex + ry * ey
+        cc = rx * rx + ry * ry - rad * rad
+        disc = b * b - cc
+        if b < 0.0 and disc >= 0.0 and cc > 0.0:
+            ti = cc / (-b + math.sqrt(disc))
+            if ti < t:
+                t, nx, ny = ti, (rx + ti * ex) / rad, (ry + ti * ey) / rad
+    return t, nx, ny, False
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _unit(t, gx, gy, inside):
     """(t, unit gradient, inside); (1, 0) for a zero gradient (the fields' fallback)."""
     norm = math.hypot(gx, gy)
@@ -438,18 +487,20 @@ def _unit(t, gx, gy, inside):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _trace(px, py, ex, ey, ox, oy, t0, t1, code, consts, pt, stack, frames, cur, value,
-           grad):
+def _trace(px, py, ex, ey, ox, oy, rad, t0, t1, code, consts, pt, stack, frames, cur,
+           value, grad):
     """Sphere trace then root solve (module docstring) of p + t e on [t0, t1]; returns
     (t, nx, ny, inside) in the body frame, t = inf for a miss. The program runs at
-    p + t e - (ox, oy) (``_outer_shift``)."""
+    p + t e - (ox, oy) (``_outer_shift``); the field traced is f - rad (the shape grown
+    by rad)."""
     miss = (math.inf, 0.0, 0.0, False)
     t = t0
     last, f_last, step = t0, 0.0, 0.0      # the last point known outside, f there, step
     omega = OMEGA
     for _ in range(MAX_STEPS):
-        f, gx, gy = _field(code, consts, px + t * ex - ox, py + t * ey - oy, pt, stack, frames, cur,
-                           value, grad)
+        f, gx, gy = _field(code, consts, px + t * ex - ox, py + t * ey - oy, pt, stack,
+                           frames, cur, value, grad)
+        f -= rad
         if f <= 0.0 and t == 0.0:
             return _unit(0.0, gx, gy, True)
         if step > f_last and f + f_last < step:
@@ -471,8 +522,9 @@ def _trace(px, py, ex, ey, ox, oy, t0, t1, code, consts, pt, stack, frames, cur,
             lo, flo, glx, gly, hi = t, f, gx, gy, math.inf
         else:
             lo, hi = last, t
-            flo, glx, gly = _field(code, consts, px + lo * ex - ox, py + lo * ey - oy, pt, stack,
-                                   frames, cur, value, grad)
+            flo, glx, gly = _field(code, consts, px + lo * ex - ox, py + lo * ey - oy, pt,
+                                   stack, frames, cur, value, grad)
+            flo -= rad
         for _ in range(_ROOT_STEPS):
             if flo <= ROOT_TOLERANCE or hi - lo <= ROOT_TOLERANCE:
                 break
@@ -483,8 +535,9 @@ def _trace(px, py, ex, ey, ox, oy, t0, t1, code, consts, pt, stack, frames, cur,
                 if hi == math.inf:
                     break              # no inside point near: a near miss or a graze
                 x = 0.5 * (lo + hi)
-            f, g1, g2 = _field(code, consts, px + x * ex - ox, py + x * ey - oy, pt, stack, frames,
-                               cur, value, grad)
+            f, g1, g2 = _field(code, consts, px + x * ex - ox, py + x * ey - oy, pt, stack,
+                               frames, cur, value, grad)
+            f -= rad
             if f > 0.0:
                 lo, flo, glx, gly = x, f, g1, g2
             else:
@@ -502,7 +555,7 @@ def _trace(px, py, ex, ey, ox, oy, t0, t1, code, consts, pt, stack, frames, cur,
 
 
 @njit(cache=True, error_model="numpy")
-def _cast(origin, direction, top, every, com, angle, sid, box, pk_kind, pk_radius, pk_bounds,
+def _cast(origin, direction, rad, top, every, com, angle, sid, box, pk_kind, pk_radius, pk_bounds,
           vstart, vcount, verts, cstart, ccount, code, consts, shift, depth, nesting, g_lo, h,
           g_shape, g_start, g_list, big, out_body, out_t, out_n, out_ray):
     """Closest hit per ray (every = False: into out_body (N,), out_t (N,), out_n (N, 2),
@@ -526,7 +579,7 @@ def _cast(origin, direction, top, every, com, angle, sid, box, pk_kind, pk_radiu
         best, bb, bnx, bny = top, -1, math.nan, math.nan
         # The bodies every ray tests, then the grid's cells in the ray's order.
         k = -1
-        t0, t1 = _slab(ox, oy, dx, dy, grid_box, top)
+        t0, t1 = _slab(ox, oy, dx, dy, grid_box, 0.0, top)
         walking = t0 <= t1 and g_list.shape[0] > 0
         ix = iy = 0
         sx = sy = 0
@@ -561,10 +614,10 @@ def _cast(origin, direction, top, every, com, angle, sid, box, pk_kind, pk_radiu
                 if stamp[body] == r or (pk_kind[sid[body]] == _SDF) == (q < hi_i):
                     continue
                 stamp[body] = r
-                a0, a1 = _slab(ox, oy, dx, dy, box[body], best if not every else top)
+                a0, a1 = _slab(ox, oy, dx, dy, box[body], 0.0, best if not every else top)
                 if a0 > a1:
                     continue
-                t, nx, ny = _hit(body, ox, oy, dx, dy, best if not every else top, com,
+                t, nx, ny = _hit(body, ox, oy, dx, dy, rad, best if not every else top, com,
                                  angle, sid, pk_kind, pk_radius, pk_bounds, vstart, vcount, verts,
                                  cstart, ccount, code, consts, shift, pt, stack, frames, cur,
                                  value, grad)
@@ -600,40 +653,51 @@ def _cast(origin, direction, top, every, com, angle, sid, box, pk_kind, pk_radiu
 
 
 def cast(world, origins: Any, directions: Any, max_distance: Any = math.inf,
-         every: bool = False, mask: Any = None, bodies: Any = None) -> RayHits:
-    """Ray casts against ``world`` (``World.ray_cast`` / ``ray_cast_all``; module
-    docstring). origins, directions: (N, 2) m and any nonzero length (normalised here);
-    max_distance: m, >= 0 (inf allowed). every: all hits (``RayHits.ray`` set) instead
-    of the closest per ray. mask: None (reserved). bodies: index array or None (all)."""
+         every: bool = False, mask: Any = None, bodies: Any = None,
+         radius: Any = 0.0) -> RayHits:
+    """Ray casts against ``world`` (``World.ray_cast`` / ``ray_cast_all`` /
+    ``circle_cast``; module docstring). origins, directions: (N, 2) m and any nonzero
+    length (normalised here); max_distance: m, >= 0 (inf allowed). every: all hits
+    (``RayHits.ray`` set) instead of the closest per ray. mask: None (reserved). bodies:
+    index array or None (all). radius: m, >= 0, a disc of that radius swept along each
+    ray (every shape grown by it): ``distance`` is how far its centre travels, ``point``
+    the contact on the body's surface (centre - radius normal)."""
     o, d, top = _rays(origins, directions, max_distance)
+    rad = check_number(radius, "radius", low=0.0)
     n = len(world)
     keep = _bodies(bodies, n, mask)
     pk = _packed(world)
     com = np.ascontiguousarray(world._view("com"))
     angle = np.ascontiguousarray(world._view("angle"))
     sid = np.ascontiguousarray(world._view("shape_id"))
-    box = world_bounds(pk.bounds[sid], pk.radius[sid], com, angle)
+    box = world_bounds(pk.bounds[sid], pk.radius[sid], com, angle, rad)
     g_lo, h, g_shape, g_start, g_list, big = _grid(box, keep)
-    args = (com, angle, sid, box, pk.kind, pk.radius, pk.bounds, pk.vstart, pk.vcount, pk.vertices,
-            pk.cstart, pk.ccount, pk.code, pk.consts, pk.shift, pk.depth, pk.nesting, g_lo, h,
-            g_shape, g_start, g_list, big)
+    args = (com, angle, sid, box, pk.kind, pk.radius, pk.bounds, pk.vstart, pk.vcount,
+            pk.vertices, pk.cstart, pk.ccount, pk.code, pk.consts, pk.shift, pk.depth,
+            pk.nesting, g_lo, h, g_shape, g_start, g_list, big)
     if not every:
         body = np.empty(len(o), np.int64)
         t = np.empty(len(o))
         normal = np.empty((len(o), 2))
-        _cast(o, d, top, False, *args, body, t, normal, np.empty(0, np.int64))
-        return RayHits(body, o + t[:, None] * d, normal, t)
+        _cast(o, d, rad, top, False, *args, body, t, normal, np.empty(0, np.int64))
+        point = o + t[:, None] * d
+        if rad > 0.0:
+            point -= rad * normal
+        return RayHits(body, point, normal, t)
     size = 4 * len(o) + 16
     while True:
         body, t = np.empty(size, np.int64), np.empty(size)
         normal, ray = np.empty((size, 2)), np.empty(size, np.int64)
-        count = _cast(o, d, top, True, *args, body, t, normal, ray)
+        count = _cast(o, d, rad, top, True, *args, body, t, normal, ray)
         if count <= size:
             break
         size = count
     order = np.lexsort((body[:count], t[:count], ray[:count]))
     body, t, normal, ray = body[order], t[order], normal[order], ray[order]
-    return RayHits(body, o[ray] + t[:, None] * d[ray], normal, t, ray)
+    point = o[ray] + t[:, None] * d[ray]
+    if rad > 0.0:
+        point -= rad * normal
+    return RayHits(body, point, normal, t, ray)
 
 
 # --------------------------------------------------------------------------------------
@@ -686,11 +750,12 @@ def nearest(world, points: Any, max_distance: Any, mask: Any = None,
     """Nearest body within ``max_distance`` (m, finite, >= 0) of each point (N, 2), m.
 
     Candidates: bodies entered in the grid cells that the point's box p +- max_distance
-    covers (``_grid``, as the ray casts'), and the big bodies. Each candidate's field at the point (``toi._distance``: compiled
-    programs, one batch per distinct shape); the least per point, ties to the lowest
-    body index; values above max_distance are dropped. Distances are exact for exact
-    fields (circles, meshes, most primitives) and a lower bound for the fields marked
-    inexact (``Field.exact``), within the grid's error bound for baked grids.
+    covers (``_grid``, as the ray casts'), and the big bodies. Each candidate's field
+    at the point (``toi._distance``: compiled programs, one batch per distinct shape);
+    the least per point, ties to the lowest body index; values above max_distance are
+    dropped. Distances are exact for exact fields (circles, meshes, most primitives) and
+    a lower bound for the fields marked inexact (``Field.exact``), within the grid's
+    error bound for baked grids.
     """
     from .toi import _distance
 

@@ -731,6 +731,16 @@ class World(WorldJoints):
         ``distance`` as ``ray_cast``'s (each body once, at its first entry)."""
         return queries.cast(self, origins, directions, max_distance, True, mask, bodies)
 
+    def circle_cast(self, origins: Any, directions: Any, radius: float,
+                    max_distance: float = math.inf, mask: Any = None,
+                    bodies: Any = None) -> queries.RayHits:
+        """``ray_cast`` of a disc of ``radius`` (m, >= 0) swept from each origin: the first
+        body it touches; ``distance`` is how far its centre travelled (0 if it overlaps
+        a body at the start), ``point`` the contact on the body's surface, ``normal`` the
+        body's outward normal there (pymunk's ``segment_query_first`` with a radius)."""
+        return queries.cast(self, origins, directions, max_distance, False, mask, bodies,
+                            radius)
+
     def point_query(self, points: Any, max_distance: float, mask: Any = None,
                     bodies: Any = None) -> queries.PointHits:
         """Nearest body to each point within max_distance (m, finite): ``body`` (N,), -1

@@ -77,6 +77,48 @@ def test_ray_cast_matches_pymunk_segment_query_first():
     assert checked > 500
 
 
+def test_circle_cast_matches_pymunk_segment_query_with_a_radius():
+    rng = np.random.default_rng(23)
+    world, _, index = pymunk_scene(rng)
+    n, length, radius = 2000, 15.0, 0.25
+    origins = rng.uniform(-12, 12, (n, 2))
+    directions = rng.normal(size=(n, 2))
+    outside = world.point_query(origins, radius + 1e-6).body < 0
+    hits = world.circle_cast(origins, directions, radius, length)
+    unit = directions / np.hypot(*directions.T)[:, None]
+    checked = 0
+    for k in np.flatnonzero(outside):
+        end = origins[k] + length * unit[k]
+        # Each shape's own query, the nearest: pymunk's space query looks the segment up
+        # in its spatial index without the radius, and misses shapes it grazes.
+        found = [q.segment_query(tuple(origins[k]), tuple(end), radius) for q in index]
+        found = [q for q in found if q is not None and q.shape is not None]
+        info = min(found, key=lambda q: q.alpha) if found else None
+        if info is None:
+            assert hits.body[k] == -1, k
+            continue
+        checked += 1
+        assert hits.body[k] == index[info.shape], k
+        np.testing.assert_allclose(hits.point[k], info.point, atol=1e-9)
+        np.testing.assert_allclose(hits.normal[k], info.normal, atol=1e-9)
+        assert abs(hits.distance[k] - info.alpha * length) < 1e-9
+    assert checked > 400
+
+
+def test_circle_cast_on_fields_is_the_ray_cast_of_the_grown_field():
+    world = World()
+    world.add_body({"type": "sdf", "field": RING}, position=(0.0, 0.0), kind="static")
+    world.add_body({"type": "sdf", "field": {"type": "circle", "radius": 1.0}},
+                   position=(6.0, 0.0), kind="static")
+    hits = world.circle_cast([[-3.0, 0.0], [0.0, 0.0], [3.0, 0.3]], [[1, 0], [1, 0], [1, 0]],
+                             0.2, 10.0)
+    assert hits.body.tolist() == [0, 0, 1]
+    np.testing.assert_allclose(hits.distance[:2], [3.0 - 1.2, 0.3], atol=1e-12)
+    # The SDF circle grown by 0.2: |(3 + t, 0.3) - (6, 0)| = 1.2.
+    assert abs(hits.distance[2] - (3.0 - math.sqrt(1.2 ** 2 - 0.09))) < 1e-12
+    np.testing.assert_allclose(np.hypot(*(hits.point[2] - [6.0, 0.0])), 1.0, atol=1e-12)
+
+
 def test_ray_from_inside_hits_at_zero_with_the_field_gradient():
     world = World()
     world.add_body({"type": "circle", "radius": 1.0}, position=(0, 0), kind="static")
@@ -285,6 +327,7 @@ def test_overlap_box_on_fields_follows_the_rule():
     (lambda w: w.ray_cast([[0.0, 0.0]], [[1, 0]], 1.0, bodies=[5]), "bodies: has an index"),
     (lambda w: w.point_query([[0.0, 0.0]], math.inf), "max_distance: must be finite"),
     (lambda w: w.overlap_box([0, 0], [-1, 1]), "hi[0]: must be >= lo[0]"),
+    (lambda w: w.circle_cast([[0.0, 0.0]], [[1, 0]], -0.1), "radius: must be >= 0"),
 ])
 def test_bad_input_raises_one_line_naming_the_argument(call, message):
     world = World()
