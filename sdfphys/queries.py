@@ -384,11 +384,7 @@ def _hit(body, ox, oy, dx, dy, rad, top, com, angle, sid, pk_kind, pk_radius, pk
         v0, m = vstart[s], vcount[s]
         first, leaving = math.inf, False
         for i in range(m):
-            ax, ay = verts[v0 + i, 0], verts[v0 + i, 1]
-            j = v0 + (i + 1) % m
-            qx, qy = verts[j, 0] - ax, verts[j, 1] - ay
-            length = math.hypot(qx, qy)
-            enx, eny = qy / length, -qx / length
+            ax, ay, qx, qy, length, enx, eny = _edge(verts, v0, m, i)
             dn = ex * enx + ey * eny
             if dn == 0.0:
                 continue
@@ -440,6 +436,18 @@ def _hit(body, ox, oy, dx, dy, rad, top, com, angle, sid, pk_kind, pk_radius, pk
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _edge(verts, v0, m, i):
+    """Edge i of the counter-clockwise outline verts[v0:v0 + m]: its start (ax, ay), its
+    vector (qx, qy) to the next vertex, its length and its outward unit normal
+    (qy, -qx) / length."""
+    ax, ay = verts[v0 + i, 0], verts[v0 + i, 1]
+    j = v0 + (i + 1) % m
+    qx, qy = verts[j, 0] - ax, verts[j, 1] - ay
+    length = math.hypot(qx, qy)
+    return ax, ay, qx, qy, length, qy / length, -qx / length
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _rounded(px, py, ex, ey, rad, v0, m, verts, code, consts, pt, stack, frames, cur, value,
              grad):
     """First hit (t, nx, ny, inside) of p + t e (body frame) on the polygon
@@ -454,11 +462,7 @@ def _rounded(px, py, ex, ey, rad, v0, m, verts, code, consts, pt, stack, frames,
         return _unit(0.0, gx, gy, True)
     t, nx, ny = math.inf, 1.0, 0.0
     for i in range(m):
-        ax, ay = verts[v0 + i, 0], verts[v0 + i, 1]
-        j = v0 + (i + 1) % m
-        qx, qy = verts[j, 0] - ax, verts[j, 1] - ay
-        length = math.hypot(qx, qy)
-        enx, eny = qy / length, -qx / length
+        ax, ay, qx, qy, length, enx, eny = _edge(verts, v0, m, i)
         dn = ex * enx + ey * eny
         if dn < 0.0:
             ti = ((ax - px) * enx + (ay - py) * eny + rad) / dn
