@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _warm
+from . import _warm, queries
 from .collide import Contacts, find_contacts
 from .collide.filter import PairFilter
 from .collide.narrowphase import PAIR_FUNCTIONS
@@ -1043,3 +1043,46 @@ class World(WorldJoints):
         dynamic = self._view("kind") == _DYNAMIC
         return float(-np.sum(self._view("mass")[dynamic]
                              * (self._view("com")[dynamic] @ self.gravity)))
+
+    # ----------------------------------------------------------------------------------
+    # Queries (``sdfphys.queries``, docs/queries.md)
+    # ----------------------------------------------------------------------------------
+
+    def ray_cast(self, origins: Any, directions: Any, max_distance: float = math.inf,
+                 mask: Any = None, bodies: Any = None) -> queries.RayHits:
+        """Closest hit of each ray (``queries.RayHits``: body (N,), -1 for none; point
+        (N, 2) m; normal (N, 2); distance (N,) m, 0 for a ray starting inside a body).
+
+        origins, directions: (N, 2) (a direction's length does not matter, it must not
+        be zero); max_distance: m, >= 0. bodies: an index array limiting the bodies
+        hit (None: all); mask: reserved for collision categories (None)."""
+        return queries.cast(self, origins, directions, max_distance, False, mask, bodies)
+
+    def ray_cast_all(self, origins: Any, directions: Any, max_distance: float = math.inf,
+                     mask: Any = None, bodies: Any = None) -> queries.RayHits:
+        """Every body each ray enters within max_distance, as flat arrays (H,) sorted
+        by (ray, distance): ``ray`` (H,) the ray index, ``body``, ``point``, ``normal``,
+        ``distance`` as ``ray_cast``'s (each body once, at its first entry)."""
+        return queries.cast(self, origins, directions, max_distance, True, mask, bodies)
+
+    def circle_cast(self, origins: Any, directions: Any, radius: float,
+                    max_distance: float = math.inf, mask: Any = None,
+                    bodies: Any = None) -> queries.RayHits:
+        """``ray_cast`` of a disc of ``radius`` (m, >= 0) swept from each origin: the first
+        body it touches; ``distance`` is how far its centre travelled (0 if it overlaps
+        a body at the start), ``point`` the contact on the body's surface, ``normal`` the
+        body's outward normal there (pymunk's ``segment_query_first`` with a radius)."""
+        return queries.cast(self, origins, directions, max_distance, False, mask, bodies,
+                            radius)
+
+    def point_query(self, points: Any, max_distance: float, mask: Any = None,
+                    bodies: Any = None) -> queries.PointHits:
+        """Nearest body to each point within max_distance (m, finite): ``body`` (N,), -1
+        for none, and its signed distance (N,) m (< 0 inside, inf for none)."""
+        return queries.nearest(self, points, max_distance, mask, bodies)
+
+    def overlap_box(self, lo: Any, hi: Any, mask: Any = None,
+                    bodies: Any = None) -> np.ndarray:
+        """Indices (K,) int64, increasing, of the bodies whose shape overlaps the
+        axis-aligned box [lo, hi] (each (2,), m); rule in ``queries.overlapping``."""
+        return queries.overlapping(self, lo, hi, mask, bodies)
