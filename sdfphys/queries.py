@@ -4,8 +4,8 @@ Every query reads the world as it is (no step), in world coordinates (m), and ta
 each body's own shape field (``Shape.field``, as time of impact does; the knobs
 ``gradient`` / ``field_representation`` do not apply). ``World.ray_cast``,
 ``ray_cast_all``, ``point_query`` and ``overlap_box`` call the functions here.
-Which bodies: all, or an index array ``bodies``; ``mask`` (category bits) is reserved
-for collision filtering and must be None until bodies carry categories.
+Which bodies: those whose collision ``category`` shares a bit with ``mask`` (None: all),
+and of those the ones in the index array ``bodies`` (None: all).
 
 Ray casts (``cast``, one numba kernel ``_cast``, no Python loop over rays or bodies).
 
@@ -66,7 +66,8 @@ import numpy as np
 
 from ._jit import njit
 from .collide.broadphase import world_bounds
-from .errors import SpecError, check_number
+from .errors import SpecError, check_int, check_number
+from .limits import MAX_BITS
 from .sdf.compiled import compile_field, run
 from .sdf.opcodes import POP_T, PUSH_T
 
@@ -148,12 +149,15 @@ def _points(value: Any, name: str) -> np.ndarray:
     return np.ascontiguousarray(a)
 
 
-def _bodies(bodies: Any, n: int, mask: Any) -> np.ndarray:
-    """(B,) bool selection of the world's n bodies."""
-    if mask is not None:
-        raise SpecError("mask", "is not supported yet (bodies have no categories); "
-                                "pass bodies=index array")
+def _bodies(bodies: Any, category: np.ndarray, mask: Any) -> np.ndarray:
+    """(B,) bool selection of the world's bodies (category (B,) uint64: their collision
+    categories): those whose category shares a bit with ``mask`` (None: all; Box2D's
+    query filter), and among them those listed in ``bodies`` (None: all)."""
+    n = len(category)
     keep = np.ones(n, np.bool_)
+    if mask is not None:
+        bits = np.uint64(check_int(mask, "mask", low=0, high=MAX_BITS))
+        keep = (category & bits) != 0
     if bodies is None:
         return keep
     idx = np.asarray(bodies)
@@ -161,9 +165,9 @@ def _bodies(bodies: Any, n: int, mask: Any) -> np.ndarray:
         raise SpecError("bodies", f"must be a 1-D array of body indices, got {bodies!r}")
     if len(idx) and (idx.min() < -n or idx.max() >= n):
         raise SpecError("bodies", f"has an index out of range ({n} bodies)")
-    keep[:] = False
-    keep[idx.astype(np.int64) % max(n, 1)] = True
-    return keep
+    listed = np.zeros(n, np.bool_)
+    listed[idx.astype(np.int64) % max(n, 1)] = True
+    return keep & listed
 
 
 def _rays(origins: Any, directions: Any, max_distance: Any
@@ -662,14 +666,14 @@ def cast(world, origins: Any, directions: Any, max_distance: Any = math.inf,
     """Ray casts against ``world`` (``World.ray_cast`` / ``ray_cast_all`` /
     ``circle_cast``; module docstring). origins, directions: (N, 2) m and any nonzero
     length (normalised here); max_distance: m, >= 0 (inf allowed). every: all hits
-    (``RayHits.ray`` set) instead of the closest per ray. mask: None (reserved). bodies:
+    (``RayHits.ray`` set) instead of the closest per ray. mask: category bits (None: all). bodies:
     index array or None (all). radius: m, >= 0, a disc of that radius swept along each
     ray (every shape grown by it): ``distance`` is how far its centre travels, ``point``
     the contact on the body's surface (centre - radius normal)."""
     o, d, top = _rays(origins, directions, max_distance)
     rad = check_number(radius, "radius", low=0.0)
     n = len(world)
-    keep = _bodies(bodies, n, mask)
+    keep = _bodies(bodies, world._view("category"), mask)
     pk = _packed(world)
     com = np.ascontiguousarray(world._view("com"))
     angle = np.ascontiguousarray(world._view("angle"))
@@ -766,7 +770,7 @@ def nearest(world, points: Any, max_distance: Any, mask: Any = None,
     p = _points(points, "points")
     top = check_number(max_distance, "max_distance", low=0.0)
     n = len(world)
-    keep = _bodies(bodies, n, mask)
+    keep = _bodies(bodies, world._view("category"), mask)
     box = _world_boxes(world, keep)
     point, body = _point_pairs(box, keep, p, top)
     d = _distance([s.field for s in world._shapes], world._view("shape_id"),
@@ -810,7 +814,7 @@ def overlapping(world, lo: Any, hi: Any, mask: Any = None, bodies: Any = None) -
         if b[k] < a[k]:
             raise SpecError(f"hi[{k}]", f"must be >= lo[{k}] = {a[k]:g}, got {b[k]:g}")
     n = len(world)
-    keep = _bodies(bodies, n, mask)
+    keep = _bodies(bodies, world._view("category"), mask)
     box = _world_boxes(world, keep)
     cand = np.flatnonzero((box[:, 0] <= b[0]) & (a[0] <= box[:, 2])
                           & (box[:, 1] <= b[1]) & (a[1] <= box[:, 3]))

@@ -135,7 +135,7 @@ class Body:
     handles, ``set_state``, ``remove_body``, ``apply_force``, ...), so it stays valid
     while other bodies are removed; after its
     own body is removed, using it raises IndexError. It equals its current index and the
-    handles of the same body, and hashes by ``id``.
+    handles of the same body, orders as its index, and hashes by ``id``.
     """
 
     __slots__ = ("_world", "id")
@@ -170,6 +170,17 @@ class Body:
                 return self.index == other
             except IndexError:
                 return False
+        return NotImplemented
+
+    def __lt__(self, other: object) -> bool:
+        """Handles order as their current indices (``sorted`` of handles: scene order)."""
+        if isinstance(other, (Body, int, np.integer)) and not isinstance(other, bool):
+            return self.index < int(other)
+        return NotImplemented
+
+    def __gt__(self, other: object) -> bool:
+        if isinstance(other, (Body, int, np.integer)) and not isinstance(other, bool):
+            return self.index > int(other)
         return NotImplemented
 
     def __hash__(self) -> int:

@@ -316,6 +316,22 @@ def test_overlap_box_on_fields_follows_the_rule():
             assert least <= np.hypot(*(hi - lo)) / 2 / 2 ** OVERLAP_LEVELS + spacing
 
 
+def test_mask_selects_bodies_by_category():
+    # Box2D's query filter: a body is seen when its category shares a bit with the mask;
+    # bodies= narrows the selection further.
+    world = World()
+    near = world.add_body({"type": "circle", "radius": 0.5}, position=(2.0, 0.0), category=2)
+    far = world.add_body({"type": "circle", "radius": 0.5}, position=(5.0, 0.0), category=4)
+    cast = [[0.0, 0.0]], [[1.0, 0.0]], 10.0
+    assert world.ray_cast(*cast).body.tolist() == [near]
+    assert world.ray_cast(*cast, mask=4).body.tolist() == [far]
+    assert world.ray_cast(*cast, mask=6).distance.tolist() == [1.5]
+    assert world.ray_cast(*cast, mask=1).body.tolist() == [-1]
+    assert world.ray_cast(*cast, mask=6, bodies=[far]).body.tolist() == [far]
+    assert world.point_query([[2.0, 0.0]], 1.0, mask=4).body.tolist() == [-1]
+    assert world.overlap_box([1.0, -1.0], [6.0, 1.0], mask=2).tolist() == [near]
+
+
 @pytest.mark.parametrize("call, message", [
     (lambda w: w.ray_cast([[math.nan, 0.0]], [[1, 0]], 1.0), "origins[0][0]: must be finite"),
     (lambda w: w.ray_cast([[0.0, 0.0]], [[0, 0]], 1.0), "directions[0]: must be a nonzero"),
@@ -323,7 +339,7 @@ def test_overlap_box_on_fields_follows_the_rule():
     (lambda w: w.ray_cast([0.0, 0.0, 1.0], [[1, 0]], 1.0), "origins: must have shape (N, 2)"),
     (lambda w: w.ray_cast([[0.0, 0.0]], [[1, 0], [0, 1]], 1.0),
      "directions: must have the shape of origins"),
-    (lambda w: w.ray_cast([[0.0, 0.0]], [[1, 0]], 1.0, mask=3), "mask: is not supported"),
+    (lambda w: w.ray_cast([[0.0, 0.0]], [[1, 0]], 1.0, mask=-1), "mask: must be >= 0"),
     (lambda w: w.ray_cast([[0.0, 0.0]], [[1, 0]], 1.0, bodies=[5]), "bodies: has an index"),
     (lambda w: w.point_query([[0.0, 0.0]], math.inf), "max_distance: must be finite"),
     (lambda w: w.overlap_box([0, 0], [-1, 1]), "hi[0]: must be >= lo[0]"),

@@ -431,6 +431,7 @@ def test_handles_follow_their_bodies_through_removals():
         w.body("bb")
     d = w.add_body(BALL)
     assert d.id == 3 and d == 2 and a != d
+    assert sorted([d, c, b]) == [b, c, d] and b < 1 < d and d > c      # ordered as indices
 
 
 @pytest.mark.parametrize("how", ["deepcopy", "pickle"])
