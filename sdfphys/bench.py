@@ -119,6 +119,7 @@ SWEEPS: dict[str, tuple[Any, ...]] = {
     "stiff_island_limit": (0, 64),
     "large_island_load_cap": (1.0, 2.0, 4.0),
     "soft_depth": (0.0, 0.005, 0.02, 1.0),
+    "split_push_out": (0.0, 0.2, 0.5, 1.0),
 }
 
 #: Reduced sweeps of the quick bench.
@@ -141,7 +142,7 @@ COLUMNS = ("scene", "answer", "setting", "group", "knob", "value", "error", "pos
 
 _CONTACT_KNOBS = ("relax_passes", "contact_hertz", "contact_damping_ratio", "warm_starting",
                   "speculative_distance", "contacts_per_pair", "large_island_load_cap",
-                  "soft_depth")
+                  "soft_depth", "split_push_out")
 _SDF_PAIRS = ("circle_sdf", "mesh_sdf", "sdf_sdf")
 
 

@@ -76,6 +76,11 @@ class Settings:
         "entering the velocities (split push-out): packed or jammed bodies separate at most at "
         "max_push_out and are not ejected. 0: every overlap split; a large value: "
         "every contact soft (Box2D v3).", low=0.0)
+    split_push_out: float = _knob(
+        0.5, "", "Fraction of a split contact's overlap (deeper than soft_depth) pushed out "
+        "per substep, at least, capped by max_push_out (a Baumgarte factor on the "
+        "pseudo-velocities). 0: at the soft contact's rate alone (0.14 of it a step).",
+        low=0.0, high=1.0)
     load_stiffening: bool = _knob(
         True, "", "Stiffen the contacts of a body that carries more than its own weight "
         "in proportion to that load (in islands over stiff_island_limit bodies, up to "

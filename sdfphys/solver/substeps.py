@@ -277,13 +277,23 @@ def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_
 # impulses; Chipmunk's bias velocities, which pymunk runs):
 # - in the velocities it is rigid (bias 0, mass_scale 1, impulse_scale 0): it stops
 #   the approach and holds the load, its accumulated impulse warm-starts as any other;
-# - its push-out bias = max(mass_scale bias_rate s, -max_push_out), the soft row's
-#   own, is a target for the pair's pseudo-velocities v' (per body, zero at the start
-#   of every substep): d_p = -m_n (n.(v'_b - v'_a at the contact) + bias), p >= 0;
-# - the positions move by h (v + v') and v' is then dropped: the overlap goes at the
-#   soft row's rate, no faster than max_push_out per contact, and no kinetic energy is
-#   made. A jam's push-out impulses are bounded by the passes of one substep and never
-#   stored.
+# - its push-out bias = max(min(mass_scale bias_rate s, beta (s + soft_depth) / h),
+#   -(max_push_out - max(vn, 0))), the faster of the soft row's own and a Baumgarte
+#   fraction beta (``Settings.split_push_out``) of the overlap beyond soft_depth per
+#   substep, capped so that with the pair's own separating speed vn (after its rigid
+#   row) it stays within max_push_out, is a target for the pair's pseudo-velocities v'
+#   (per body, zero at the start of every substep):
+#   d_p = -m_n (n.(v'_b - v'_a at the contact) + bias), p >= 0;
+# - the positions move by h (v + v') and v' is then dropped: the overlap goes no faster
+#   than max_push_out per contact, and no kinetic energy is made. A jam's push-out
+#   impulses are bounded by the passes of one substep and never stored.
+# Why beta: the soft rate (bias_rate ~ 9/s at the defaults, 14 % of an overlap a step)
+# is slower than a rolling or spinning body presses new overlap in (a body rolling on a
+# curved field, a circle squeezed by a turning horn). beta = 0.5 takes 94 % of the
+# excess out in a step's four substeps (Box2D v2's position solver: 0.2 per iteration,
+# 3 iterations); pushing out only the excess over soft_depth leaves the last 5 mm to
+# the soft row, so a column settling from deep overlap onto its soft rows never sinks
+# back. Figures: docs/solver.md, "Split push-out".
 # Shallower rows stay soft: resting contacts sag by a fraction of a millimetre
 # (impulse_scale g h / (mass_scale bias_rate) = 0.07 mm for a body on the ground at
 # the defaults; a body under n others about n times that, less with load stiffening),
@@ -318,8 +328,8 @@ def _pseudo_push(pseudo_velocity, pseudo_angular, pseudo_impulse, k, a, b, ma, i
 
 
 @njit(cache=True)
-def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, use_bias,
-           use_friction):
+def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, split_rate,
+           use_bias, use_friction):
     """One Gauss-Seidel pass over the pairs ``pairs`` (indices into pair_start, in order):
     normal rows of the pair, then its friction rows.
 
@@ -334,9 +344,10 @@ def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, use_bia
     Accumulated l_n >= 0. Friction row: d_l = -m_t vt, accumulated |l_t| <= mu l_n.
     A row deeper than ``soft_depth`` (s < -soft_depth, see "Split push-out") is rigid in
     the velocities and, with ``use_bias``, pushes its pair apart in the pseudo-velocities
-    instead:
-    d_p = -m_n (vn' + bias) on the pair's pseudo-velocities vn', accumulated p >= 0
-    (``pseudo_impulse``, reset every substep).
+    instead: d_p = -m_n (vn' + bias) on the pair's pseudo-velocities vn', accumulated
+    p >= 0 (``pseudo_impulse``, reset every substep), with bias = max(min(mass_scale
+    bias_rate s, split_rate (s + soft_depth) / h), -(max_push_out - max(vn, 0))), vn the
+    row's relative normal velocity after its rigid impulse ("Split push-out").
 
     Returns (largest |d_l_n|, largest accumulated l_n) over the pass, N s: how far the
     pass was from converged (``_sweeps``' extra passes stop on their ratio).
@@ -369,12 +380,11 @@ def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, use_bia
             ray = anchor_a[k, 1]
             rbx = anchor_b[k, 0]
             rby = anchor_b[k, 1]
+            split = False
             if s > 0.0:
                 bias = s * inv_h
             elif use_bias and s < -soft_depth:
-                _pseudo_push(pseudo_velocity, pseudo_angular, pseudo_impulse, k, a, b, ma, ia,
-                             mb, ib, nx, ny, rax, ray, rbx, rby, normal_mass[k],
-                             max(mass_scale[k] * bias_rate[k] * s, -max_push_out))
+                split = True
             elif use_bias:
                 bias = max(mass_scale[k] * bias_rate[k] * s, -max_push_out)
                 m_scale = mass_scale[k]
@@ -392,6 +402,16 @@ def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, use_bia
             py = impulse * ny
             vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
                                                rax, ray, rbx, rby, px, py)
+            if split:
+                # The push-out's cap counts the pair's own separating speed (vn >= 0 after
+                # the rigid row): together they stay within max_push_out.
+                dvx, dvy = _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby)
+                cap = max(max_push_out - max(dvx * nx + dvy * ny, 0.0), 0.0)
+                push = min(mass_scale[k] * bias_rate[k] * s,
+                           split_rate * inv_h * (s + soft_depth))
+                _pseudo_push(pseudo_velocity, pseudo_angular, pseudo_impulse, k, a, b, ma, ia,
+                             mb, ib, nx, ny, rax, ray, rbx, rby, normal_mass[k],
+                             max(push, -cap))
         if use_friction:
             for k in range(first, last):
                 mu = friction[k]
@@ -419,7 +439,7 @@ def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, use_bia
 
 @njit(cache=True)
 def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_depth,
-            use_bias, use_friction, passes, extra_passes, rest_passes, joints):
+            split_rate, use_bias, use_friction, passes, extra_passes, rest_passes, joints):
     """One phase of a substep: ``passes`` ``_solve`` passes over every pair, then, if any
     ran, up to ``extra_passes`` more over the loaded islands' pairs, stopping after a
     pass whose largest normal impulse change is at most CONVERGED times the largest
@@ -435,8 +455,8 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_d
     """
     loaded_pairs, small_pairs = loaded
     for _ in range(passes):
-        _solve(bodies, rows, pseudo, all_pairs, inv_h, max_push_out, soft_depth, use_bias,
-               use_friction)
+        _solve(bodies, rows, pseudo, all_pairs, inv_h, max_push_out, soft_depth, split_rate,
+               use_bias, use_friction)
     if passes == 0 or loaded_pairs.shape[0] == 0:
         return 0
     for n in range(extra_passes):
@@ -444,7 +464,7 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_d
         if pairs.shape[0] == 0:
             return n
         change, impulse = _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out,
-                                 soft_depth, use_bias, use_friction)
+                                 soft_depth, split_rate, use_bias, use_friction)
         joints_converged = True
         if joints is not None:
             _joint_phase(joints, SOLVE if use_bias else RELAX, inv_h, 1, False)
@@ -471,7 +491,7 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
                      bias_rate, mass_scale, impulse_scale, normal_impulse, tangent_impulse,
                      total_normal_impulse, total_tangent_impulse, h, substeps, relax_passes,
                      max_push_out, max_speed, use_friction, extra_passes, rest_passes, soft_depth,
-                     joints, accel):
+                     split_rate, joints, accel):
     """All substeps of one step: integrate v, warm start, solve, integrate x, relax.
 
     joints: None (no joints: no joint code is compiled, numba prunes the branches on the
@@ -534,8 +554,8 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             _joint_phase(joints, SOLVE, inv_h, joint_passes_max, False)
         if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
-                                  max_push_out, soft_depth, True, use_friction, 1, extra_passes,
-                                  rest_passes, joints)
+                                  max_push_out, soft_depth, split_rate, True, use_friction, 1,
+                                  extra_passes, rest_passes, joints)
         _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h)
         if split:
             _integrate_pseudo(com, angle, pseudo_velocity, pseudo_angular, pseudo_impulse, h)
@@ -547,8 +567,8 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
             _joint_phase(joints, RELAX, inv_h, max(relax_passes, joint_passes_max), True)
         if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
-                                  max_push_out, soft_depth, False, use_friction, relax_passes,
-                                  extra_passes, rest_passes, joints)
+                                  max_push_out, soft_depth, split_rate, False, use_friction,
+                                  relax_passes, extra_passes, rest_passes, joints)
     return passes_run, push_outs
 
 
@@ -602,7 +622,8 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         c.normal_impulse, c.tangent_impulse, c.total_normal_impulse, c.total_tangent_impulse,
         h, settings.substeps, settings.relax_passes, settings.max_push_out,
         settings.max_linear_speed, use_friction, settings.stiff_iterations - 1,
-        settings.rest_iterations - 1, settings.soft_depth, joint_args, accel)
+        settings.rest_iterations - 1, settings.soft_depth, settings.split_push_out, joint_args,
+        accel)
     if joint_args is not None:
         cap[0] = stiffening[4]
     # Friction applied in substep s is its accumulated value at the substep's end, l_s:
