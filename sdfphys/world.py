@@ -61,6 +61,7 @@ from .solver import (
     store_impulses,
 )
 from .toi import _distance, fast_bodies, step_fractions
+from .vec2 import rotate
 
 __all__ = ["KINDS", "PAIR_STAGES", "STAGES", "Body", "World"]
 
@@ -112,15 +113,9 @@ _ARRAYS: dict[str, tuple[tuple[int, ...], Any]] = {
 }
 
 
-def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """Rows of ``v`` (N, 2) rotated counter-clockwise by ``angle`` (N,) rad."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.column_stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]])
-
-
 def _rotate_one(v: np.ndarray, angle: float) -> np.ndarray:
     """(2,) ``v`` rotated counter-clockwise by ``angle`` rad (numpy's cos and sin, as
-    ``_rotate``: the same bits)."""
+    ``vec2.rotate``: the same bits)."""
     a = np.array([angle], dtype=np.float64)
     c, s = float(np.cos(a)[0]), float(np.sin(a)[0])
     return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
@@ -722,7 +717,7 @@ class World(WorldJoints):
         away = np.where(length[:, None] > 0.0, away / np.where(length > 0.0, length, 1.0)[:, None],
                         np.array([1.0, 0.0]))
         # Width across the blast: the body's extent along the perpendicular, in its frame.
-        across = _rotate(np.column_stack([-away[:, 1], away[:, 0]]), -angle[body])
+        across = rotate(np.column_stack([-away[:, 1], away[:, 0]]), -angle[body])
         width = np.empty(len(body))
         for sid in np.unique(shape_id[body]):
             rows = np.flatnonzero(shape_id[body] == sid)
@@ -964,7 +959,7 @@ class World(WorldJoints):
     @property
     def position(self) -> np.ndarray:
         """(B, 2) m, world position of each body's user frame origin."""
-        return _read_only(self._view("com") + _rotate(self._view("origin"),
+        return _read_only(self._view("com") + rotate(self._view("origin"),
                                                       self._view("angle")))
 
     @property

@@ -1,7 +1,7 @@
 """Bit-for-bit determinism of the curved primitives that take dot products of points.
 
 segment, capsule, pie, ring, horseshoe and quadratic_bezier project points on fixed
-directions; those products are written out (``curved._rows_dot``) instead of BLAS
+directions; those products are written out (``vec2.rows_dot``) instead of BLAS
 ``q @ c``, which rounds a row differently depending on its place in the batch. So a
 point gets the same bits alone as in any batch, and segment, capsule, pie, ring and
 horseshoe give exactly the compiled program's bits (``sdfphys.sdf.compiled``, whose

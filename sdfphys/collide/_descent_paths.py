@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from .._jit import njit
+from ..vec2 import TINY
 
 TRIANGLE = 0
 PAIR = 1
@@ -47,7 +48,6 @@ KINK = 1e-3
 #: Weight k of the imbalance in the field-field objective (f_a + f_b) / 2 + k |f_a - f_b|.
 IMBALANCE = 0.25
 EPS = np.finfo(np.float64).eps
-TINY = 1e-300
 
 # Columns of ``state``.
 BEST = 0          # b (2)

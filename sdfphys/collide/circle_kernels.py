@@ -50,13 +50,11 @@ import math
 import numpy as np
 
 from .._jit import njit
+from ..vec2 import TINY
 from .broadphase import body_box
 from .polygons import clip_pair
 
 __all__ = ["BOX", "CIRCLE", "OTHER", "POLYGON", "analytic_contacts", "merge_order", "reach_and_boxes"]
-
-#: Vectors not longer than this normalize to (1, 0) (``sdf.base._TINY``).
-_TINY_LENGTH = 1e-300
 
 
 @njit(cache=True)
@@ -229,7 +227,7 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
             d = (rf + shape_radius[ss]) - distance
             if not (d > -group_margin and d > -((margin + reach[f]) + reach[s])):
                 continue
-            if distance > _TINY_LENGTH:
+            if distance > TINY:
                 nx = dx / distance
                 ny = dy / distance
             else:
@@ -253,7 +251,7 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
             if not (d > -group_margin and d > -((margin + reach[f]) + reach[s])):
                 continue
             length = math.hypot(gx, gy)
-            if length > _TINY_LENGTH:
+            if length > TINY:
                 gx = gx / length
                 gy = gy / length
             else:

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..sdf import Field, safe_normalize
 from ..sdf.compiled import Program, compile_field
+from ..vec2 import TINY
 from . import _descent_paths as paths
 from . import descent
 from ._compiled_descent import field_contacts, patch_ends
@@ -33,7 +34,6 @@ __all__ = ["field_field_contacts", "field_field_contacts_single"]
 _MERGE = 1e-3
 #: Thickness of the sliver measuring a flat patch, as a fraction of the region's diagonal.
 _SLIVER = 1e-9
-_TINY = 1e-300
 
 
 def _rotations(angle: np.ndarray) -> np.ndarray:
@@ -327,7 +327,7 @@ def field_field_contacts(field_a: Field, field_b: Field, poses_b_in_a: np.ndarra
     problem = _PairProblem(field_a, field_b, _rotations(poses[live, 2]), poses[live, :2],
                            pair_of)
     extent = hi - lo
-    scale = np.maximum(np.hypot(extent[:, 0], extent[:, 1]), _TINY)    # (L,) diagonals
+    scale = np.maximum(np.hypot(extent[:, 0], extent[:, 1]), TINY)    # (L,) diagonals
 
     # Starts and descent.
     unit = _starts(n_starts)

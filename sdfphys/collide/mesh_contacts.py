@@ -57,6 +57,7 @@ from ..sdf import Field, compiled, safe_normalize
 from ..sdf.compiled import run, scratch
 from ..settings import Settings
 from ..shapes import Shape
+from ..vec2 import unit_or
 from . import descent
 from ._compiled_descent import enclosing_circles
 
@@ -363,7 +364,6 @@ _PROBE_OFFSETS = _PROBE * _AXES
 #: Start weights (K, 3) per number of descent starts, in ``_START_PRIORITY`` order.
 _STARTS = {k: np.ascontiguousarray(descent.START_BARYCENTRIC[_START_PRIORITY[:k]])
            for k in range(1, len(_START_PRIORITY) + 1)}
-_TINY = 1e-300                          # ``sdf.safe_normalize``'s zero length
 
 
 @njit(cache=True, error_model="numpy")
@@ -374,15 +374,6 @@ def _evaluate(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int,
     value, grad = np.empty(n), np.empty((n, 2))
     run(code, consts, points, n, stack, frames, cur, value, grad)
     return value, grad
-
-
-@njit(cache=True, error_model="numpy")
-def _unit(x: float, y: float) -> tuple[float, float]:
-    """``sdf.safe_normalize`` of one row: (x, y) / |(x, y)|, (1, 0) for a zero vector."""
-    length = math.hypot(x, y)
-    if length > _TINY:
-        return x / length, y / length
-    return 1.0, 0.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -552,7 +543,7 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
                 probes[c + 4 * i + a, 1] = p[i, 1] + _PROBE_OFFSETS[a, 1]
         f_probe, g = _evaluate(code, consts, depth_p, nesting, probes, 5 * c)
         for i in range(5 * c):
-            g[i, 0], g[i, 1] = _unit(g[i, 0], g[i, 1])
+            g[i, 0], g[i, 1] = unit_or(g[i, 0], g[i, 1], 1.0, 0.0)
         sides = np.empty((2 * c, 2))
         for i in range(c):
             fx, fy = p[i, 0] + depth[i] * g[i, 0], p[i, 1] + depth[i] * g[i, 1]
@@ -570,7 +561,8 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
                 if a < 4:
                     hx, hy = g[c + 4 * i + a, 0], g[c + 4 * i + a, 1]
                 else:
-                    hx, hy = _unit(g_foot[i + (a - 4) * c, 0], g_foot[i + (a - 4) * c, 1])
+                    hx, hy = unit_or(g_foot[i + (a - 4) * c, 0], g_foot[i + (a - 4) * c, 1],
+                                     1.0, 0.0)
                 ok = ok and (hx - gx) * (hx - gx) + (hy - gy) * (hy - gy) <= kink2
             d = depth[i]
             if not ok and d > 0.0:
@@ -596,7 +588,7 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
     else:
         _, g = _evaluate(code, consts, depth_p, nesting, p, c)
         for i in range(c):
-            normal[i, 0], normal[i, 1] = _unit(g[i, 0], g[i, 1])
+            normal[i, 0], normal[i, 1] = unit_or(g[i, 0], g[i, 1], 1.0, 0.0)
     # 4. Reference faces (``_reference_faces``).
     r_idx = np.empty(c * m, dtype=np.int64)
     v_idx = np.empty(c * m, dtype=np.int64)

@@ -72,8 +72,9 @@ from .._jit import njit
 from ..sdf import Field, compiled, safe_normalize
 from ..settings import Settings
 from ..shapes import Shape
+from ..vec2 import rotate_cs, unit_or
 from . import field_pairs
-from .mesh_contacts import _evaluate, _unit
+from .mesh_contacts import _evaluate
 
 __all__ = ["FAR_END", "REFINE_ROUNDS", "SDF_CALLS", "sdf_in_mesh"]
 
@@ -133,11 +134,6 @@ _MEDIAL = 1e-2
 _FALL = 4.0 * np.finfo(float).eps
 
 
-def _rotate(v: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
-    """Rows of v (N, 2) rotated counter-clockwise by the angles of cos, sin (N,)."""
-    return np.stack([cos * v[:, 0] - sin * v[:, 1], sin * v[:, 0] + cos * v[:, 1]], axis=1)
-
-
 class _MeshInSdfFrame:
     """The mesh's field seen from the sdf's frame, for P placements (one call per batch).
 
@@ -150,12 +146,12 @@ class _MeshInSdfFrame:
 
     def to_mesh(self, points: np.ndarray, pair: np.ndarray) -> np.ndarray:
         """Points (N, 2) of the sdf's frame into the mesh's frame of pairs (N,)."""
-        return _rotate(points - self.offset[pair], self.cos[pair], -self.sin[pair])
+        return rotate_cs(points - self.offset[pair], self.cos[pair], -self.sin[pair])
 
     def evaluate(self, points: np.ndarray, pair: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """f_mesh (N,) and its unit gradient (N, 2) (sdf frame) at points (N, 2), pairs (N,)."""
         f, g = compiled.evaluate(self.field, self.to_mesh(points, pair))
-        return f, _rotate(safe_normalize(g), self.cos[pair], self.sin[pair])
+        return f, rotate_cs(safe_normalize(g), self.cos[pair], self.sin[pair])
 
 
 def _project(sdf: Field, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -379,7 +375,7 @@ def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.nda
     """
     angle = pose_mesh[:, 2] - pose_sdf[:, 2]
     co, so = np.cos(pose_sdf[:, 2]), np.sin(pose_sdf[:, 2])
-    offset = _rotate(pose_mesh[:, :2] - pose_sdf[:, :2], co, -so)      # mesh in sdf frame
+    offset = rotate_cs(pose_mesh[:, :2] - pose_sdf[:, :2], co, -so)      # mesh in sdf frame
     pair, point, depth, _, start = field_pairs.field_field_contacts(
         sdf.field, mesh.field, np.column_stack([offset, angle]), region,
         n_starts=settings.field_descent_starts, iterations=settings.field_descent_iterations,
@@ -450,8 +446,8 @@ def _support_numpy(mesh: Shape, sdf: Shape, pose_sdf: np.ndarray, angle: np.ndar
                                       edge[order], start[order])
     mid = z + (0.5 * depth)[:, None] * n
     co, so = co[pair], so[pair]
-    world_mid = _rotate(mid, co, so) + pose_sdf[pair, :2]
-    return pair, world_mid, _rotate(n, co, so), depth, edge, start
+    world_mid = rotate_cs(mid, co, so) + pose_sdf[pair, :2]
+    return pair, world_mid, rotate_cs(n, co, so), depth, edge, start
 
 
 # --------------------------------------------------------------------------------------
@@ -465,7 +461,7 @@ def _project_compiled(code: np.ndarray, consts: np.ndarray, depth: int, nesting:
     f, g = _evaluate(code, consts, depth, nesting, w, n)
     z = np.empty((n, 2))
     for j in range(n):
-        g[j, 0], g[j, 1] = _unit(g[j, 0], g[j, 1])
+        g[j, 0], g[j, 1] = unit_or(g[j, 0], g[j, 1], 1.0, 0.0)
         z[j, 0], z[j, 1] = w[j, 0] - f[j] * g[j, 0], w[j, 1] - f[j] * g[j, 1]
     return z, g
 
@@ -502,7 +498,7 @@ def _mesh_compiled(code: np.ndarray, consts: np.ndarray, depth: int, nesting: in
         q[j, 0], q[j, 1] = _to_mesh(points[j, 0], points[j, 1], pair[j], cos, sin, offset)
     f, g = _evaluate(code, consts, depth, nesting, q, n)
     for j in range(n):
-        ux, uy = _unit(g[j, 0], g[j, 1])
+        ux, uy = unit_or(g[j, 0], g[j, 1], 1.0, 0.0)
         c, s = cos[pair[j]], sin[pair[j]]
         g[j, 0], g[j, 1] = c * ux - s * uy, s * ux + c * uy
     return f, g

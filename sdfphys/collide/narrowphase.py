@@ -65,6 +65,7 @@ from ..sdf.operators import Scale, Transform
 from ..sdf.polygonal import HalfPlane
 from ..settings import Settings
 from ..shapes import Shape
+from ..vec2 import rotate
 from .contacts import Contacts
 from .mesh_contacts import mesh_in_field
 from .polygons import polygon_contacts, polygon_table
@@ -102,15 +103,9 @@ def feature_key(source: int, element: np.ndarray | int, start: np.ndarray | int)
             | np.asarray(start, np.int64))
 
 
-def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """Rows of v (n, 2) rotated counter-clockwise by angle (n,) radians."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]], axis=1)
-
-
 def _to_local(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
     """World points (n, 2) into the body frames of poses (n, 3): R^T (p - x)."""
-    return _rotate(points - pose[:, :2], -pose[:, 2])
+    return rotate(points - pose[:, :2], -pose[:, 2])
 
 
 def collide_circles(circle_a: Shape, circle_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
@@ -162,7 +157,7 @@ def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray
     if concave:
         outside = d > 0.0            # these get a contact per outline feature within reach
         keep &= ~outside
-    g_world = _rotate(safe_normalize(g[keep]), pose_b[keep, 2])
+    g_world = rotate(safe_normalize(g[keep]), pose_b[keep, 2])
     point = pose_a[keep, :2] - (0.5 * (d[keep] + r))[:, None] * g_world
     contacts = Contacts(body_a[keep], body_b[keep], point, -g_world, depth[keep],
                         np.full(int(np.sum(keep)), feature_key(SOURCE_ANALYTIC, 0, 0), np.int64))
@@ -171,7 +166,7 @@ def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray
     row, out, s, element, start = _circle_outside_concave_mesh(shape_b.vertices,
                                                                centre[outside], r, margin)
     rows = np.flatnonzero(outside)[row]
-    normal = _rotate(out, pose_b[rows, 2])
+    normal = rotate(out, pose_b[rows, 2])
     point = pose_a[rows, :2] - (0.5 * (s + r))[:, None] * normal
     return Contacts.concatenate([contacts, Contacts(
         body_a[rows], body_b[rows], point, -normal, r - s,
@@ -357,8 +352,8 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
         n_starts=settings.field_descent_starts, iterations=settings.field_descent_iterations,
         margin=margin)
     rot = pose_a[pair, 2]
-    return Contacts(body_a[pair], body_b[pair], _rotate(point, rot) + pose_a[pair, :2],
-                    _rotate(normal, rot), depth, feature_key(SOURCE_FIELDS, 0, start))
+    return Contacts(body_a[pair], body_b[pair], rotate(point, rot) + pose_a[pair, :2],
+                    rotate(normal, rot), depth, feature_key(SOURCE_FIELDS, 0, start))
 
 
 #: (kind_a, kind_b) -> pair function, kind_a <= kind_b in KIND_ORDER.

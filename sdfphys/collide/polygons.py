@@ -42,6 +42,7 @@ import math
 import numpy as np
 
 from .._jit import njit
+from ..vec2 import TINY
 
 __all__ = ["SOURCE_CLIP", "clip_pair", "polygon_contacts", "polygon_table"]
 
@@ -49,8 +50,6 @@ __all__ = ["SOURCE_CLIP", "clip_pair", "polygon_contacts", "polygon_table"]
 SOURCE_CLIP = 5
 #: Vertex indices take this many bits in a key's element (vertex_a << 24 | vertex_b).
 _VERTEX_BITS = 24
-#: Vectors no longer than this normalize to (1, 0) (``sdf.base._TINY``).
-_TINY = 1e-300
 
 
 def polygon_table(polygons: list[np.ndarray | None]) -> tuple[np.ndarray, ...]:
@@ -202,7 +201,7 @@ def clip_pair(vertices, normals, start_a, count_a, start_b, count_b, xa, ya, ang
             distance = math.hypot(ux, uy)
             if not -distance > -margin:
                 return k
-            if distance > _TINY:
+            if distance > TINY:
                 ux /= distance
                 uy /= distance
             else:

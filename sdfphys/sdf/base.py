@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import SpecError, check_int, check_number, check_points, check_vec2
+from ..vec2 import TINY
 
 __all__ = [
     "FALLBACK_DIRECTION",
@@ -44,7 +45,6 @@ __all__ = [
 #: Direction used wherever a gradient or normal is undefined (a zero vector).
 FALLBACK_DIRECTION = np.array([1.0, 0.0])
 
-_TINY = 1e-300
 
 
 def as_points(points: Any) -> np.ndarray:
@@ -60,7 +60,7 @@ def as_points(points: Any) -> np.ndarray:
 def safe_normalize(v: np.ndarray, fallback: np.ndarray = FALLBACK_DIRECTION) -> np.ndarray:
     """Rows of ``v`` (N, 2) scaled to unit length; zero rows become ``fallback``."""
     n = np.hypot(v[:, 0], v[:, 1])
-    ok = n > _TINY
+    ok = n > TINY
     out = np.empty_like(v)
     out[ok] = v[ok] / n[ok, None]
     out[~ok] = fallback

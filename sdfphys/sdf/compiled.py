@@ -44,7 +44,7 @@ fields compile once.
 
 Rounding. Most kinds give numpy's bits exactly (tests/test_compiled_fields*.py
 and tests/test_sdf_curved_bits.py compare with ``assert_array_equal``; the numpy
-fields write their per-point products out, ``_rows_dot``, instead of a BLAS
+fields write their per-point products out, ``vec2.rows_dot``, instead of a BLAS
 ``q @ c`` that rounds a row differently with its place in the batch). Where the
 numpy code calls something the compiled code cannot reproduce the results differ
 in the last bits: numpy's SIMD arctan2 (star) and cbrt / arccos / power
@@ -68,10 +68,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._jit import njit
+from ..vec2 import TINY
 from . import conics, curved, folded, grid, operators, polygonal
 from .base import Field, safe_normalize
 from .opcodes import (
-    _TINY,
     ARC,
     BLEND_INDEX,
     BOX,
@@ -351,7 +351,7 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
             for j in range(n):
                 x, y = cur[j, 0], cur[j, 1]
                 length = math.hypot(x, y)
-                if length > _TINY:
+                if length > TINY:
                     out[j, 0], out[j, 1], out[j, 2] = length - r, x / length, y / length
                 else:
                     out[j, 0], out[j, 1], out[j, 2] = length - r, 1.0, 0.0

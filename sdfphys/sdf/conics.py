@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import SpecError
+from ..vec2 import rows_dot, rows_unit_or
 from .base import REQUIRED, Field, Param, as_points, primitive
 from .curved import (
     _DOWN,
@@ -25,9 +26,7 @@ from .curved import (
     _fold_x,
     _norm,
     _pick,
-    _rows_dot,
     _unfold,
-    _unit,
     _vec,
 )
 
@@ -70,7 +69,7 @@ class Vesica(Field):
         on_arc = rel[:, 0] * b - rel[:, 1] * dc >= 0.0
         rel_c = q - np.array([0.0, b])
         d = np.where(on_arc, _norm(rel) - r, _norm(rel_c))
-        g = _pick(on_arc, _unit(rel, _RIGHT), _unit(rel_c, _UP))
+        g = _pick(on_arc, rows_unit_or(rel, _RIGHT), rows_unit_or(rel_c, _UP))
         return d, _unfold(g, sx, sy)
 
     def bounds(self) -> np.ndarray:
@@ -117,7 +116,7 @@ class Moon(Field):
         s = np.where((length < ra) & (lv > rb), -1.0, 1.0)
         rel_k = q - self.horn
         d_k = _norm(rel_k)
-        g_k = _unit(s[:, None] * rel_k, self.horn / ra)
+        g_k = rows_unit_or(s[:, None] * rel_k, self.horn / ra)
         # With y folded to |y| the outer arc runs from the horn to (-ra, 0) and the
         # bitten arc from the horn to (dc - rb, 0); a radial projection lands on an
         # arc iff the direction is past the horn's: cross(horn direction, q) >= 0.
@@ -125,8 +124,8 @@ class Moon(Field):
         on_b = (ka - dc) * v[:, 1] - kb * v[:, 0] >= 0.0
         d_a = np.where(on_a, np.abs(length - ra), d_k)
         d_b = np.where(on_b, np.abs(lv - rb), d_k)
-        g_a = _pick(on_a, _unit(q, _LEFT), g_k)
-        g_b = _pick(on_b, _unit(-v, _RIGHT), g_k)
+        g_a = _pick(on_a, rows_unit_or(q, _LEFT), g_k)
+        g_b = _pick(on_b, rows_unit_or(-v, _RIGHT), g_k)
         outer = d_a <= d_b
         d = s * np.where(outer, d_a, d_b)
         return d, _unfold(_pick(outer, g_a, g_b), 1.0, sy)
@@ -171,8 +170,8 @@ class Egg(Field):
         above = math.sqrt(3.0) * (q[:, 0] + r) <= q[:, 1]
         d = np.where(lower, _norm(q) - r,
                      np.where(above, _norm(q - apex), _norm(q - side_centre) - 2.0 * r))
-        g = _pick(lower, _unit(q, _DOWN),
-                  _pick(above, _unit(q - apex, _UP), _unit(q - side_centre, _RIGHT)))
+        g = _pick(lower, rows_unit_or(q, _DOWN),
+                  _pick(above, rows_unit_or(q - apex, _UP), rows_unit_or(q - side_centre, _RIGHT)))
         return d - self.top_radius, _unfold(g, sx)
 
     def bounds(self) -> np.ndarray:
@@ -206,17 +205,18 @@ class Heart(Field):
         lobe = q[:, 0] + q[:, 1] > 1.0
         rel_l = q - self._LOBE_CENTRE
         d_lobe = _norm(rel_l) - self._LOBE_RADIUS
-        g_lobe = _unit(rel_l, _UP)
+        g_lobe = rows_unit_or(rel_l, _UP)
         # Below the line x + y = 1: the segment from the tip along (1, 1) (its
         # projection t stays <= 0.5 there) or the cusp; inside iff x < y.
         s = np.where(q[:, 0] > q[:, 1], 1.0, -1.0)
         t = np.maximum(q[:, 0] + q[:, 1], 0.0) / 2.0
         rel_s = q - t[:, None]
         d_seg = _norm(rel_s)
-        g_seg = _pick(t > 0.0, self._EDGE_NORMAL, _unit(s[:, None] * rel_s, self._EDGE_NORMAL))
+        g_seg = _pick(t > 0.0, self._EDGE_NORMAL,
+                      rows_unit_or(s[:, None] * rel_s, self._EDGE_NORMAL))
         rel_k = q - self._CUSP
         d_cusp = _norm(rel_k)
-        g_cusp = _unit(s[:, None] * rel_k, _UP)
+        g_cusp = rows_unit_or(s[:, None] * rel_k, _UP)
         seg = d_seg <= d_cusp
         d_low = s * np.where(seg, d_seg, d_cusp)
         g_low = _pick(seg, g_seg, g_cusp)
@@ -300,7 +300,7 @@ class Ellipse(Field):
         xc, yc = np.where(general, xc, x_axis), np.where(general, yc, y_axis)
         dist = np.hypot(x - xc, y - yc)
         inside = (x / a) ** 2 + (y / b) ** 2 < 1.0
-        g = _unit(np.column_stack([xc / (a * a), yc / (b * b)]), _RIGHT)
+        g = rows_unit_or(np.column_stack([xc / (a * a), yc / (b * b)]), _RIGHT)
         g = _unfold(g, sx, sy)
         if self.swap:
             g = g[:, ::-1]
@@ -390,8 +390,8 @@ class QuadraticBezier(Field):
         ap = self.a - p
         k3 = np.full(n, B @ B)
         k2 = np.full(n, 3.0 * (A @ B))
-        k1 = 2.0 * (A @ A) + _rows_dot(ap, B)
-        k0 = _rows_dot(ap, A)
+        k1 = 2.0 * (A @ A) + rows_dot(ap, B)
+        k0 = rows_dot(ap, A)
         lin = np.where(k1 != 0.0, -k0 / np.where(k1 != 0.0, k1, 1.0), 0.0)[:, None]
         if self.cubic:
             with np.errstate(over="ignore", invalid="ignore"):
@@ -421,11 +421,11 @@ class QuadraticBezier(Field):
         rel = p - self._curve(t)
         tangent = A + t[:, None] * B
         left = np.column_stack([-tangent[:, 1], tangent[:, 0]])
-        normal = _unit(left, _unit(rel, _RIGHT))
-        side = np.where(_rows_dot(rel, left) < 0.0, -1.0, 1.0)
+        normal = rows_unit_or(left, rows_unit_or(rel, _RIGHT))
+        side = np.where(rows_dot(rel, left) < 0.0, -1.0, 1.0)
         near = dist * self.cross < 2.0 * _norm(tangent) ** 3
         interior = (t > 0.0) & (t < 1.0) & near
-        g = _pick(interior, side[:, None] * normal, _unit(rel, normal))
+        g = _pick(interior, side[:, None] * normal, rows_unit_or(rel, normal))
         return dist - self.radius, g
 
     def bounds(self) -> np.ndarray:

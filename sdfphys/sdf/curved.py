@@ -31,9 +31,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import SpecError
+from ..vec2 import rows_dot, rows_unit_or
 from .base import REQUIRED, Field, Param, as_points, primitive, safe_normalize
 
-_TINY = 1e-300
 _UP = np.array([0.0, 1.0])
 _DOWN = np.array([0.0, -1.0])
 _RIGHT = np.array([1.0, 0.0])
@@ -46,13 +46,6 @@ _LEFT = np.array([-1.0, 0.0])
 
 def _norm(v: np.ndarray) -> np.ndarray:
     return np.hypot(v[:, 0], v[:, 1])
-
-
-def _unit(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
-    """Rows of ``v`` scaled to unit length; (near) zero rows become ``fallback``."""
-    n = _norm(v)
-    ok = n > _TINY
-    return np.where(ok[:, None], v / np.where(ok, n, 1.0)[:, None], fallback)
 
 
 def _pick(mask: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -100,16 +93,6 @@ def _arc_box(radius: float, half_angle: float) -> np.ndarray:
     return np.array([-x, radius * math.cos(half_angle), x, radius])
 
 
-def _rows_dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise dot product of (N, 2) arrays (either may be a broadcast (2,)).
-
-    Written out rather than ``a @ b`` (as ``polygonal._rows_dot``): BLAS rounds a
-    row differently depending on its position in the batch, and a field must give
-    a point the same answer alone or among others.
-    """
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
-
-
 def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray]:
     """Unsigned distance (N,) from ``p`` to the segment ab and its gradient (N, 2).
@@ -122,13 +105,13 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray
     ba = b - a
     pa = p - a
     length2 = float(ba @ ba)
-    h = np.clip(_rows_dot(pa, ba) / length2, 0.0, 1.0) if length2 > 0.0 else np.zeros(len(p))
+    h = np.clip(rows_dot(pa, ba) / length2, 0.0, 1.0) if length2 > 0.0 else np.zeros(len(p))
     rel = pa - h[:, None] * ba
     left = safe_normalize(np.array([[-ba[1], ba[0]]]))[0]
     side = ba[0] * pa[:, 1] - ba[1] * pa[:, 0]
     g_side = np.where((side < 0.0)[:, None], -left, left)
     interior = (h > 0.0) & (h < 1.0)
-    return _norm(rel), _pick(interior, g_side, _unit(rel, left))
+    return _norm(rel), _pick(interior, g_side, rows_unit_or(rel, left))
 
 
 # --------------------------------------------------------------------------------------
@@ -240,8 +223,8 @@ class UnevenCapsule(Field):
         d_side = c * q[:, 0] + s * q[:, 1] - self.r1
         d = np.where(bottom, _norm(q) - self.r1,
                      np.where(top, _norm(q - top_centre) - self.r2, d_side))
-        g = _pick(bottom, _unit(q, _DOWN),
-                  _pick(top, _unit(q - top_centre, _UP), np.array([c, s])))
+        g = _pick(bottom, rows_unit_or(q, _DOWN),
+                  _pick(top, rows_unit_or(q - top_centre, _UP), np.array([c, s])))
         return d, _unfold(g, sx)
 
     def bounds(self) -> np.ndarray:
@@ -277,7 +260,7 @@ class Pie(Field):
         q, sx = _fold_x(as_points(points))
         r = self.radius
         d_arc = _norm(q) - r
-        g_arc = _unit(q, _UP)
+        g_arc = rows_unit_or(q, _UP)
         if self.full:
             return d_arc, _unfold(g_arc, sx)
         # max() is exact: the edge lies in the disk, so beyond it m >= |p| - r; inside
@@ -285,13 +268,13 @@ class Pie(Field):
         # -min(r - |p|, m) is minus the distance to the nearer of arc and edge.
         c = self.c
         normal = np.array([c[1], -c[0]])
-        beyond = _rows_dot(q, normal) > 0.0
+        beyond = rows_dot(q, normal) > 0.0
         s = np.where(beyond, 1.0, -1.0)
-        h = np.clip(_rows_dot(q, c), 0.0, r)
+        h = np.clip(rows_dot(q, c), 0.0, r)
         rel = q - h[:, None] * c
         d_edge = s * _norm(rel)
         interior = (h > 0.0) & (h < r)
-        g_edge = _pick(interior, normal, _unit(s[:, None] * rel, normal))
+        g_edge = _pick(interior, normal, rows_unit_or(s[:, None] * rel, normal))
         arc = d_arc >= d_edge
         return np.where(arc, d_arc, d_edge), _unfold(_pick(arc, g_arc, g_edge), sx)
 
@@ -329,12 +312,12 @@ class CutDisk(Field):
         s = np.where((length < r) & (q[:, 1] > h), -1.0, 1.0)
         rel_c = q - corner
         d_c = _norm(rel_c)
-        g_c = _unit(s[:, None] * rel_c, _DOWN)
+        g_c = rows_unit_or(s[:, None] * rel_c, _DOWN)
         # The radial projection r q/|q| is on the kept arc iff q is on or above the
         # ray from the origin through the corner: h x - w y <= 0; else the corner.
         on_arc = h * q[:, 0] - w * q[:, 1] <= 0.0
         d_arc = np.where(on_arc, np.abs(length - r), d_c)
-        g_arc = _pick(on_arc, _unit(q, _UP), g_c)
+        g_arc = _pick(on_arc, rows_unit_or(q, _UP), g_c)
         on_chord = q[:, 0] < w
         d_chord = np.where(on_chord, np.abs(q[:, 1] - h), d_c)
         g_chord = _pick(on_chord, _DOWN, g_c)
@@ -383,7 +366,7 @@ class Arc(Field):
         rel = q - r * c
         d = np.where(on_arc, np.abs(length - r), _norm(rel))
         outward = np.where(length >= r, 1.0, -1.0)[:, None]
-        g = _pick(on_arc, outward * _unit(q, _UP), _unit(rel, c))
+        g = _pick(on_arc, outward * rows_unit_or(q, _UP), rows_unit_or(rel, c))
         return d - self.half_width, _unfold(g, sx)
 
     def bounds(self) -> np.ndarray:
@@ -423,7 +406,7 @@ class Ring(Field):
         r, w, c = self.radius, self.half_width, self.c
         length = _norm(q)
         d_ring = np.abs(length - r) - w
-        g_ring = np.where(length >= r, 1.0, -1.0)[:, None] * _unit(q, _UP)
+        g_ring = np.where(length >= r, 1.0, -1.0)[:, None] * rows_unit_or(q, _UP)
         if self.full:
             return d_ring, _unfold(g_ring, sx)
         # Frame of the right end face: u along its outward normal (cos a, -sin a),
@@ -431,12 +414,12 @@ class Ring(Field):
         # As for the pie, max() is exact: the face lies in the annulus, and inside
         # the wedge the radial projections onto both circles are on the sector.
         normal = np.array([c[1], -c[0]])
-        u, v = _rows_dot(q, normal), _rows_dot(q, c)
+        u, v = rows_dot(q, normal), rows_dot(q, c)
         s = np.where(u > 0.0, 1.0, -1.0)
         rel = np.column_stack([u, v - np.clip(v, r - w, r + w)])
         d_face = s * _norm(rel)
         on_face = (v > r - w) & (v < r + w)
-        g_local = _pick(on_face, _RIGHT, _unit(s[:, None] * rel, _RIGHT))
+        g_local = _pick(on_face, _RIGHT, rows_unit_or(s[:, None] * rel, _RIGHT))
         g_face = g_local[:, :1] * normal + g_local[:, 1:] * c
         ring = d_ring >= d_face
         return np.where(ring, d_ring, d_face), _unfold(_pick(ring, g_ring, g_face), sx)
@@ -496,7 +479,7 @@ class Horseshoe(Field):
     def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q, sx = _fold_x(as_points(points))
         r, w, L, n, d = self.radius, self.half_width, self.length, self.n, self.d
-        u, v = _rows_dot(q, d), _rows_dot(q, n)
+        u, v = rows_dot(q, d), rows_dot(q, n)
         sv = np.where(v >= r, 1.0, -1.0)
         # Leg: box distance (Quilez's sdBox) in the (u, |v - r|) frame.
         bx, by = u - L, np.abs(v - r) - w
@@ -510,10 +493,10 @@ class Horseshoe(Field):
         # Arc: annulus distance; inside the band the tip face u = L may be nearer.
         length = _norm(q)
         d_ann = np.abs(length - r) - w
-        g_ann = np.where(length >= r, 1.0, -1.0)[:, None] * _unit(q, _DOWN)
+        g_ann = np.where(length >= r, 1.0, -1.0)[:, None] * rows_unit_or(q, _DOWN)
         tip = np.column_stack([u - L, v - np.clip(v, r - w, r + w)])
         d_tip = -_norm(tip)
-        g_tip_local = _unit(-tip, _RIGHT)
+        g_tip_local = rows_unit_or(-tip, _RIGHT)
         g_tip = g_tip_local[:, :1] * d + g_tip_local[:, 1:] * n
         use_tip = (d_ann < 0.0) & (d_tip > d_ann)
         d_arc = np.where(use_tip, d_tip, d_ann)

@@ -14,17 +14,16 @@ from typing import Any
 import numpy as np
 
 from ..errors import SpecError
+from ..vec2 import rows_dot, rows_unit_or
 from .base import REQUIRED, Field, Param, as_points, primitive
 from .polygonal import (
     _DEGENERATE,
     _aabb,
     _nearest,
     _reflect,
-    _rows_dot,
     _segment,
     _sign,
     _signed,
-    _unit_or,
     _unreflect,
 )
 
@@ -216,7 +215,7 @@ class Star(Field):
         q = np.hypot(x, y)[:, None] * q_hat
         dist, v, n, interior = _nearest(q, self._edge)
         edge = self._edge[0]
-        inside = _rows_dot(q - edge.b, edge.normal) < 0.0
+        inside = rows_dot(q - edge.b, edge.normal) < 0.0
         d, gq = _signed(dist, v, n, interior, inside, self._eps)
         g_r = gq[:, 0] * q_hat[:, 0] + gq[:, 1] * q_hat[:, 1]
         g_t = np.where(bn >= 0.0, -1.0, 1.0) * (gq[:, 1] * q_hat[:, 0] - gq[:, 0] * q_hat[:, 1])
@@ -319,13 +318,13 @@ class RoundedCross(Field):
         wedge = (q[:, 0] < 1.0) & (q[:, 1] < q[:, 0] * (k - h) + h)
         to_centre = np.array([1.0, k]) - q
         d_arc = k - np.hypot(to_centre[:, 0], to_centre[:, 1])
-        g_arc = _unit_or(to_centre, np.array([-1.0, 0.0]), _DEGENERATE)
+        g_arc = rows_unit_or(to_centre, np.array([-1.0, 0.0]), _DEGENERATE)
         from_top = q - np.array([0.0, h])
         from_side = q - np.array([1.0, 0.0])
-        top = _rows_dot(from_top, from_top) <= _rows_dot(from_side, from_side)
+        top = rows_dot(from_top, from_top) <= rows_dot(from_side, from_side)
         w = np.where(top[:, None], from_top, from_side)
         d_tip = np.hypot(w[:, 0], w[:, 1])
-        g_tip = _unit_or(w, np.where(top[:, None], [0.0, 1.0], [1.0, 0.0]), _DEGENERATE)
+        g_tip = rows_unit_or(w, np.where(top[:, None], [0.0, 1.0], [1.0, 0.0]), _DEGENERATE)
         d = np.where(wedge, d_arc, d_tip) * self.radius
         return d, np.where(wedge[:, None], g_arc, g_tip) * s
 

@@ -57,5 +57,4 @@ QUADRATIC_BEZIER = 36  # consts: a, A = b - a, B = a - 2b + c (2 each), B.B, 3 A
 #: Blend kernels by index (``SMOOTH``'s b), as in ``operators.BLENDS``.
 BLEND_INDEX = {"polynomial": 0, "cubic": 1, "circular": 2, "exponential": 3}
 _EXP_SCALE = operators._EXP_SCALE
-_TINY = 1e-300
 _POLYGON_EDGE = 8

@@ -41,6 +41,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..errors import SpecError
+from ..vec2 import rows_dot, rows_unit_or
 from .base import REQUIRED, Field, Param, as_points, primitive
 
 #: Below this many times a primitive's size, a closest-point offset counts as zero
@@ -59,34 +60,16 @@ def _sign(x: np.ndarray) -> np.ndarray:
     return np.where(x < 0.0, -1.0, 1.0)
 
 
-def _rows_dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise dot product of (N, 2) arrays (either may be a broadcast (2,)).
-
-    Written out rather than ``a @ b``: BLAS rounds a row differently depending on
-    its position in the batch, and a field must give a point the same answer
-    alone or among others.
-    """
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
-
-
-def _unit_or(v: np.ndarray, fallback: np.ndarray, eps: float) -> np.ndarray:
-    """Rows of ``v`` (N, 2) scaled to unit length; rows shorter than ``eps`` take
-    the matching row of ``fallback`` ((N, 2) or (2,))."""
-    n = np.hypot(v[:, 0], v[:, 1])
-    ok = n > eps
-    return np.where(ok[:, None], v / np.where(ok, n, 1.0)[:, None], fallback)
-
-
 def _reflect(q: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Fold rows of ``q`` with n.q < 0 across the mirror through the origin with
     unit normal ``n`` (Quilez's ``p -= 2 min(dot(n, p), 0) n``); also which rows moved."""
-    k = _rows_dot(q, n)
+    k = rows_dot(q, n)
     return q - 2.0 * np.minimum(k, 0.0)[:, None] * n, k < 0.0
 
 
 def _unreflect(g: np.ndarray, n: np.ndarray, moved: np.ndarray) -> np.ndarray:
     """Gradients mapped back through ``_reflect`` (a reflection is its own inverse)."""
-    return np.where(moved[:, None], g - 2.0 * _rows_dot(g, n)[:, None] * n, g)
+    return np.where(moved[:, None], g - 2.0 * rows_dot(g, n)[:, None] * n, g)
 
 
 class _Segment(NamedTuple):
@@ -121,9 +104,9 @@ def _nearest(q: np.ndarray, segments: list[_Segment]
     for i, seg in enumerate(segments):
         e = seg.b - seg.a
         w = q - seg.a
-        t = np.clip(_rows_dot(w, e) / _rows_dot(e, e), 0.0, 1.0)
+        t = np.clip(rows_dot(w, e) / rows_dot(e, e), 0.0, 1.0)
         v = w - t[:, None] * e
-        d2 = _rows_dot(v, v)
+        d2 = rows_dot(v, v)
         interior = (t > 0.0) & (t < 1.0)
         if i == 0:
             best, best_v, best_in = d2, v, interior
@@ -143,7 +126,7 @@ def _signed(dist: np.ndarray, v: np.ndarray, normal: np.ndarray, interior: np.nd
     module docstring): f = s |v|, grad f = the edge normal where the closest point
     is inside an edge, else s v / |v|, falling back to the edge normal if |v| < eps."""
     s = np.where(inside, -1.0, 1.0)
-    g = np.where(interior[:, None], normal, _unit_or(s[:, None] * v, normal, eps))
+    g = np.where(interior[:, None], normal, rows_unit_or(s[:, None] * v, normal, eps))
     return s * dist, g
 
 
@@ -341,7 +324,7 @@ class Trapezoid(Field):
         p = as_points(points)
         q = np.stack([np.abs(p[:, 0]), p[:, 1]], axis=1)
         dist, v, n, interior = _nearest(q, self._edges)
-        inside = (np.abs(q[:, 1]) < self.he) & (_rows_dot(q - self._side.a, self._side.normal) < 0)
+        inside = (np.abs(q[:, 1]) < self.he) & (rows_dot(q - self._side.a, self._side.normal) < 0)
         d, g = _signed(dist, v, n, interior, inside, self._eps)
         g[:, 0] *= _sign(p[:, 0])
         return d, g
@@ -365,7 +348,7 @@ class _ConvexPolygon(Field):
         dist, v, n, interior = _nearest(p, self._edges)
         inside = np.ones(len(p), dtype=bool)
         for e in self._edges:
-            inside &= _rows_dot(p - e.a, e.normal) < 0.0
+            inside &= rows_dot(p - e.a, e.normal) < 0.0
         return _signed(dist, v, n, interior, inside, self._eps)
 
     def bounds(self):
@@ -409,7 +392,7 @@ class _SymmetricTriangle(Field):
         p = as_points(points)
         q = np.stack([np.abs(p[:, 0]), p[:, 1]], axis=1)
         dist, v, n, interior = _nearest(q, self._edges)
-        inside = (q[:, 1] > self.y_base) & (_rows_dot(q - self._side.a, self._side.normal) < 0)
+        inside = (q[:, 1] > self.y_base) & (rows_dot(q - self._side.a, self._side.normal) < 0)
         d, g = _signed(dist, v, n, interior, inside, self._eps)
         g[:, 0] *= _sign(p[:, 0])
         return d, g
@@ -492,7 +475,7 @@ class Polygon(Field):
         self.vertices = validate_polygon(points, "points")
         a = self.vertices
         e = np.roll(a, -1, axis=0) - a
-        ee = _rows_dot(e, e)
+        ee = rows_dot(e, e)
         # Per-edge rows, contiguous, for the (points, edges) broadcasts.
         self._ax, self._ay = a[:, 0].copy(), a[:, 1].copy()
         self._ex, self._ey = e[:, 0].copy(), e[:, 1].copy()
@@ -563,7 +546,7 @@ class HalfPlane(Field):
 
     def evaluate(self, points):
         p = as_points(points)
-        d = _rows_dot(p, self.normal) - self.level
+        d = rows_dot(p, self.normal) - self.level
         return d, np.broadcast_to(self.normal, p.shape).copy()
 
     def bounds(self):

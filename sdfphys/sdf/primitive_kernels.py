@@ -16,10 +16,10 @@ import math
 import numpy as np
 
 from .._jit import njit
+from ..vec2 import TINY, unit_or
 from .opcodes import (
     _EXP_SCALE,
     _POLYGON_EDGE,
-    _TINY,
     ARC,
     CONVEX,
     CROSS,
@@ -123,30 +123,22 @@ def _segment(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, f
         if side < 0.0:
             return dist - consts[o + 7], -lx, -ly
         return dist - consts[o + 7], lx, ly
-    if dist > _TINY:
+    if dist > TINY:
         return dist - consts[o + 7], rx / dist, ry / dist
     return dist - consts[o + 7], lx, ly
 
 
 # --------------------------------------------------------------------------------------
 # The primitives that ``_shape`` evaluates point by point. Each repeats its numpy
-# evaluate (curved.py, conics.py, polygonal.py, folded.py, grid.py) operation for operation: the folds
-# as ``_fold_x`` (sign(0) = +1), ``_unit`` / ``_unit_or`` with their fallbacks,
-# ``np.where`` choices as if/else on the same comparisons. Where the numpy code
+# evaluate (curved.py, conics.py, polygonal.py, folded.py, grid.py) operation for
+# operation: the folds as ``_fold_x`` (sign(0) = +1), ``vec2.rows_unit_or`` with
+# its fallbacks (``vec2.unit_or``), ``np.where`` choices as if/else on the same
+# comparisons. Where the numpy code
 # uses a BLAS product (``q @ c``) the products are written out: BLAS may round a
 # row an ulp differently (it depends on the row's place in the batch).
 # --------------------------------------------------------------------------------------
 
 _EDGE = 7
-
-
-@njit(cache=True, error_model="numpy")
-def _unit(x: float, y: float, fx: float, fy: float) -> tuple[float, float]:
-    """curved._unit: (x, y) / |(x, y)|, or the fallback (fx, fy) below 1e-300."""
-    n = math.hypot(x, y)
-    if n > _TINY:
-        return x / n, y / n
-    return fx, fy
 
 
 @njit(cache=True, error_model="numpy")
@@ -257,7 +249,7 @@ def _ellipse(a: float, b: float, swap: int, cur: np.ndarray, n: int, out: np.nda
             xc, yc = a, 0.0
         dist = math.hypot(x - xc, y - yc)
         ra, rb = x / a, y / b
-        gx, gy = _unit(xc / (a * a), yc / (b * b), 1.0, 0.0)
+        gx, gy = unit_or(xc / (a * a), yc / (b * b), 1.0, 0.0)
         gx, gy = gx * sx, gy * sy
         if swap:
             gx, gy = gy, gx
@@ -274,7 +266,7 @@ def _ring(consts: np.ndarray, o: int, full: int, px: float, py: float
     qx, qy = abs(px), py
     length = math.hypot(qx, qy)
     d_ring = abs(length - r) - w
-    ux, uy = _unit(qx, qy, 0.0, 1.0)
+    ux, uy = unit_or(qx, qy, 0.0, 1.0)
     if length < r:
         ux, uy = -ux, -uy
     if full:
@@ -288,7 +280,7 @@ def _ring(consts: np.ndarray, o: int, full: int, px: float, py: float
     if v > r - w and v < r + w:
         lx, ly = 1.0, 0.0
     else:
-        lx, ly = _unit(s * rx, s * ry, 1.0, 0.0)
+        lx, ly = unit_or(s * rx, s * ry, 1.0, 0.0)
     if d_ring >= d_face:
         return d_ring, ux * sx, uy
     return d_face, (lx * nx + ly * cx) * sx, lx * ny + ly * cy
@@ -302,7 +294,7 @@ def _pie(consts: np.ndarray, o: int, full: int, px: float, py: float
     sx = _sign(px)
     qx, qy = abs(px), py
     d_arc = math.hypot(qx, qy) - r
-    ax, ay = _unit(qx, qy, 0.0, 1.0)
+    ax, ay = unit_or(qx, qy, 0.0, 1.0)
     if full:
         return d_arc, ax * sx, ay
     nx, ny = cy, -cx
@@ -314,7 +306,7 @@ def _pie(consts: np.ndarray, o: int, full: int, px: float, py: float
         return d_arc, ax * sx, ay
     if h > 0.0 and h < r:
         return d_edge, nx * sx, ny
-    gx, gy = _unit(s * rx, s * ry, nx, ny)
+    gx, gy = unit_or(s * rx, s * ry, nx, ny)
     return d_edge, gx * sx, gy
 
 
@@ -346,9 +338,9 @@ def _horseshoe(consts: np.ndarray, o: int, px: float, py: float
     tx, ty = u - L, v - min(max(v, r - w), r + w)
     d_tip = -math.hypot(tx, ty)
     if d_ann < 0.0 and d_tip > d_ann:
-        lx, ly = _unit(-tx, -ty, 1.0, 0.0)
+        lx, ly = unit_or(-tx, -ty, 1.0, 0.0)
         return d_tip, (lx * dx + ly * nx) * sx, lx * dy + ly * ny
-    gx, gy = _unit(qx, qy, 0.0, -1.0)
+    gx, gy = unit_or(qx, qy, 0.0, -1.0)
     if length < r:
         gx, gy = -gx, -gy
     return d_ann, gx * sx, gy
@@ -369,16 +361,16 @@ def _moon(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, floa
     d_k = math.hypot(kx, ky)
     if ka * qy - kb * qx >= 0.0:
         d_a = abs(length - ra)
-        gax, gay = _unit(qx, qy, -1.0, 0.0)
+        gax, gay = unit_or(qx, qy, -1.0, 0.0)
     else:
         d_a = d_k
-        gax, gay = _unit(s * kx, s * ky, consts[o + 5], consts[o + 6])
+        gax, gay = unit_or(s * kx, s * ky, consts[o + 5], consts[o + 6])
     if (ka - dc) * vy - kb * vx >= 0.0:
         d_b = abs(lv - rb)
-        gbx, gby = _unit(-vx, -vy, 1.0, 0.0)
+        gbx, gby = unit_or(-vx, -vy, 1.0, 0.0)
     else:
         d_b = d_k
-        gbx, gby = _unit(s * kx, s * ky, consts[o + 5], consts[o + 6])
+        gbx, gby = unit_or(s * kx, s * ky, consts[o + 5], consts[o + 6])
     if d_a <= d_b:
         return s * d_a, gax, gay * sy
     return s * d_b, gbx, gby * sy
@@ -394,7 +386,7 @@ def _heart(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, flo
     enx, eny = consts[o + 4], consts[o + 5]
     if qx + qy > 1.0:                                   # a lobe
         lx, ly = qx - consts[o + 1], qy - consts[o + 2]
-        gx, gy = _unit(lx, ly, 0.0, 1.0)
+        gx, gy = unit_or(lx, ly, 0.0, 1.0)
         return (math.hypot(lx, ly) - consts[o + 3]) * scale, gx * sx, gy
     s = 1.0 if qx > qy else -1.0
     t = max(qx + qy, 0.0) / 2.0
@@ -406,9 +398,9 @@ def _heart(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, flo
         if t > 0.0:
             gx, gy = enx, eny
         else:
-            gx, gy = _unit(s * rx, s * ry, enx, eny)
+            gx, gy = unit_or(s * rx, s * ry, enx, eny)
         return s * d_seg * scale, gx * sx, gy
-    gx, gy = _unit(s * kx, s * ky, 0.0, 1.0)
+    gx, gy = unit_or(s * kx, s * ky, 0.0, 1.0)
     return s * d_cusp * scale, gx * sx, gy
 
 
@@ -507,12 +499,12 @@ def _shape(op: int, consts: np.ndarray, o: int, a: int, b: int, px: float, py: f
         qx, qy = abs(px), py
         length = math.hypot(qx, qy)
         if cy * qx - cx * qy <= 0.0:                    # on the arc
-            gx, gy = _unit(qx, qy, 0.0, 1.0)
+            gx, gy = unit_or(qx, qy, 0.0, 1.0)
             if length < r:
                 gx, gy = -gx, -gy
             return abs(length - r) - consts[o + 3], gx * sx, gy
         rx, ry = qx - r * cx, qy - r * cy
-        gx, gy = _unit(rx, ry, cx, cy)
+        gx, gy = unit_or(rx, ry, cx, cy)
         return math.hypot(rx, ry) - consts[o + 3], gx * sx, gy
     if op == RING:
         return _ring(consts, o, a, px, py)
@@ -533,13 +525,13 @@ def _shape(op: int, consts: np.ndarray, o: int, a: int, b: int, px: float, py: f
         d_chord = abs(qy - h) if qx < w else d_c
         if d_arc <= d_chord:
             if h * qx - w * qy <= 0.0:
-                gx, gy = _unit(qx, qy, 0.0, 1.0)
+                gx, gy = unit_or(qx, qy, 0.0, 1.0)
             else:
-                gx, gy = _unit(s * cx, s * cy, 0.0, -1.0)
+                gx, gy = unit_or(s * cx, s * cy, 0.0, -1.0)
             return s * d_arc, gx * sx, gy
         if qx < w:
             return s * d_chord, 0.0 * sx, -1.0
-        gx, gy = _unit(s * cx, s * cy, 0.0, -1.0)
+        gx, gy = unit_or(s * cx, s * cy, 0.0, -1.0)
         return s * d_chord, gx * sx, gy
     if op == HORSESHOE:
         return _horseshoe(consts, o, px, py)
@@ -549,10 +541,10 @@ def _shape(op: int, consts: np.ndarray, o: int, a: int, b: int, px: float, py: f
         qx, qy = abs(px), abs(py)
         rx, ry = qx + dc, qy + 0.0
         if rx * hb - ry * dc >= 0.0:
-            gx, gy = _unit(rx, ry, 1.0, 0.0)
+            gx, gy = unit_or(rx, ry, 1.0, 0.0)
             return math.hypot(rx, ry) - r, gx * sx, gy * sy
         cx, cy = qx - 0.0, qy - hb
-        gx, gy = _unit(cx, cy, 0.0, 1.0)
+        gx, gy = unit_or(cx, cy, 0.0, 1.0)
         return math.hypot(cx, cy), gx * sx, gy * sy
     if op == MOON:
         return _moon(consts, o, px, py)
@@ -561,14 +553,14 @@ def _shape(op: int, consts: np.ndarray, o: int, a: int, b: int, px: float, py: f
         sx = _sign(px)
         qx, qy = abs(px), py
         if qy < 0.0:
-            gx, gy = _unit(qx, qy, 0.0, -1.0)
+            gx, gy = unit_or(qx, qy, 0.0, -1.0)
             return math.hypot(qx, qy) - r - top, gx * sx, gy
         if consts[o + 4] * (qx + r) <= qy:              # nearest core point: the apex
             cx, cy = qx - 0.0, qy - apex
-            gx, gy = _unit(cx, cy, 0.0, 1.0)
+            gx, gy = unit_or(cx, cy, 0.0, 1.0)
             return math.hypot(cx, cy) - top, gx * sx, gy
         cx, cy = qx - (-r), qy - 0.0
-        gx, gy = _unit(cx, cy, 1.0, 0.0)
+        gx, gy = unit_or(cx, cy, 1.0, 0.0)
         return math.hypot(cx, cy) - consts[o + 2] - top, gx * sx, gy
     if op == HEART:
         return _heart(consts, o, px, py)
@@ -578,11 +570,11 @@ def _shape(op: int, consts: np.ndarray, o: int, a: int, b: int, px: float, py: f
         qx, qy = abs(px), py
         k = -s * qx + c * qy
         if k < 0.0:
-            gx, gy = _unit(qx, qy, 0.0, -1.0)
+            gx, gy = unit_or(qx, qy, 0.0, -1.0)
             return math.hypot(qx, qy) - r1, gx * sx, gy
         if k > consts[o + 5]:
             tx, ty = qx - 0.0, qy - hh
-            gx, gy = _unit(tx, ty, 0.0, 1.0)
+            gx, gy = unit_or(tx, ty, 0.0, 1.0)
             return math.hypot(tx, ty) - r2, gx * sx, gy
         return c * qx + s * qy - r1, c * sx, s
     if op == STAR:
@@ -730,14 +722,14 @@ def _bezier(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, fl
     rx, ry = px - cx, py - cy
     tx, ty = cax + tb * cbx, cay + tb * cby
     lx, ly = -ty, tx
-    fx, fy = _unit(rx, ry, 1.0, 0.0)
-    nx, ny = _unit(lx, ly, fx, fy)
+    fx, fy = unit_or(rx, ry, 1.0, 0.0)
+    nx, ny = unit_or(lx, ly, fx, fy)
     near = best * consts[o + 10] < 2.0 * math.pow(math.hypot(tx, ty), 3.0)
     if tb > 0.0 and tb < 1.0 and near:
         if rx * lx + ry * ly < 0.0:
             return best - consts[o + 9], -nx, -ny
         return best - consts[o + 9], nx, ny
-    gx, gy = _unit(rx, ry, nx, ny)
+    gx, gy = unit_or(rx, ry, nx, ny)
     return best - consts[o + 9], gx, gy
 
 
