@@ -21,6 +21,7 @@ Materials mix per contact: friction sqrt(f_a f_b), restitution max(e_a, e_b).
 
 from __future__ import annotations
 
+import bisect
 import math
 import operator
 from collections.abc import Mapping
@@ -29,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from . import _warm, queries
+from .blasts import Blast, check_blast, fire_due
 from .collide import Contacts, find_contacts
 from .collide.filter import PairFilter
 from .collide.narrowphase import PAIR_FUNCTIONS
@@ -254,6 +256,7 @@ class World(WorldJoints):
         self._forces = False            # some force or torque held for the next step
         self._report = StepReport()     # ``events``
         self._sensor_pass: tuple[Contacts, np.ndarray] | None = None
+        self._blasts: list[Blast] = []  # ``explode_at``, by time
 
     # ----------------------------------------------------------------------------------
     # Bodies
@@ -511,17 +514,20 @@ class World(WorldJoints):
     def step(self) -> None:
         """Advance the world by ``settings.dt`` (docs/solver.md, "One step").
 
-        Stages: collide once; prepare the contact rows (warm start matched by feature
-        key); the substeps (each: integrate velocities, warm start, solve, integrate
-        positions, relax); restitution; time of impact for fast bodies; store impulses;
-        with ``settings.sleeping``, islands at rest fall asleep (``sdfphys.sleep``): a
-        step with no awake dynamic and no moving kinematic body only advances the time,
-        and sleeping islands within contact range of an active body wake first.
+        Stages: blasts due (``explode_at``); collide once; prepare the contact rows
+        (warm start matched by feature key); the substeps (each: integrate velocities,
+        warm start, solve, integrate positions, relax); restitution; time of impact for
+        fast bodies; store impulses; with ``settings.sleeping``, islands at rest fall
+        asleep (``sdfphys.sleep``): a step with no awake dynamic and no moving kinematic
+        body only advances the time, and sleeping islands within contact range of an
+        active body wake first.
         Afterwards ``contacts`` carry the step's impulses and ``events`` its events;
         forces and torques held by ``apply_force`` and ``apply_torque`` are released.
         """
         if self.step_count == 0:
             _warm.start(self)
+        if self._blasts:
+            fire_due(self)
         sleeping = self.settings.sleeping
         # What moves this step (awake dynamic bodies, moving kinematic ones), None
         # without sleeping: changed within a step only by waking islands.
@@ -729,6 +735,15 @@ class World(WorldJoints):
             width[rows] = _width(self._shapes[sid], across[rows])
         self.apply_impulse(body, (impulse * width)[:, None] * away, point)
         return body
+
+    def explode_at(self, time: float, center: Any, radius: float, impulse: float) -> None:
+        """Schedule ``explode(center, radius, impulse)`` for the start of the first step
+        that begins at or after ``time`` (s, >= 0; a step begins at ``self.time``, and
+        one within a millionth of a step before ``time`` counts: ``sdfphys.blasts``). A
+        time already past runs at the next step. A scene's ``[[explode]]`` tables
+        schedule these (docs/toolkit.md)."""
+        blast = check_blast(time=time, center=center, radius=radius, impulse=impulse)
+        bisect.insort(self._blasts, blast, key=lambda b: b.time)
 
     def _compile_ahead(self) -> None:
         """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
