@@ -523,35 +523,40 @@ def _trace(px, py, ex, ey, ox, oy, rad, t0, t1, code, consts, pt, stack, frames,
             last, f_last, step = t, f, omega * f
             t = min(t + step, t1)
             continue
-        # Root solve on [lo, hi]: lo outside (f > 0), hi inside once found.
+        # Root solve on [lo, hi]: lo outside (f > 0), hi inside (f <= 0) once found;
+        # Newton steps from the latest point x, whichever side it lies on.
         if f <= 0.0 and t == last:     # inside where the ray enters the shape's box
             return _unit(t, gx, gy, False)
         if f > 0.0:
-            lo, flo, glx, gly, hi = t, f, gx, gy, math.inf
+            lo, flo, glx, gly = t, f, gx, gy
+            hi, fhi, ghx, ghy = math.inf, -math.inf, 0.0, 0.0
         else:
-            lo, hi = last, t
+            lo, hi, fhi, ghx, ghy = last, t, f, gx, gy
             flo, glx, gly = _field(code, consts, px + lo * ex - ox, py + lo * ey - oy, pt,
                                    stack, frames, cur, value, grad)
             flo -= rad
+        x, fx, slope = t, f, gx * ex + gy * ey
         for _ in range(_ROOT_STEPS):
-            if flo <= ROOT_TOLERANCE or hi - lo <= ROOT_TOLERANCE:
+            if flo <= ROOT_TOLERANCE or -fhi <= ROOT_TOLERANCE or hi - lo <= ROOT_TOLERANCE:
                 break
-            slope = glx * ex + gly * ey
-            newton = -flo / slope if slope < 0.0 else math.inf
-            x = lo + newton
-            if not (x < hi) or newton > 1e3 * COARSE:
+            newton = -fx / slope if slope < 0.0 else math.inf
+            x = x + newton
+            if not (lo < x < hi) or abs(newton) > 1e3 * COARSE:
                 if hi == math.inf:
                     break              # no inside point near: a near miss or a graze
                 x = 0.5 * (lo + hi)
-            f, g1, g2 = _field(code, consts, px + x * ex - ox, py + x * ey - oy, pt, stack,
-                               frames, cur, value, grad)
-            f -= rad
-            if f > 0.0:
-                lo, flo, glx, gly = x, f, g1, g2
+            fx, g1, g2 = _field(code, consts, px + x * ex - ox, py + x * ey - oy, pt, stack,
+                                frames, cur, value, grad)
+            fx -= rad
+            slope = g1 * ex + g2 * ey
+            if fx > 0.0:
+                lo, flo, glx, gly = x, fx, g1, g2
             else:
-                hi = x
-                if f == 0.0:
+                hi, fhi, ghx, ghy = x, fx, g1, g2
+                if fx == 0.0:
                     lo, flo, glx, gly = x, 0.0, g1, g2
+        if hi < math.inf and -fhi < flo:
+            return _unit(hi, ghx, ghy, False)
         if hi < math.inf or flo <= TOUCH:
             return _unit(lo, glx, gly, False)
         # A near miss: go on past the closest approach, with plain steps.
@@ -672,7 +677,6 @@ def cast(world, origins: Any, directions: Any, max_distance: Any = math.inf,
     the contact on the body's surface (centre - radius normal)."""
     o, d, top = _rays(origins, directions, max_distance)
     rad = check_number(radius, "radius", low=0.0)
-    n = len(world)
     keep = _bodies(bodies, world._view("category"), mask)
     pk = _packed(world)
     com = np.ascontiguousarray(world._view("com"))
@@ -769,7 +773,6 @@ def nearest(world, points: Any, max_distance: Any, mask: Any = None,
 
     p = _points(points, "points")
     top = check_number(max_distance, "max_distance", low=0.0)
-    n = len(world)
     keep = _bodies(bodies, world._view("category"), mask)
     box = _world_boxes(world, keep)
     point, body = _point_pairs(box, keep, p, top)
