@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _warm, queries
+from . import _warm, queries, rays
 from .blasts import Blast, check_blast, fire_due
 from .collide import Contacts, find_contacts
 from .collide.filter import PairFilter
@@ -1071,7 +1071,7 @@ class World(WorldJoints):
                              * (self._view("com")[dynamic] @ self.gravity)))
 
     # ----------------------------------------------------------------------------------
-    # Queries (``sdfphys.queries``, docs/queries.md)
+    # Queries (``sdfphys.rays``, ``sdfphys.queries``, docs/queries.md)
     # ----------------------------------------------------------------------------------
 
     def ray_cast(self, origins: Any, directions: Any, max_distance: float = math.inf,
@@ -1082,14 +1082,14 @@ class World(WorldJoints):
         origins, directions: (N, 2) (a direction's length does not matter, it must not
         be zero); max_distance: m, >= 0. bodies: an index array limiting the bodies
         hit (None: all); mask: reserved for collision categories (None)."""
-        return queries.cast(self, origins, directions, max_distance, False, mask, bodies)
+        return rays.cast(self, origins, directions, max_distance, False, mask, bodies)
 
     def ray_cast_all(self, origins: Any, directions: Any, max_distance: float = math.inf,
                      mask: Any = None, bodies: Any = None) -> queries.RayHits:
         """Every body each ray enters within max_distance, as flat arrays (H,) sorted
         by (ray, distance): ``ray`` (H,) the ray index, ``body``, ``point``, ``normal``,
         ``distance`` as ``ray_cast``'s (each body once, at its first entry)."""
-        return queries.cast(self, origins, directions, max_distance, True, mask, bodies)
+        return rays.cast(self, origins, directions, max_distance, True, mask, bodies)
 
     def circle_cast(self, origins: Any, directions: Any, radius: float,
                     max_distance: float = math.inf, mask: Any = None,
@@ -1098,7 +1098,7 @@ class World(WorldJoints):
         body it touches; ``distance`` is how far its centre travelled (0 if it overlaps
         a body at the start), ``point`` the contact on the body's surface, ``normal`` the
         body's outward normal there (pymunk's ``segment_query_first`` with a radius)."""
-        return queries.cast(self, origins, directions, max_distance, False, mask, bodies,
+        return rays.cast(self, origins, directions, max_distance, False, mask, bodies,
                             radius)
 
     def point_query(self, points: Any, max_distance: float, mask: Any = None,

@@ -1,4 +1,4 @@
-"""Speed of batched ray casts (``World.ray_cast``, ``sdfphys.queries``): 100,000 rays in
+"""Speed of batched ray casts (``World.ray_cast``, ``sdfphys.rays``): 100,000 rays in
 one call against a 200-body scene; target <= 100 ms per call (issue #19).
 
 Scene (seeded): 200 static bodies over a 60 m x 30 m field, a third each circles
@@ -117,7 +117,7 @@ def cold() -> None:
         warm = first_call_seconds(cache)
         removed = 0
         for path in Path(cache).rglob("*"):
-            if path.is_file() and path.name.startswith("queries."):
+            if path.is_file() and path.name.startswith("rays."):
                 path.unlink()
                 removed += 1
         queries_only = first_call_seconds(cache)
