@@ -107,13 +107,14 @@ def _slab(px, py, dx, dy, b, grow, top):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _hit(body, ox, oy, dx, dy, rad, top, com, angle, sid, pk_kind, pk_radius, pk_bounds, vstart,
-         vcount, verts, cstart, ccount, code, consts, shift, pt, stack, frames, cur, value, grad):
+def _hit(body, ox, oy, dx, dy, rad, top, com, cosine, sine, sid, pk_kind, pk_radius, pk_bounds,
+         vstart, vcount, verts, cstart, ccount, code, consts, shift, pt, stack, frames, cur, value,
+         grad):
     """First hit (t, nx, ny) of the ray o + t d (unit d), 0 <= t <= top, on ``body``
     grown by rad (m; the disc of a circle cast); t = inf for none. Normal in world axes.
-    See the module docstring."""
+    cosine, sine (B,): of the bodies' angles. See the module docstring."""
     s = sid[body]
-    c, sn = math.cos(angle[body]), math.sin(angle[body])
+    c, sn = cosine[body], sine[body]
     rx, ry = ox - com[body, 0], oy - com[body, 1]
     px, py = c * rx + sn * ry, -sn * rx + c * ry
     ex, ey = c * dx + sn * dy, -sn * dx + c * dy
@@ -327,6 +328,9 @@ def _cast(origin, direction, rad, top, every, com, angle, sid, box, pk_kind, pk_
     """
     n_bodies = com.shape[0]
     stamp = np.full(n_bodies, -1, np.int64)
+    cosine, sine = np.empty(n_bodies), np.empty(n_bodies)
+    for b in range(n_bodies):              # once per body, not per (ray, body) test
+        cosine[b], sine[b] = math.cos(angle[b]), math.sin(angle[b])
     pt = np.empty((1, 2))
     stack = np.empty((depth, 1, 3))
     frames = np.empty((nesting, 1, 2))
@@ -381,9 +385,9 @@ def _cast(origin, direction, rad, top, every, com, angle, sid, box, pk_kind, pk_
                 if a0 > a1:
                     continue
                 t, nx, ny = _hit(body, ox, oy, dx, dy, rad, best if not every else top, com,
-                                 angle, sid, pk_kind, pk_radius, pk_bounds, vstart, vcount, verts,
-                                 cstart, ccount, code, consts, shift, pt, stack, frames, cur,
-                                 value, grad)
+                                 cosine, sine, sid, pk_kind, pk_radius, pk_bounds, vstart, vcount,
+                                 verts, cstart, ccount, code, consts, shift, pt, stack, frames,
+                                 cur, value, grad)
                 if t == math.inf:
                     continue
                 if every:
