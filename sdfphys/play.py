@@ -7,7 +7,9 @@ H key help, Esc or closing the window quits. The overlays shown have a legend.
 Mouse: press the left button on a dynamic body and drag; the grabbed point is
 pulled toward the pointer by a soft mouse joint (``DragSpring``, ``grab``). The right button on
 any body shows that body's field alone (and turns the field overlay on); on empty
-space, the union of all fields again.
+space, the union of all fields again. Hovering shows a readout of the body under the
+pointer next to it (``hover_readout``: name, index, kind, mass, velocity and the
+pointer's signed distance to it).
 
 The top line shows frames per second, simulation steps per second, the simulated
 time and the state (paused, overlays).
@@ -44,6 +46,7 @@ __all__ = [
     "RateMeter",
     "RenderSettings",
     "grab",
+    "hover_readout",
     "pick_body",
     "play",
 ]
@@ -64,7 +67,11 @@ KEYS = (
     ("Esc", "quit"),
     ("left drag", "pull a dynamic body"),
     ("right click", "a body's own field (empty space: all again)"),
+    ("hover", "the body under the pointer: kind, mass, velocity, distance"),
 )
+
+#: The hover readout shows the nearest body within this many pixels of the pointer.
+HOVER_PIXELS = 8.0
 
 CAPTION = "sdfphys   (H: keys)"
 
@@ -130,6 +137,23 @@ def pick_body(world: Any, point: np.ndarray, tolerance: float = 0.0,
     return best
 
 
+def hover_readout(world: Any, point: np.ndarray, max_distance: float) -> list[str]:
+    """Lines describing the body nearest world ``point`` (2,) m if it lies within
+    ``max_distance`` m (``World.point_query``; ties to the lower index): its name and
+    index, kind, mass (kg; inf for static and kinematic bodies), velocity of its centre
+    of mass (m/s) and the signed distance of ``point`` to it (m, < 0 inside). [] if no
+    body is that near."""
+    near = world.point_query(np.asarray(point, np.float64)[None, :], max_distance)
+    body = int(near.body[0])
+    if body < 0:
+        return []
+    vx, vy = (float(v) for v in world.velocity[body])
+    return [f"{world.names[body]}  #{body}  {world.kind[body]}",
+            f"mass {float(world.mass[body]):.4g} kg",
+            f"velocity ({vx:+.3f}, {vy:+.3f}) m/s",
+            f"distance {float(near.distance[0]):+.4f} m"]
+
+
 class RateMeter:
     """Events per second over a sliding window of the last ``window`` frames."""
 
@@ -175,6 +199,7 @@ class _Session:
         self.help = False
         self.overlays = Overlays(legend=True)
         self.grab: _Grab | None = None
+        self.pointer: np.ndarray | None = None      # world, m: where the mouse last moved
         self.step_rate = RateMeter()
 
     @property
@@ -182,6 +207,8 @@ class _Session:
         return float(self.world.settings.dt)
 
     def handle(self, event: pygame.event.Event) -> None:
+        if event.type == pygame.MOUSEMOTION:
+            self.pointer = self.camera.screen_to_world([event.pos])[0]
         if event.type == pygame.QUIT:
             self.running = False
         elif event.type == pygame.KEYDOWN:
@@ -247,9 +274,18 @@ class _Session:
                 f"t = {float(self.world.time):7.3f} s   {len(self.world.shape_id)} bodies   "
                 + "  ".join(flags))
         screen.blit(font.render(line, True, palette.text), (8, 6))
+        if self.pointer is not None:
+            self._draw_readout(screen, palette)
         if self.help:
             draw_panel(screen, ["Keys"] + [f"{k}:  {what}" for k, what in KEYS], palette,
                        corner="center", size=22)
+
+    def _draw_readout(self, screen: pygame.Surface, palette: Palette) -> None:
+        """``hover_readout`` on a panel below and right of the pointer, kept on screen."""
+        lines = hover_readout(self.world, self.pointer, HOVER_PIXELS / self.camera.scale)
+        if lines:
+            x, y = (int(v) for v in self.camera.world_to_screen([self.pointer])[0])
+            draw_panel(screen, lines, palette, corner=(x + 14, y + 14), size=18)
 
     def save_screenshot(self, screen: pygame.Surface, frame: int) -> Path:
         stem = f"sdfphys-{time.strftime('%Y%m%d-%H%M%S')}-{frame:05d}"

@@ -700,11 +700,13 @@ def font(size: int = 18) -> pygame.font.Font:
     return _FONTS[size]
 
 
-def draw_panel(surface: pygame.Surface, lines: list[str], pal: Palette, corner: str,
-           swatches: list[Color] | None = None, size: int = 18) -> pygame.Rect:
+def draw_panel(surface: pygame.Surface, lines: list[str], pal: Palette,
+               corner: str | tuple[int, int], swatches: list[Color] | None = None,
+               size: int = 18) -> pygame.Rect:
     """Lines of text on a translucent panel in a ``corner`` of ``surface``
-    ("top-left", "bottom-left", "center"), each after a colour swatch if ``swatches``;
-    returns the panel's rectangle."""
+    ("top-left", "bottom-left", "center") or with its top-left corner at the pixel
+    ``corner`` (x, y), moved in to fit on the surface; each line after a colour swatch
+    if ``swatches``. Returns the panel's rectangle."""
     face = font(size)
     pad, gap, line = 6, 4, face.get_linesize()
     swatch = line - 4 if swatches else 0
@@ -712,8 +714,11 @@ def draw_panel(surface: pygame.Surface, lines: list[str], pal: Palette, corner: 
     width = max(r.get_width() for r in rendered) + 2 * pad + (swatch + gap if swatch else 0)
     height = len(lines) * line + 2 * pad
     w, h = surface.get_size()
-    x, y = {"top-left": (6, 6), "bottom-left": (6, h - height - 6),
-            "center": ((w - width) // 2, (h - height) // 2)}[corner]
+    if isinstance(corner, tuple):
+        x, y = min(max(corner[0], 0), w - width), min(max(corner[1], 0), h - height)
+    else:
+        x, y = {"top-left": (6, 6), "bottom-left": (6, h - height - 6),
+                "center": ((w - width) // 2, (h - height) // 2)}[corner]
     panel = pygame.Surface((width, height), pygame.SRCALPHA)
     panel.fill((*pal.panel, 215))
     surface.blit(panel, (x, y))

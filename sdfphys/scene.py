@@ -11,6 +11,8 @@ The format is the DESIGN.md contract::
               category, mask, group, sensor, gravity_scale (docs/toolkit.md)
     [[joint]] type, name, bodies, anchor | anchors, axis, length, limits, motor,
               spring, collide_connected (``sdfphys.joints``)
+    [[explode]] time, center, radius, impulse (``World.explode_at``: a blast at the
+              start of the first step at or after ``time``; docs/toolkit.md)
 
 Every problem raises one ``SpecError`` naming the file and the key path
 (``scenes/x.toml: body[2].shape.radius: must be > 0, got -1``), with the nearest
@@ -30,6 +32,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from .blasts import Blast, check_blast
 from .errors import SpecError, check_int, check_number, check_vec2
 from .joints import JointSpec, check_joint
 from .limits import MAX_BITS, MAX_DURATION, BodyValues, check_body, check_flag, check_gravity
@@ -40,13 +43,14 @@ from .shapes import shape_from_spec
 __all__ = ["BodySpec", "RenderSpec", "Scene", "apply_overrides", "load_scene", "read_scene",
            "read_scene_file"]
 
-TOP_KEYS = ("version", "world", "sim", "render", "body", "joint")
+TOP_KEYS = ("version", "world", "sim", "render", "body", "joint", "explode")
 WORLD_KEYS = ("gravity",)
 RENDER_KEYS = ("size", "center", "scale", "fps", "hud")
 BODY_KEYS = ("name", "shape", "position", "angle", "velocity", "angular_velocity",
              "density", "mass", "friction", "restitution", "static", "kinematic",
              "category", "mask", "group", "sensor", "gravity_scale")
 SIM_EXTRA_KEYS = ("quality", "duration")
+EXPLODE_KEYS = ("time", "center", "radius", "impulse")
 
 
 @dataclass(frozen=True)
@@ -94,6 +98,7 @@ class Scene:
     render: RenderSpec
     bodies: list[BodySpec]
     joints: list[JointSpec] = field(default_factory=list)
+    blasts: list[Blast] = field(default_factory=list)
     data: dict = field(default_factory=dict, repr=False)
     """The scene as read (after overrides), for ``digest``."""
 
@@ -118,6 +123,8 @@ class Scene:
                 raise err.in_file(self.source) from None
         if self.joints:
             world._add_joint(*self.joints)
+        for blast in self.blasts:
+            world.explode_at(*blast)
         world.scene = self
         return world
 
@@ -249,7 +256,7 @@ def _known_sections(data: Mapping) -> None:
         if not hint and stem:
             hint = f" (did you mean {stem[0]!r}?)"
         raise SpecError(str(key), f"unknown key{hint}; a scene has version, [world], [sim], "
-                                  "[render], [[body]] and [[joint]]")
+                                  "[render], [[body]], [[joint]] and [[explode]]")
 
 
 def _parse(data: Any, source: str) -> Scene:
@@ -280,7 +287,24 @@ def _parse(data: Any, source: str) -> Scene:
                             f"duplicate name {b.name!r} (also body[{seen[b.name]}])")
         seen[b.name] = i
     return Scene(source, gravity, quality, settings, duration, render, bodies,
-                 _parse_joints(data.get("joint", []), bodies, seen))
+                 _parse_joints(data.get("joint", []), bodies, seen),
+                 _parse_blasts(data.get("explode", [])))
+
+
+def _parse_blasts(blasts: Any) -> list[Blast]:
+    """The ``[[explode]]`` tables (``blasts.check_blast``); every key is required."""
+    if not isinstance(blasts, list):
+        raise SpecError("explode", "must be an array of tables ([[explode]])")
+    out = []
+    for i, data in enumerate(blasts):
+        path = f"explode[{i}]"
+        blast = _table(data, path)
+        _known(blast, EXPLODE_KEYS, path)
+        for key in EXPLODE_KEYS:
+            if key not in blast:
+                raise SpecError(f"{path}.{key}", "is required")
+        out.append(check_blast(path, **blast))
+    return out
 
 
 def _parse_joints(joints: Any, bodies: list[BodySpec], index: dict[str, int]

@@ -21,6 +21,7 @@ Materials mix per contact: friction sqrt(f_a f_b), restitution max(e_a, e_b).
 
 from __future__ import annotations
 
+import bisect
 import math
 import operator
 from collections.abc import Mapping
@@ -28,7 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from . import _warm, queries
+from . import _warm, queries, rays
+from .blasts import Blast, check_blast, fire_due
 from .collide import Contacts, find_contacts
 from .collide.filter import PairFilter
 from .collide.narrowphase import PAIR_FUNCTIONS
@@ -249,6 +251,7 @@ class World(WorldJoints):
         self._forces = False            # some force or torque held for the next step
         self._report = StepReport()     # ``events``
         self._sensor_pass: tuple[Contacts, np.ndarray] | None = None
+        self._blasts: list[Blast] = []  # ``explode_at``, by time
 
     # ----------------------------------------------------------------------------------
     # Bodies
@@ -506,17 +509,20 @@ class World(WorldJoints):
     def step(self) -> None:
         """Advance the world by ``settings.dt`` (docs/solver.md, "One step").
 
-        Stages: collide once; prepare the contact rows (warm start matched by feature
-        key); the substeps (each: integrate velocities, warm start, solve, integrate
-        positions, relax); restitution; time of impact for fast bodies; store impulses;
-        with ``settings.sleeping``, islands at rest fall asleep (``sdfphys.sleep``): a
-        step with no awake dynamic and no moving kinematic body only advances the time,
-        and sleeping islands within contact range of an active body wake first.
+        Stages: blasts due (``explode_at``); collide once; prepare the contact rows
+        (warm start matched by feature key); the substeps (each: integrate velocities,
+        warm start, solve, integrate positions, relax); restitution; time of impact for
+        fast bodies; store impulses; with ``settings.sleeping``, islands at rest fall
+        asleep (``sdfphys.sleep``): a step with no awake dynamic and no moving kinematic
+        body only advances the time, and sleeping islands within contact range of an
+        active body wake first.
         Afterwards ``contacts`` carry the step's impulses and ``events`` its events;
         forces and torques held by ``apply_force`` and ``apply_torque`` are released.
         """
         if self.step_count == 0:
             _warm.start(self)
+        if self._blasts:
+            fire_due(self)
         sleeping = self.settings.sleeping
         # What moves this step (awake dynamic bodies, moving kinematic ones), None
         # without sleeping: changed within a step only by waking islands.
@@ -724,6 +730,15 @@ class World(WorldJoints):
             width[rows] = _width(self._shapes[sid], across[rows])
         self.apply_impulse(body, (impulse * width)[:, None] * away, point)
         return body
+
+    def explode_at(self, time: float, center: Any, radius: float, impulse: float) -> None:
+        """Schedule ``explode(center, radius, impulse)`` for the start of the first step
+        that begins at or after ``time`` (s, >= 0; a step begins at ``self.time``, and
+        one within a millionth of a step before ``time`` counts: ``sdfphys.blasts``). A
+        time already past runs at the next step. A scene's ``[[explode]]`` tables
+        schedule these (docs/toolkit.md)."""
+        blast = check_blast(time=time, center=center, radius=radius, impulse=impulse)
+        bisect.insort(self._blasts, blast, key=lambda b: b.time)
 
     def _compile_ahead(self) -> None:
         """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
@@ -1051,7 +1066,7 @@ class World(WorldJoints):
                              * (self._view("com")[dynamic] @ self.gravity)))
 
     # ----------------------------------------------------------------------------------
-    # Queries (``sdfphys.queries``, docs/queries.md)
+    # Queries (``sdfphys.rays``, ``sdfphys.queries``, docs/queries.md)
     # ----------------------------------------------------------------------------------
 
     def ray_cast(self, origins: Any, directions: Any, max_distance: float = math.inf,
@@ -1062,14 +1077,14 @@ class World(WorldJoints):
         origins, directions: (N, 2) (a direction's length does not matter, it must not
         be zero); max_distance: m, >= 0. bodies: an index array limiting the bodies
         hit (None: all); mask: reserved for collision categories (None)."""
-        return queries.cast(self, origins, directions, max_distance, False, mask, bodies)
+        return rays.cast(self, origins, directions, max_distance, False, mask, bodies)
 
     def ray_cast_all(self, origins: Any, directions: Any, max_distance: float = math.inf,
                      mask: Any = None, bodies: Any = None) -> queries.RayHits:
         """Every body each ray enters within max_distance, as flat arrays (H,) sorted
         by (ray, distance): ``ray`` (H,) the ray index, ``body``, ``point``, ``normal``,
         ``distance`` as ``ray_cast``'s (each body once, at its first entry)."""
-        return queries.cast(self, origins, directions, max_distance, True, mask, bodies)
+        return rays.cast(self, origins, directions, max_distance, True, mask, bodies)
 
     def circle_cast(self, origins: Any, directions: Any, radius: float,
                     max_distance: float = math.inf, mask: Any = None,
@@ -1078,7 +1093,7 @@ class World(WorldJoints):
         body it touches; ``distance`` is how far its centre travelled (0 if it overlaps
         a body at the start), ``point`` the contact on the body's surface, ``normal`` the
         body's outward normal there (pymunk's ``segment_query_first`` with a radius)."""
-        return queries.cast(self, origins, directions, max_distance, False, mask, bodies,
+        return rays.cast(self, origins, directions, max_distance, False, mask, bodies,
                             radius)
 
     def point_query(self, points: Any, max_distance: float, mask: Any = None,

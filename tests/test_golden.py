@@ -42,11 +42,13 @@ HORIZONS: dict[str, tuple[int, str]] = {
     "chain_bridge": (45, "the crates land on the 40-plank bridge at step 37"),
     "cradle_strings": (60, "the pulled ball strikes the row at step 45, the last one leaves"),
     "double_pendulum": (60, "both bars swing down past the vertical (revolute joints)"),
+    "blast": (70, "resting pyramid; [[explode]] at t = 1 s (step 61) throws it, hits from 63"),
     "box_stack": (12, "ten boxes in resting contact from step 1: warm-started stacking"),
     "bullet": (15, "hits the wall by time of impact at step 3-5, then stops"),
     "circles_in_box": (50, "first circles reach the floor at step 36 and start piling"),
     "concave_polygons": (35, "first triangle-field contacts at step 25"),
     "csg_bodies": (35, "first CSG bodies land at step 25"),
+    "filtered_crowd": (65, "teams pass through each other at steps 28-50, land at 59, pile"),
     "grid_terrain": (55, "bodies reach the baked terrain at step 43"),
     "head_on": (75, "the balls meet at step 64 and separate"),
     "kinematic_platform": (20, "crates land on the moving platform at step 7 and ride it"),
@@ -59,6 +61,7 @@ HORIZONS: dict[str, tuple[int, str]] = {
     "ramp_friction": (20, "boxes on the ramp from step 1: sliding and sticking begin"),
     "restitution_row": (80, "the six balls land at step 65 (5.6 m of free fall) and bounce"),
     "sdf_primitives": (36, "field-field and triangle-field contacts from step 26"),
+    "sensor_gate": (50, "funnel hit at step 37, ball0 through the sensor at 39-48, balls meet"),
     "showcase": (12, "every pair kind; terrain and pyramid in contact from step 1"),
 }
 

@@ -1,5 +1,6 @@
 """The interactive window under SDL's dummy driver, driven by scripted events."""
 
+import math
 import os
 import sys
 from types import SimpleNamespace
@@ -10,7 +11,7 @@ import pytest
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import pygame
 
-from sdfphys.play import DragSpring, RateMeter, grab, pick_body, play
+from sdfphys.play import DragSpring, RateMeter, grab, hover_readout, pick_body, play
 from sdfphys.render import Camera, Palette
 from sdfphys.world import World
 
@@ -249,3 +250,30 @@ def test_overlays_in_play_have_a_legend(tmp_path, monkeypatch):
     inside = np.all(field == np.array(Palette().field_inside), axis=2)   # the legend's swatch
     assert np.any(inside[:, 160:]) and not np.any(np.all(plain == np.array(
         Palette().field_inside), axis=2))
+
+
+def test_hover_readout_names_the_body_under_the_pointer_and_its_signed_distance():
+    """Inside the ball 0.1 m from its centre: -0.3 m; 5 cm above the static post:
+    +0.05 m; nothing within max_distance: no lines."""
+    world = ball_world()
+    world.set_state(0, velocity=(1.5, -2.0))
+    assert hover_readout(world, np.array([-1.0, 2.1]), 0.1) == [
+        "ball  #0  dynamic", f"mass {math.pi * 0.4 ** 2:.4g} kg",
+        "velocity (+1.500, -2.000) m/s", "distance -0.3000 m"]
+    assert hover_readout(world, np.array([2.0, 2.55]), 0.1) == [
+        "post  #1  static", "mass inf kg", "velocity (+0.000, +0.000) m/s",
+        "distance +0.0500 m"]
+    assert hover_readout(world, np.array([2.0, 2.65]), 0.1) == []
+
+
+def test_hovering_shows_the_readout_next_to_the_pointer(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    s = key(pygame.K_s)
+    plain, hovered, away = shots(tmp_path, [
+        [key(pygame.K_p), s], [mouse(pygame.MOUSEMOTION, (-1.0, 2.1)), s],
+        [mouse(pygame.MOUSEMOTION, (0.5, 0.0)), s]])            # nothing within 8 px
+    x, y = (int(v) for v in CAMERA.world_to_screen([(-1.0, 2.1)])[0])
+    region = (slice(x + 14, x + 100), slice(y + 14, y + 60))   # below right of the pointer
+    assert np.any(hovered != plain, axis=2)[region].mean() > 0.9
+    assert np.all(hovered[region] == np.array(Palette().text), axis=2).sum() > 50
+    np.testing.assert_array_equal(away[:, 30:], plain[:, 30:])

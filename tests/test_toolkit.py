@@ -8,6 +8,9 @@ substeps), one step where an event's time is compared with a continuous closed f
 
 import itertools
 import math
+import pickle
+import subprocess
+import sys
 
 import numpy as np
 import pymunk
@@ -402,6 +405,98 @@ def test_explode_pushes_by_the_width_facing_the_blast():
                                             rel=1e-12)
     assert w.angular_velocity[box] == pytest.approx(0.0, abs=1e-12)
     assert w.velocity[far].tolist() == [0.0, 0.0]
+
+
+def _blast_world(gravity=(0.0, 0.0)) -> World:
+    w = World(gravity=gravity)
+    w.add_body({"type": "circle", "radius": 0.5}, position=(3.0, 4.0), mass=2.0)
+    return w
+
+
+#: The ball's velocity after the blast: impulse 3 N s/m times its width 1 m, along its
+#: centre's direction (0.6, 0.8), over its 2 kg.
+_KICK = np.array([0.6, 0.8]) * 3.0 * 1.0 / 2.0
+
+
+@pytest.mark.parametrize("steps, time", [(3, 3 / 60), (60, 1.0), (3, 2.5 / 60), (0, 0.0)])
+def test_explode_at_runs_at_the_start_of_the_first_step_at_or_after_its_time(steps, time):
+    """The blast runs at the start of step ``steps`` (the first beginning at or after
+    ``time``, the sum of dt's rounding aside): before it the ball rests, after it the
+    ball has the closed-form velocity, and the run is bit for bit the one that calls
+    ``explode`` by hand before that step (copies carry the pending blast)."""
+    w, by_hand = _blast_world(), _blast_world()
+    w.explode_at(time, (0.0, 0.0), 6.0, 3.0)
+    for _ in range(steps):
+        w.step()
+        by_hand.step()
+    assert w.velocity[0].tolist() == [0.0, 0.0]
+    copy = pickle.loads(pickle.dumps(w))
+    by_hand.explode((0.0, 0.0), 6.0, 3.0)
+    for world in (w, by_hand, copy):
+        world.step()
+        world.step()
+    assert w.velocity[0] == pytest.approx(_KICK, rel=1e-12)
+    assert w.position[0].tolist() == by_hand.position[0].tolist() == copy.position[0].tolist()
+    assert w.velocity[0].tolist() == by_hand.velocity[0].tolist()
+    assert w._blasts == []
+
+
+def test_explode_tables_of_a_scene_schedule_blasts_in_time_order():
+    """Two [[explode]] tables, listed late first: each runs once at its step, and the
+    ball's velocity is the sum of the closed-form kicks."""
+    scene = {"version": 1, "world": {"gravity": [0.0, 0.0]},
+             "body": [{"shape": BALL, "position": [3.0, 4.0], "mass": 2.0}],
+             "explode": [{"time": 0.1, "center": [3.0, 0.0], "radius": 6.0, "impulse": 2.0},
+                         {"time": 0.05, "center": [0.0, 0.0], "radius": 6.0,
+                          "impulse": 3.0}]}
+    w = read_scene(scene).build()
+    seen = []
+    for _ in range(8):
+        w.step()
+        seen.append(w.velocity[0].copy())
+    assert seen[2].tolist() == [0.0, 0.0]                          # after steps 0-2
+    assert seen[3] == pytest.approx(_KICK, rel=1e-12)              # step 3: t = 3 dt
+    assert seen[5] == pytest.approx(_KICK, rel=1e-12)
+    # Step 6: the second blast from below the ball (which has moved by 3 dt of the
+    # first kick): 2 N s/m times its 1 m width along the direction to its centre.
+    centre = np.array([3.0, 4.0]) + _KICK * 3.0 / 60.0
+    away = (centre - (3.0, 0.0)) / np.hypot(*(centre - (3.0, 0.0)))
+    assert seen[6] == pytest.approx(_KICK + away * 2.0 * 1.0 / 2.0, rel=1e-12)
+    assert seen[7].tolist() == seen[6].tolist()
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("time", -1, "explode[0].time: must be >= 0, got -1"),
+    ("radius", 0, "explode[0].radius: must be > 0, got 0"),
+    ("center", [1.0], "explode[0].center: must be a pair [x, y], got [1.0]"),
+    ("impulse", "big", "explode[0].impulse: must be a number, got 'big'"),
+    ("impulse", None, "explode[0].impulse: is required"),
+    ("radios", 1.0, "explode[0].radios: unknown key (did you mean 'radius'?)"),
+])
+def test_bad_explode_tables_name_the_key_path(key, value, message):
+    blast = {"time": 0.5, "center": [0.0, 0.0], "radius": 1.0, "impulse": 1.0}
+    if value is None:
+        del blast[key]
+    else:
+        blast[key] = value
+    with pytest.raises(SpecError) as err:
+        read_scene({"version": 1, "body": [{"shape": BALL}], "explode": [blast]})
+    assert str(err.value) == "<scene>: " + message
+    if key in ("time", "radius", "impulse") and value is not None:   # the API alike
+        with pytest.raises(SpecError, match=message.removeprefix("explode[0].")):
+            World().explode_at(**blast)
+
+
+def test_bad_explode_table_exits_2_with_one_line(tmp_path):
+    path = tmp_path / "blast.toml"
+    path.write_text("version = 1\n[[body]]\nshape = { type = 'circle', radius = 1.0 }\n"
+                    "[[explode]]\ntime = 1.0\ncenter = [0, 0]\nradius = -2\nimpulse = 1\n")
+    result = subprocess.run([sys.executable, "-m", "sdfphys.cli", "run", str(path), "-o",
+                             str(tmp_path / "out.mp4")], capture_output=True, text=True,
+                            check=False)
+    assert result.returncode == 2
+    assert result.stderr.strip().splitlines() == [
+        f"sdfphys: error: {path}: explode[0].radius: must be > 0, got -2"]
 
 
 # --------------------------------------------------------------------------------------
