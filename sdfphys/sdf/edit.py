@@ -112,7 +112,6 @@ def edit_grid(grid: GridField, shape: Field, position, angle: float,
     return i0, i1, j0, j1
 
 
-@njit(cache=True, error_model="numpy")
 def redistance(values: np.ndarray, i0: int, i1: int, j0: int, j1: int, reach: int,
                cell: float) -> None:
     """Re-distance the nodes ``[i0, i1) x [j0, j1)`` of ``values`` (nx, ny), m, in place.
@@ -125,64 +124,105 @@ def redistance(values: np.ndarray, i0: int, i1: int, j0: int, j1: int, reach: in
     nx, ny = values.shape
     c0, c1 = max(i0 - reach - 1, 0), min(i1 + reach, nx - 1)    # cells [c0, c1)
     d0, d1 = max(j0 - reach - 1, 0), min(j1 + reach, ny - 1)
-    mx, my = max(c1 - c0, 0), max(d1 - d0, 0)
-    seg = np.empty((mx, my, 2, 4))
-    count = np.zeros((mx, my), np.int64)
-    px, py = np.empty(4), np.empty(4)
-    for a in range(mx):
-        for b in range(my):
-            i, j = c0 + a, d0 + b
-            v00, v10 = values[i, j], values[i + 1, j]
-            v01, v11 = values[i, j + 1], values[i + 1, j + 1]
+    seg = np.empty((max(c1 - c0, 0), max(d1 - d0, 0), 8))
+    count = np.empty(seg.shape[:2], np.int64)
+    _segments(values, c0, c1, d0, d1, seg, count)
+    squared = np.empty((i1 - i0, j1 - j0))
+    _nearest(seg, count, c0, d0, i0, i1, j0, j1, reach, squared)
+    v = values[i0:i1, j0:j1]
+    sign = np.where(v < 0.0, -1.0, 1.0)
+    v[...] = np.where(squared <= reach * reach, sign * np.sqrt(squared) * cell,
+                      sign * np.maximum(np.abs(v), reach * cell))
+
+
+# Two small kernels of scalar statements (no tuple stores into arrays, no nested
+# helpers): numba types and lowers them in about a second together, where one kernel
+# doing both took 7-15 s (docs/terrain.md, "Compile time").
+
+@njit(cache=True, error_model="numpy")
+def _segments(values: np.ndarray, c0: int, c1: int, d0: int, d1: int, seg: np.ndarray,
+              count: np.ndarray) -> None:
+    """Marching squares on the cells [c0, c1) x [d0, d1) of ``values`` (node units):
+    seg[a, b] (8,) holds up to two segments (x0, y0, x1, y1) of cell (c0 + a, d0 + b),
+    count[a, b] how many. A node is inside where v <= 0; crossings by linear
+    interpolation along the edges; a saddle is split by the sign of the mean."""
+    px = np.empty(4)
+    py = np.empty(4)
+    for i in range(c0, c1):
+        for j in range(d0, d1):
+            v00 = values[i, j]
+            v10 = values[i + 1, j]
+            v01 = values[i, j + 1]
+            v11 = values[i + 1, j + 1]
             m = 0                   # crossings: bottom, right, top, left edge, in order
             if (v00 <= 0.0) != (v10 <= 0.0):
-                px[m], py[m] = i + v00 / (v00 - v10), j
+                px[m] = i + v00 / (v00 - v10)
+                py[m] = j
                 m += 1
             if (v10 <= 0.0) != (v11 <= 0.0):
-                px[m], py[m] = i + 1.0, j + v10 / (v10 - v11)
+                px[m] = i + 1.0
+                py[m] = j + v10 / (v10 - v11)
                 m += 1
             if (v01 <= 0.0) != (v11 <= 0.0):
-                px[m], py[m] = i + v01 / (v01 - v11), j + 1.0
+                px[m] = i + v01 / (v01 - v11)
+                py[m] = j + 1.0
                 m += 1
             if (v00 <= 0.0) != (v01 <= 0.0):
-                px[m], py[m] = i, j + v00 / (v00 - v01)
+                px[m] = i
+                py[m] = j + v00 / (v00 - v01)
                 m += 1
+            a = i - c0
+            b = j - d0
+            # A saddle: if the centre is on the side of corners 00 and 11, they join and
+            # the segments cut off corners 10 (bottom-right) and 01 (top-left); otherwise
+            # corners 00 (bottom-left) and 11 (right-top).
+            first = 1
+            second = 3
+            if (0.25 * (v00 + v10 + v01 + v11) <= 0.0) != (v00 <= 0.0):
+                first = 3
+                second = 1
             if m == 2:
-                seg[a, b, 0, 0], seg[a, b, 0, 1] = px[0], py[0]
-                seg[a, b, 0, 2], seg[a, b, 0, 3] = px[1], py[1]
-                count[a, b] = 1
-            elif m == 4:
-                # A saddle: if the centre is on the side of corners 00 and 11, they join
-                # and the segments cut off corners 10 (bottom-right) and 01 (top-left);
-                # otherwise corners 00 (bottom-left) and 11 (right-top).
-                centre = 0.25 * (v00 + v10 + v01 + v11)
-                first, second = (1, 3) if (centre <= 0.0) == (v00 <= 0.0) else (3, 1)
-                seg[a, b, 0, 0], seg[a, b, 0, 1] = px[0], py[0]
-                seg[a, b, 0, 2], seg[a, b, 0, 3] = px[first], py[first]
-                seg[a, b, 1, 0], seg[a, b, 1, 1] = px[2], py[2]
-                seg[a, b, 1, 2], seg[a, b, 1, 3] = px[second], py[second]
-                count[a, b] = 2
-    out = np.empty((i1 - i0, j1 - j0))
-    limit = float(reach * reach)
+                first = 1
+            count[a, b] = m // 2
+            if m >= 2:
+                seg[a, b, 0] = px[0]
+                seg[a, b, 1] = py[0]
+                seg[a, b, 2] = px[first]
+                seg[a, b, 3] = py[first]
+            if m == 4:
+                seg[a, b, 4] = px[2]
+                seg[a, b, 5] = py[2]
+                seg[a, b, 6] = px[second]
+                seg[a, b, 7] = py[second]
+
+
+@njit(cache=True, error_model="numpy")
+def _nearest(seg: np.ndarray, count: np.ndarray, c0: int, d0: int, i0: int, i1: int,
+             j0: int, j1: int, reach: int, out: np.ndarray) -> None:
+    """out[i - i0, j - j0]: the squared distance (node units) from node (i, j) to the
+    nearest segment of ``_segments`` within ``reach`` cells, reach^2 + 1 if none."""
+    mx = seg.shape[0]
+    my = seg.shape[1]
     for i in range(i0, i1):
+        alo = max(i - reach - 1 - c0, 0)
+        ahi = min(i + reach + 1 - c0, mx)
         for j in range(j0, j1):
-            best = limit
-            found = False
-            for a in range(max(i - reach - 1 - c0, 0), min(i + reach + 1 - c0, mx)):
-                for b in range(max(j - reach - 1 - d0, 0), min(j + reach + 1 - d0, my)):
+            blo = max(j - reach - 1 - d0, 0)
+            bhi = min(j + reach + 1 - d0, my)
+            best = reach * reach + 1.0
+            for a in range(alo, ahi):
+                for b in range(blo, bhi):
                     for k in range(count[a, b]):
-                        ax, ay = seg[a, b, k, 0] - i, seg[a, b, k, 1] - j
-                        ex, ey = seg[a, b, k, 2] - seg[a, b, k, 0], seg[a, b, k, 3] - seg[a, b, k, 1]
+                        ax = seg[a, b, 4 * k] - i
+                        ay = seg[a, b, 4 * k + 1] - j
+                        ex = seg[a, b, 4 * k + 2] - seg[a, b, 4 * k]
+                        ey = seg[a, b, 4 * k + 3] - seg[a, b, 4 * k + 1]
                         ee = ex * ex + ey * ey
-                        t = 0.0 if ee == 0.0 else min(max(-(ax * ex + ay * ey) / ee, 0.0), 1.0)
-                        qx, qy = ax + t * ex, ay + t * ey
+                        t = 0.0
+                        if ee > 0.0:
+                            t = min(max(-(ax * ex + ay * ey) / ee, 0.0), 1.0)
+                        qx = ax + t * ex
+                        qy = ay + t * ey
                         dd = qx * qx + qy * qy
-                        if dd <= best:
-                            best, found = dd, True
-            v = values[i, j]
-            sign = -1.0 if v < 0.0 else 1.0
-            if found:
-                out[i - i0, j - j0] = sign * math.sqrt(best) * cell
-            else:
-                out[i - i0, j - j0] = sign * max(abs(v), reach * cell)
-    values[i0:i1, j0:j1] = out
+                        best = min(best, dd)
+            out[i - i0, j - j0] = best
