@@ -231,6 +231,21 @@ def test_alpha_decides_where_the_image_has_it(tmp_path):
     assert d[0] > 0.0 and d[1] < 0.0
 
 
+@pytest.mark.parametrize("grey, edge", [(0, 0.0), (64, 0.5 / (0.5 + 0.5 - 64 / 255) - 0.5)])
+def test_a_grey_edge_pixel_moves_the_edge_into_it(tmp_path, grey, edge):
+    """Columns 0-3 white, column 4 grey (or black), 5-7 black; threshold 0.5: the edge
+    nodes hold 0.5 - level (px), so the zero level crosses between the centres of
+    columns 3 (-0.5) and 4 (0.5 - 64/255) by linear interpolation."""
+    surface = pygame.Surface((8, 4))
+    surface.fill((255, 255, 255), pygame.Rect(0, 0, 4, 4))
+    surface.fill((grey, grey, grey), pygame.Rect(4, 0, 1, 4))
+    pygame.image.save(surface, str(tmp_path / "edge.png"))
+    f = field({"type": "image", "path": str(tmp_path / "edge.png"), "cell": 1.0})
+    assert abs(f.distance(np.array([[edge, 0.5]]))[0]) < 1e-12
+    d = f.distance(np.array([[edge - 0.2, 0.5], [edge + 0.2, 0.5]]))
+    np.testing.assert_allclose(d, [-0.2, 0.2], atol=1e-12)
+
+
 def test_a_ball_dropped_on_an_image_disc_rests_on_top(tmp_path):
     _disc_png(tmp_path / "disc.png")
     scene = tmp_path / "scene.toml"

@@ -53,7 +53,7 @@ from .opcodes import GRID
 __all__ = ["REDISTANCE_CELLS", "edit_grid", "redistance"]
 
 #: Reach R of the re-distancing, in cells (see the module docstring).
-REDISTANCE_CELLS = 6
+REDISTANCE_CELLS = 8
 
 
 def edit_grid(grid: GridField, shape: Field, position, angle: float,

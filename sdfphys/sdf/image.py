@@ -15,13 +15,24 @@ and beyond the image everything is outside (an inside pixel on the image's edge 
 a pixel from the boundary). The squared transform is exact: Felzenszwalb and
 Huttenlocher's lower envelope of parabolas, "Distance Transforms of Sampled
 Functions", Theory of Computing 8 (2012), one pass along the columns and one along the
-rows. A shape drawn d pixels wide is that wide within about a pixel (the digitised
-edge wanders by up to half a pixel, the half-pixel offset is exact on straight rows
-and columns); tests/test_terrain.py checks a disc 40 px wide is a 0.8 m disc within
-one cell.
+rows.
 
-A missing or unreadable image raises SpecError naming ``path``; so does an image with
-no inside pixel. Relative paths are taken from the current directory here; a scene
+Antialiased edges. A pixel on the boundary (a 4-neighbour on the other side) holds
+instead (t - level) / max(t, 1 - t) / 2 pixels, t the threshold: +-1/2 for a pure
+black or white pixel (as above), and for a grey one the edge moves into the pixel in
+proportion to its level (for t = 1/2, a pixel whose level is its covered fraction gets
+1/2 - coverage: exact for an edge along a pixel row or column). Then the nodes within
+``SMOOTH_CELLS`` cells of the boundary are re-distanced from its polyline
+(``edit.redistance``): the distance to the edge through these sub-pixel points, where
+the transform of a binary image is the distance to a pixel staircase, whose gradient
+turns at every step (boxes and triangles sliding on a slope drawn in black and white
+at 2 cm per pixel sank 1-3 cm into it; drawn antialiased, under 1 cm:
+scenes/image_terrain.toml). A shape drawn d pixels wide is that wide within about a
+pixel (a binary edge wanders by up to half a pixel); tests/test_terrain.py checks a
+disc 40 px wide is a 0.8 m disc within one cell.
+
+A missing or unreadable image raises SpecError naming ``path``; an image with no
+inside pixel one naming ``threshold``. Relative paths are taken from the current directory here; a scene
 file's image paths are relative to the scene file (``scene.py`` resolves them).
 """
 
@@ -35,17 +46,23 @@ import numpy as np
 from .._jit import njit
 from ..errors import SpecError
 from .base import REQUIRED, Param, primitive
+from .edit import redistance
 from .grid import MAX_NODES, GridField
 
-__all__ = ["image_field", "inside_pixels", "signed_distance_transform"]
+__all__ = ["SMOOTH_CELLS", "image_field", "pixel_levels", "signed_distance_transform"]
+
+#: Nodes within this many cells of the boundary get their distance to its polyline
+#: (``edit.redistance``), which runs through the sub-pixel edge points.
+SMOOTH_CELLS = 3
 
 #: Stands for "no feature pixel yet" in the squared transform (1e20 px^2, finite so
 #: that differences of it stay finite).
 _FAR = 1e20
 
 
-def inside_pixels(path: str, threshold: float) -> np.ndarray:
-    """(W, H) bool, indexed [column, row from the top]: the pixels inside (see module)."""
+def pixel_levels(path: str) -> np.ndarray:
+    """(W, H) float in [0, 1], indexed [column, row from the top]: each pixel's alpha if
+    the image has an alpha channel, else its luminance (see module)."""
     os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
     import pygame
 
@@ -62,7 +79,7 @@ def inside_pixels(path: str, threshold: float) -> np.ndarray:
     else:
         rgb = pygame.surfarray.array3d(surface).astype(np.float64) / 255.0
         level = rgb[..., 0] * 0.299 + rgb[..., 1] * 0.587 + rgb[..., 2] * 0.114
-    return level >= threshold
+    return level
 
 
 def signed_distance_transform(inside: np.ndarray) -> np.ndarray:
@@ -121,10 +138,17 @@ def _squared_transform(f: np.ndarray) -> np.ndarray:
 def image_field(path: str, cell: float, threshold: float = 0.5) -> GridField:
     """The baked grid of an image (module docstring): nodes at the pixel centres, the
     image centred on the origin, ``cell`` m per pixel, rows from +y down."""
-    inside = inside_pixels(path, threshold)
+    level = pixel_levels(path)
+    inside = level >= threshold
     if not np.any(inside):
         raise SpecError("threshold", f"no pixel of {path!r} is inside (luminance or alpha "
                                      f">= {threshold:g})")
-    values = signed_distance_transform(inside)[:, ::-1] * cell    # rows: +y first
+    signed = signed_distance_transform(inside)
+    # Pixels on the boundary (a 4-neighbour on the other side, |signed| = 1/2): the
+    # level's distance to the threshold places the edge inside the pixel.
+    edge = np.abs(signed) == 0.5
+    signed[edge] = (threshold - level[edge]) / max(threshold, 1.0 - threshold) * 0.5
+    values = signed[:, ::-1] * cell                               # rows: +y first
+    redistance(values, 0, values.shape[0], 0, values.shape[1], SMOOTH_CELLS, cell)
     origin = -0.5 * cell * (np.array(values.shape, dtype=np.float64) - 1.0)
     return GridField.from_values(values, origin, cell)
