@@ -18,10 +18,11 @@ First edit of a body:
 The edited body gets its own shape (bodies that shared its shape keep theirs). What is
 refreshed, for that body only: its contacts and warm-start impulses (dropped: the next
 step finds them anew), the sleeping islands it touches (woken, so bodies resting on it
-fall into a hole), its core radius, and its sprite (``TerrainShape.revision``, which the
-renderer compares). The collision tables see the new shape once, at the first edit;
-later edits keep the grid's bounds (its whole box, grown where a rim node is inside),
-so nothing cached by shape needs rebuilding.
+fall into a hole), its core radius, its sprite (``TerrainShape.revision``, which the
+renderer compares) and its constants in the queries' tables (``queries._packed``).
+The collision tables see the new shape once, at the first edit; later edits keep the
+grid's bounds (its whole box, grown where a rim node is inside), so nothing cached by
+shape needs rebuilding.
 
 Scheduled edits (a scene's ``[[carve]]`` tables, ``schedule``) are applied at the start
 of the first step whose time is at or after theirs, in time order then scene order; an
@@ -41,7 +42,7 @@ from .limits import check_angle, check_position
 from .sdf.base import Field
 from .sdf.build import field as build_field
 from .sdf.build import suggest
-from .sdf.edit import edit_grid
+from .sdf.edit import edit_grid, write_window
 from .sdf.grid import GridField
 from .shapes import SdfShape, Shape
 
@@ -183,8 +184,17 @@ def edit(world: Any, body: Any, spec: Any, position: Any, angle: float = 0.0,
     c, s = math.cos(turn), math.sin(turn)
     dx, dy = position - com
     local = (c * dx + s * dy, c * dy - s * dx)          # R(-turn) (position - com)
-    if edit_grid(terrain.grid, shape, local, angle - turn, deposit) is None:
+    window = edit_grid(terrain.grid, shape, local, angle - turn, deposit)
+    if window is None:
         return
+    # The ray and overlap queries pack a copy of every program's constants (cached on
+    # the world until a shape is added, ``queries._packed``): the window goes there too.
+    packed = world.__dict__.get("_query_pack")
+    if packed is not None and packed[0] == len(world._shapes):
+        tables = packed[1]
+        number = int(d["shape_id"][i])
+        write_window(tables.code, tables.consts, int(tables.cstart[number]), terrain.grid,
+                     window)
     terrain.revision += 1
     d["core_radius"][i] = -float(terrain.grid.distance(np.zeros((1, 2)))[0])
     world._wake_touching(i)

@@ -273,3 +273,16 @@ def test_a_missing_image_exits_2_naming_the_key(tmp_path):
     assert len(lines) == 1 and "Traceback" not in result.stderr
     assert lines[0].startswith(f"sdfphys: error: {scene}: body[0].shape.field.path: cannot "
                                f"read image '{tmp_path / 'nope.png'}'")
+
+
+def test_ray_casts_see_every_edit():
+    w = _two_crates(GROUND)
+    down = np.array([[0.0, -1.0], [0.0, -1.0]])
+    origins = np.array([[2.0, 3.0], [-2.0, 3.0]])
+    hit = w.ray_cast(origins, down, bodies=np.array([0]))
+    np.testing.assert_allclose(hit.point[:, 1], [0.5, 0.5], atol=1e-9)
+    w.carve("ground", {"type": "circle", "radius": 0.3}, (2.0, 0.5))   # the first edit
+    assert w.ray_cast(origins, down, bodies=np.array([0])).point[0, 1] < 0.25
+    w.carve("ground", {"type": "circle", "radius": 0.3}, (-2.0, 0.5))  # tables cached now
+    hit = w.ray_cast(origins, down, bodies=np.array([0]))
+    np.testing.assert_allclose(hit.point[:, 1], [0.2, 0.2], atol=0.05 / np.sqrt(2))

@@ -50,10 +50,25 @@ from .base import Field
 from .grid import GridField
 from .opcodes import GRID
 
-__all__ = ["REDISTANCE_CELLS", "edit_grid", "redistance"]
+__all__ = ["GRID_HEADER", "REDISTANCE_CELLS", "edit_grid", "redistance", "write_window"]
 
 #: Reach R of the re-distancing, in cells (see the module docstring).
 REDISTANCE_CELLS = 8
+
+#: A GRID instruction's constants before the node values: origin x, y, cell, margin,
+#: band (``compiled._emit``).
+GRID_HEADER = 5
+
+
+def write_window(code: np.ndarray, consts: np.ndarray, row: int, grid: GridField,
+                 window: tuple[int, int, int, int]) -> None:
+    """Copy ``grid``'s node values on ``window`` (i0, i1, j0, j1) into ``consts``, the
+    constants of a program whose instruction ``row`` of ``code`` is that grid's GRID."""
+    assert code[row, 0] == GRID
+    nx, ny = grid.shape
+    i0, i1, j0, j1 = window
+    o = int(code[row, 1]) + GRID_HEADER
+    consts[o:o + nx * ny].reshape(nx, ny)[i0:i1, j0:j1] = grid._values[i0:i1, j0:j1]
 
 
 def edit_grid(grid: GridField, shape: Field, position, angle: float,
@@ -106,9 +121,7 @@ def edit_grid(grid: GridField, shape: Field, position, angle: float,
     window[rim] = np.maximum(window[rim], np.minimum(old[rim], 0.0))
     program = grid.__dict__.get("_compiled_program")
     if program:
-        o = int(program.code[0, 1]) + 5         # GRID consts: origin, cell, margin, band
-        assert program.code[0, 0] == GRID
-        program.consts[o:o + nx * ny].reshape(nx, ny)[i0:i1, j0:j1] = window
+        write_window(program.code, program.consts, 0, grid, (i0, i1, j0, j1))
     return i0, i1, j0, j1
 
 
