@@ -11,6 +11,11 @@ space, the union of all fields again. Hovering shows a readout of the body under
 pointer next to it (``hover_readout``: name, index, kind, mass, velocity and the
 pointer's signed distance to it).
 
+Carve tool (K toggles it, docs/terrain.md): a left click carves a disc of the tool's
+radius out of the static or kinematic body the disc reaches (``pick_terrain``: the one
+whose field is smallest at the pointer), shift + left click deposits one; the wheel
+sets the radius (x 1.25 per notch, ``CARVE_RADII``). The pointer shows the disc.
+
 The top line shows frames per second, simulation steps per second, the simulated
 time and the state (paused, overlays).
 
@@ -37,6 +42,7 @@ import numpy as np
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import pygame
 
+from .errors import SpecError
 from .render import DYNAMIC, Camera, Overlays, Palette, Renderer, body_frames, draw_panel
 
 __all__ = [
@@ -68,10 +74,14 @@ KEYS = (
     ("left drag", "pull a dynamic body"),
     ("right click", "a body's own field (empty space: all again)"),
     ("hover", "the body under the pointer: kind, mass, velocity, distance"),
+    ("K", "carve tool: click carves a disc, shift+click deposits, wheel: radius"),
 )
 
 #: The hover readout shows the nearest body within this many pixels of the pointer.
 HOVER_PIXELS = 8.0
+#: The carve tool's first radius and its range, m.
+CARVE_RADIUS = 0.3
+CARVE_RADII = (0.05, 5.0)
 
 CAPTION = "sdfphys   (H: keys)"
 
@@ -122,9 +132,17 @@ def pick_body(world: Any, point: np.ndarray, tolerance: float = 0.0,
     that value is <= ``tolerance`` m; None if there is none. Only dynamic bodies
     unless ``dynamic_only`` is False."""
     frames = body_frames(world)
+    eligible = (frames.motion == DYNAMIC) if dynamic_only else np.ones(len(frames.com), bool)
+    return _smallest_field(frames, point, eligible, tolerance)
+
+
+def _smallest_field(frames: Any, point: np.ndarray, eligible: np.ndarray,
+                    tolerance: float) -> int | None:
+    """Among the ``eligible`` (B,) bodies of ``frames`` whose bounding circle reaches
+    within ``tolerance`` m of ``point``, the one whose field is smallest there, if it
+    is <= ``tolerance``."""
     radius = np.array([float(s.radius) for s in frames.shapes])[frames.shape_id]
     gap = np.hypot(*(frames.com - point).T)
-    eligible = (frames.motion == DYNAMIC) if dynamic_only else np.ones(len(gap), bool)
     candidates = np.flatnonzero(eligible & (gap <= radius + tolerance))
     best, best_d = None, tolerance
     for b in candidates.tolist():
@@ -152,6 +170,16 @@ def hover_readout(world: Any, point: np.ndarray, max_distance: float) -> list[st
             f"mass {float(world.mass[body]):.4g} kg",
             f"velocity ({vx:+.3f}, {vy:+.3f}) m/s",
             f"distance {float(near.distance[0]):+.4f} m"]
+
+
+def pick_terrain(world: Any, point: np.ndarray, reach: float) -> int | None:
+    """The static or kinematic bounded body whose field is smallest at world ``point``
+    (2,) m, if that value is <= ``reach`` m (a disc of that radius there reaches it);
+    None if there is none (the carve tool's target)."""
+    frames = body_frames(world)
+    radius = np.array([float(s.radius) for s in frames.shapes])[frames.shape_id]
+    return _smallest_field(frames, point, (frames.motion != DYNAMIC) & np.isfinite(radius),
+                           reach)
 
 
 class RateMeter:
@@ -201,6 +229,8 @@ class _Session:
         self.grab: _Grab | None = None
         self.pointer: np.ndarray | None = None      # world, m: where the mouse last moved
         self.step_rate = RateMeter()
+        self.carving = False
+        self.carve_radius = CARVE_RADIUS
 
     @property
     def dt(self) -> float:
@@ -213,6 +243,11 @@ class _Session:
             self.running = False
         elif event.type == pygame.KEYDOWN:
             self._key(event.key)
+        elif event.type == pygame.MOUSEWHEEL and self.carving:
+            low, high = CARVE_RADII
+            self.carve_radius = min(max(self.carve_radius * 1.25 ** event.y, low), high)
+        elif event.type == pygame.MOUSEBUTTONDOWN and event.button == 1 and self.carving:
+            self._carve(event.pos, bool(pygame.key.get_mods() & pygame.KMOD_SHIFT))
         elif event.type == pygame.MOUSEBUTTONDOWN and event.button == 1:
             point = self.camera.screen_to_world([event.pos])[0]
             body = pick_body(self.world, point, tolerance=3.0 / self.camera.scale)
@@ -228,6 +263,19 @@ class _Session:
             point = self.camera.screen_to_world([event.pos])[0]
             body = pick_body(self.world, point, 3.0 / self.camera.scale, dynamic_only=False)
             self.overlays = replace(self.overlays, field=True, field_body=body)
+
+    def _carve(self, pos: tuple[int, int], deposit: bool) -> None:
+        """Carve (or deposit) the tool's disc at screen ``pos`` in the terrain it reaches;
+        an edit the body refuses is one line on stderr."""
+        point = self.pointer = self.camera.screen_to_world([pos])[0]
+        body = pick_terrain(self.world, point, self.carve_radius)
+        if body is None:
+            return
+        disc = {"type": "circle", "radius": self.carve_radius}
+        try:
+            (self.world.deposit if deposit else self.world.carve)(body, disc, point)
+        except SpecError as err:
+            print(f"sdfphys: carve: {err}", file=sys.stderr, flush=True)
 
     def _key(self, key: int) -> None:
         if key == pygame.K_ESCAPE:
@@ -250,6 +298,11 @@ class _Session:
             self.overlays = replace(self.overlays, bounds=not self.overlays.bounds)
         elif key == pygame.K_h:
             self.help = not self.help
+        elif key == pygame.K_k:
+            self.carving = not self.carving
+            if self.grab is not None:
+                self.world.remove_joint(self.grab.joint)
+                self.grab = None
 
     def advance(self) -> None:
         """Run this frame's steps: enough to keep pace with ``fps`` (at least one),
@@ -269,13 +322,20 @@ class _Session:
         flags = [name for name, on in (("PAUSED", self.paused),
                                        ("contacts", self.overlays.contacts),
                                        ("field", self.overlays.field),
-                                       ("bounds", self.overlays.bounds)) if on] + ["H: keys"]
+                                       ("bounds", self.overlays.bounds)) if on]
+        if self.carving:
+            flags.append(f"carve r = {self.carve_radius:.2f} m")
+        flags.append("H: keys")
         line = (f"{frame_rate:5.1f} frames/s   {self.step_rate.rate:6.1f} steps/s   "
                 f"t = {float(self.world.time):7.3f} s   {len(self.world.shape_id)} bodies   "
                 + "  ".join(flags))
         screen.blit(font.render(line, True, palette.text), (8, 6))
         if self.pointer is not None:
             self._draw_readout(screen, palette)
+            if self.carving:
+                r_px = max(1, round(self.carve_radius * self.camera.scale))
+                at = self.camera.world_to_screen([self.pointer])[0]
+                pygame.draw.circle(screen, palette.text, (round(at[0]), round(at[1])), r_px, 1)
         if self.help:
             draw_panel(screen, ["Keys"] + [f"{k}:  {what}" for k, what in KEYS], palette,
                        corner="center", size=22)

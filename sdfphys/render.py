@@ -456,9 +456,10 @@ class Renderer:
                          colours: tuple[np.ndarray, np.ndarray]) -> None:
         """Blit the sprite of every SDF body of ``index``.
 
-        A body's sprite from the last frame is reused while the body has the same shape,
-        colour and camera and has moved less than ``SPRITE_TOLERANCE`` px (centre of
-        mass, and rotation at its bounding radius), so bodies at rest cost one blit.
+        A body's sprite from the last frame is reused while the body has the same shape
+        (and shape ``revision``: an edited terrain's sprite is redrawn), colour and
+        camera and has moved less than ``SPRITE_TOLERANCE`` px (centre of mass, and
+        rotation at its bounding radius), so bodies at rest cost one blit.
         The others are rasterized with one batch of field evaluations per shape for all
         the bodies that share it (instancing).
         """
@@ -470,8 +471,9 @@ class Renderer:
         for k, b in enumerate(index.tolist()):
             shape = frames.shapes[frames.shape_id[b]]
             colour, angle = (tuple(fills[b]), tuple(edges[b])), float(frames.angle[b])
+            look = (colour, cam, getattr(shape, "revision", 0))     # edited terrain: redraw
             old = self._sprites.get(b)
-            if (old is not None and old[0] is shape and old[1] == (colour, cam)
+            if (old is not None and old[0] is shape and old[1] == look
                     and _close(old[2], centre[k], old[3], angle, float(shape.radius) * cam.scale)):
                 sprites[b] = old
             else:
@@ -484,7 +486,7 @@ class Renderer:
                                         rects)
             for b, rect, d_px in zip(bodies, rects, fields):
                 colour = (tuple(fills[b]), tuple(edges[b]))
-                sprites[b] = (shape, (colour, cam),
+                sprites[b] = (shape, (colour, cam, getattr(shape, "revision", 0)),
                               cam.world_to_screen(frames.com[b])[0], float(frames.angle[b]),
                               *self._sprite(d_px, rect, colour))
         for b in index.tolist():
@@ -643,7 +645,8 @@ class Renderer:
         paused or resting scene costs one blit per frame.
         """
         key = (self.camera, self.palette, overlays.field_body, overlays.iso_spacing,
-               overlays.field_alpha, tuple(id(s) for s in frames.shapes),
+               overlays.field_alpha,
+               tuple((id(s), getattr(s, "revision", 0)) for s in frames.shapes),
                frames.shape_id.tobytes(), frames.com.tobytes(), frames.angle.tobytes())
         cached = self._field_layer
         if cached is None or cached[0] != key or not cached[2]:

@@ -13,6 +13,10 @@ The format is the DESIGN.md contract::
               spring, collide_connected (``sdfphys.joints``)
     [[explode]] time, center, radius, impulse (``World.explode_at``: a blast at the
               start of the first step at or after ``time``; docs/toolkit.md)
+    [[carve]] time, body, field, position, angle, deposit, blast = {radius, impulse}
+              (``sdfphys.terrain``, docs/terrain.md)
+
+An image field's ``path`` (``{type = "image", ...}``) is relative to the scene file.
 
 Every problem raises one ``SpecError`` naming the file and the key path
 (``scenes/x.toml: body[2].shape.radius: must be > 0, got -1``), with the nearest
@@ -35,15 +39,26 @@ from typing import Any, NamedTuple
 from .blasts import Blast, check_blast
 from .errors import SpecError, check_int, check_number, check_vec2
 from .joints import JointSpec, check_joint
-from .limits import MAX_BITS, MAX_DURATION, BodyValues, check_body, check_flag, check_gravity
+from .limits import (
+    MAX_BITS,
+    MAX_DURATION,
+    BodyValues,
+    check_angle,
+    check_body,
+    check_flag,
+    check_gravity,
+    check_position,
+)
+from .sdf.build import field as build_field
 from .sdf.build import suggest
 from .settings import Settings, preset
 from .shapes import shape_from_spec
+from .terrain import Edit, schedule
 
 __all__ = ["BodySpec", "RenderSpec", "Scene", "apply_overrides", "load_scene", "read_scene",
            "read_scene_file"]
 
-TOP_KEYS = ("version", "world", "sim", "render", "body", "joint", "explode")
+TOP_KEYS = ("version", "world", "sim", "render", "body", "joint", "explode", "carve")
 WORLD_KEYS = ("gravity",)
 RENDER_KEYS = ("size", "center", "scale", "fps", "hud")
 BODY_KEYS = ("name", "shape", "position", "angle", "velocity", "angular_velocity",
@@ -51,6 +66,8 @@ BODY_KEYS = ("name", "shape", "position", "angle", "velocity", "angular_velocity
              "category", "mask", "group", "sensor", "gravity_scale")
 SIM_EXTRA_KEYS = ("quality", "duration")
 EXPLODE_KEYS = ("time", "center", "radius", "impulse")
+CARVE_KEYS = ("time", "body", "field", "position", "angle", "deposit", "blast")
+BLAST_KEYS = ("radius", "impulse")
 
 
 @dataclass(frozen=True)
@@ -99,6 +116,8 @@ class Scene:
     bodies: list[BodySpec]
     joints: list[JointSpec] = field(default_factory=list)
     blasts: list[Blast] = field(default_factory=list)
+    carves: list[Edit] = field(default_factory=list)
+    """The ``[[carve]]`` tables (``terrain.Edit``, body by index), scheduled by ``build``."""
     data: dict = field(default_factory=dict, repr=False)
     """The scene as read (after overrides), for ``digest``."""
 
@@ -125,6 +144,8 @@ class Scene:
             world._add_joint(*self.joints)
         for blast in self.blasts:
             world.explode_at(*blast)
+        if self.carves:
+            schedule(world, self.carves)
         world.scene = self
         return world
 
@@ -256,7 +277,8 @@ def _known_sections(data: Mapping) -> None:
         if not hint and stem:
             hint = f" (did you mean {stem[0]!r}?)"
         raise SpecError(str(key), f"unknown key{hint}; a scene has version, [world], [sim], "
-                                  "[render], [[body]], [[joint]] and [[explode]]")
+                                  "[render], [[body]], [[joint]], [[explode]] and "
+                                  "[[carve]]")
 
 
 def _parse(data: Any, source: str) -> Scene:
@@ -279,7 +301,8 @@ def _parse(data: Any, source: str) -> Scene:
         raise SpecError("body", "must be an array of tables ([[body]])")
     if not bodies_data:
         raise SpecError("body", "a scene needs at least one [[body]]")
-    bodies = [_parse_body(b, i) for i, b in enumerate(bodies_data)]
+    base = None if source == "<scene>" else Path(source).parent
+    bodies = [_parse_body(b, i, base) for i, b in enumerate(bodies_data)]
     seen: dict[str, int] = {}
     for i, b in enumerate(bodies):
         if b.name in seen:
@@ -288,7 +311,8 @@ def _parse(data: Any, source: str) -> Scene:
         seen[b.name] = i
     return Scene(source, gravity, quality, settings, duration, render, bodies,
                  _parse_joints(data.get("joint", []), bodies, seen),
-                 _parse_blasts(data.get("explode", [])))
+                 _parse_blasts(data.get("explode", [])),
+                 _parse_carves(data.get("carve", []), bodies, seen, base))
 
 
 def _parse_blasts(blasts: Any) -> list[Blast]:
@@ -305,6 +329,70 @@ def _parse_blasts(blasts: Any) -> list[Blast]:
                 raise SpecError(f"{path}.{key}", "is required")
         out.append(check_blast(path, **blast))
     return out
+
+
+def _image_paths(spec: Any, base: Path | None) -> Any:
+    """A copy of the FIELD ``spec`` whose image paths are joined to the directory ``base``
+    (the scene file's; None: left relative to the current directory)."""
+    if base is None:
+        return spec
+    if isinstance(spec, Mapping):
+        out = {key: _image_paths(value, base) for key, value in spec.items()}
+        if out.get("type") == "image" and isinstance(out.get("path"), str):
+            out["path"] = str(base / out["path"])
+        return out
+    if isinstance(spec, list):
+        return [_image_paths(value, base) for value in spec]
+    return spec
+
+
+def _parse_carves(carves: Any, bodies: list[BodySpec], index: dict[str, int],
+                  base: Path | None) -> list[Edit]:
+    """The ``[[carve]]`` tables (``terrain.Edit``): time (s, >= 0), body (a name or an
+    index of a static or kinematic bounded body), field (FIELD), position (world, m),
+    optional angle (rad), deposit (bool) and blast {radius (m, > 0), impulse (N s/m)}."""
+    if not isinstance(carves, list):
+        raise SpecError("carve", "must be an array of tables ([[carve]])")
+    edits = []
+    for k, data in enumerate(carves):
+        path = f"carve[{k}]"
+        table = _table(data, path)
+        _known(table, CARVE_KEYS, path)
+        for key in ("time", "body", "field", "position"):
+            if key not in table:
+                raise SpecError(f"{path}.{key}", "is required")
+        time = check_number(table["time"], f"{path}.time", low=0.0, high=MAX_DURATION)
+        body = table["body"]
+        if isinstance(body, str):
+            if body not in index:
+                raise SpecError(f"{path}.body", f"no body named {body!r}"
+                                + suggest(body, list(index)))
+            number = index[body]
+        else:
+            number = check_int(body, f"{path}.body", low=0, high=len(bodies) - 1)
+        target = bodies[number]
+        if target.kind == "dynamic":
+            raise SpecError(f"{path}.body", f"body {target.name!r} is dynamic: only static "
+                                            "and kinematic bodies can be carved")
+        if not math.isfinite(target.shape.radius):
+            raise SpecError(f"{path}.body", f"body {target.name!r} is unbounded (e.g. a "
+                                            "half-plane): only a bounded field can be carved")
+        carved = build_field(_image_paths(table["field"], base), f"{path}.field")
+        position = check_position(table["position"], f"{path}.position")
+        angle = check_angle(table.get("angle", 0.0), f"{path}.angle")
+        blast = None
+        if "blast" in table:
+            where = f"{path}.blast"
+            spec = _table(table["blast"], where)
+            _known(spec, BLAST_KEYS, where)
+            for key in BLAST_KEYS:
+                if key not in spec:
+                    raise SpecError(f"{where}.{key}", "is required")
+            blast = (check_number(spec["radius"], f"{where}.radius", low=0.0, low_open=True),
+                     check_number(spec["impulse"], f"{where}.impulse", low=0.0))
+        edits.append(Edit(time, number, carved, position, angle,
+                          _flag(table, "deposit", path), blast))
+    return edits
 
 
 def _parse_joints(joints: Any, bodies: list[BodySpec], index: dict[str, int]
@@ -355,7 +443,7 @@ def _parse_render(render: dict) -> RenderSpec:
     return RenderSpec((w + w % 2, h + h % 2), center, scale, fps, hud)
 
 
-def _parse_body(data: Any, i: int) -> BodySpec:
+def _parse_body(data: Any, i: int, base: Path | None = None) -> BodySpec:
     path = f"body[{i}]"
     body = _table(data, path)
     _known(body, BODY_KEYS, path)
@@ -370,7 +458,10 @@ def _parse_body(data: Any, i: int) -> BodySpec:
         raise SpecError(f"{path}.kinematic", "a body cannot be both static and kinematic")
     kind = "static" if static else "kinematic" if kinematic else "dynamic"
 
-    shape = shape_from_spec(body["shape"], f"{path}.shape")
+    shape = body["shape"]
+    if isinstance(shape, Mapping) and shape.get("type") == "sdf":     # may hold an image
+        shape = _image_paths(shape, base)
+    shape = shape_from_spec(shape, f"{path}.shape")
     if kind == "dynamic" and not math.isfinite(shape.radius):
         raise SpecError(f"{path}.shape", "an unbounded shape (e.g. a half-plane) must be static")
     if "density" in body and "mass" in body:

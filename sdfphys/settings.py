@@ -188,6 +188,9 @@ class Settings:
     grid_cell: float = _knob(
         0.02, "m", "Node spacing of baked fields (field_representation = grid).",
         low=1e-4, high=1.0)
+    carve_cell: float = _knob(
+        0.05, "m", "Node spacing of the grid an analytic field is baked on at its first "
+        "carve or deposit (World.carve, docs/terrain.md).", low=1e-3, high=1.0)
 
     def __post_init__(self) -> None:
         for f in fields(self):

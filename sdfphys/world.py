@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _warm, queries, rays
+from . import _warm, queries, rays, terrain
 from .blasts import Blast, check_blast, fire_due
 from .collide import Contacts, find_contacts
 from .collide.filter import PairFilter
@@ -252,6 +252,7 @@ class World(WorldJoints):
         self._report = StepReport()     # ``events``
         self._sensor_pass: tuple[Contacts, np.ndarray] | None = None
         self._blasts: list[Blast] = []  # ``explode_at``, by time
+        self._scheduled: list[terrain.Edit] = []    # ``terrain.schedule``: [[carve]]
 
     # ----------------------------------------------------------------------------------
     # Bodies
@@ -523,6 +524,8 @@ class World(WorldJoints):
             _warm.start(self)
         if self._blasts:
             fire_due(self)
+        if self._scheduled:
+            terrain.apply_due(self)
         sleeping = self.settings.sleeping
         # What moves this step (awake dynamic bodies, moving kinematic ones), None
         # without sleeping: changed within a step only by waking islands.
@@ -739,6 +742,34 @@ class World(WorldJoints):
         schedule these (docs/toolkit.md)."""
         blast = check_blast(time=time, center=center, radius=radius, impulse=impulse)
         bisect.insort(self._blasts, blast, key=lambda b: b.time)
+
+    # ----------------------------------------------------------------------------------
+    # Editable terrain (``sdfphys.terrain``, docs/terrain.md)
+    # ----------------------------------------------------------------------------------
+
+    def carve(self, body: Any, field: Any, position: Any, angle: float = 0.0) -> None:
+        """Remove ``field`` (a FIELD dict such as ``{"type": "circle", "radius": 0.3}``,
+        or a Field), its origin placed at world ``position`` (2,) m and turned by
+        ``angle`` rad, from static or kinematic ``body`` (an index, name or Body).
+
+        The body's field becomes a baked grid at its first edit (an analytic field at
+        ``settings.carve_cell``, m) and is edited in place: max(v, -c) on the nodes the
+        field's bounds cover, then re-distanced (``sdf.edit``); the part beyond the grid
+        is clipped. Bodies resting on it wake; its contacts and warm starts are dropped.
+        Bad input (unknown body, dynamic or unbounded body, NaN position, bad FIELD)
+        raises SpecError naming it.
+        """
+        terrain.edit(self, body, field, position, angle, deposit=False)
+
+    def deposit(self, body: Any, field: Any, position: Any, angle: float = 0.0) -> None:
+        """Add ``field`` to ``body``: min(v, c) instead of ``carve``'s max(v, -c); the
+        rest as ``carve`` (a deposit reaching beyond the grid is clipped at its edge)."""
+        terrain.edit(self, body, field, position, angle, deposit=True)
+
+    def field(self, body: Any) -> Any:
+        """Body ``body``'s current field (a Field: m, < 0 inside) in its own frame, the
+        one its ``position`` and ``angle`` place: after edits, the edited grid."""
+        return terrain.user_field(self, body)
 
     def _compile_ahead(self) -> None:
         """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for

@@ -21,6 +21,7 @@ compared to ``BEZIER_GRAD_ATOL``.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,6 +31,7 @@ from fieldcheck import FAR_POINTS, boundary_and_sides, bounds_and_axes
 from sdfphys.sdf import compiled, field
 from sdfphys.sdf.gradient import NumericGradientField
 
+ROOT = Path(__file__).resolve().parents[1]
 ATOL = 1e-12
 BEZIER_GRAD_ATOL = 1e-7
 
@@ -115,6 +117,9 @@ PRIMITIVES = {
                    "of": {"type": "star", "radius": 1.0, "points": 5, "m": 3.0}},
     "grid_no_band": {"op": "bake", "cell": 0.2, "margin": 0.1,
                      "of": {"type": "box", "size": [2.0, 1.0], "angle": 0.3}},
+    # scenes/terrain.png (tools/make_terrain_image.py) at 5 mm per pixel: a grid from a
+    # distance transform and antialiased edges, run by the same GRID instruction.
+    "image": {"type": "image", "path": str(ROOT / "scenes" / "terrain.png"), "cell": 0.005},
 }
 
 #: The kinds whose numpy code calls numpy's SIMD transcendental functions (arctan2, cbrt).

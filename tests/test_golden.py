@@ -41,6 +41,8 @@ HORIZONS: dict[str, tuple[int, str]] = {
     "car": (40, "wheels touch the SDF terrain at step 16, springs take the load, motors drive"),
     "chain_bridge": (45, "the crates land on the 40-plank bridge at step 37"),
     "cradle_strings": (60, "the pulled ball strikes the row at step 45, the last one leaves"),
+    "destructible_terrain": (40, "a hole and a blast under the first crates at step 15: "
+                             "they fly and fall into the carved ground"),
     "double_pendulum": (60, "both bars swing down past the vertical (revolute joints)"),
     "blast": (70, "resting pyramid; [[explode]] at t = 1 s (step 61) throws it, hits from 63"),
     "box_stack": (12, "ten boxes in resting contact from step 1: warm-started stacking"),
@@ -51,6 +53,7 @@ HORIZONS: dict[str, tuple[int, str]] = {
     "filtered_crowd": (65, "teams pass through each other at steps 28-50, land at 59, pile"),
     "grid_terrain": (55, "bodies reach the baked terrain at step 43"),
     "head_on": (75, "the balls meet at step 64 and separate"),
+    "image_terrain": (40, "bodies land on the image's hills at step 12-20 and roll"),
     "kinematic_platform": (20, "crates land on the moving platform at step 7 and ride it"),
     "marble_run": (40, "marbles touch the track at step 12 and roll"),
     "mixed_pairs": (20, "every pair kind in contact from step 10"),

@@ -277,3 +277,41 @@ def test_hovering_shows_the_readout_next_to_the_pointer(tmp_path, monkeypatch):
     assert np.any(hovered != plain, axis=2)[region].mean() > 0.9
     assert np.all(hovered[region] == np.array(Palette().text), axis=2).sum() > 50
     np.testing.assert_array_equal(away[:, 30:], plain[:, 30:])
+
+
+def ground_world():
+    world = World()
+    world.add_body({"type": "sdf", "field": {"type": "box", "size": [6.0, 1.0]}},
+                   position=(0.0, 0.5), kind="static", name="ground")
+    world.add_body({"type": "circle", "radius": 0.3}, position=(2.5, 3.0), name="ball")
+    return world
+
+
+def test_the_carve_tool_carves_deposits_and_sizes_its_disc(capsys):
+    worlds = []
+
+    def factory():
+        worlds.append(ground_world())
+        return worlds[-1]
+
+    def script():
+        yield [mouse(pygame.MOUSEBUTTONDOWN, (1.0, 1.0))]        # tool off: grabs nothing
+        yield [key(pygame.K_k)]
+        yield [mouse(pygame.MOUSEBUTTONDOWN, (1.0, 1.0))]        # carve r = 0.3
+        yield [pygame.event.Event(pygame.MOUSEWHEEL, x=0, y=1, flipped=False)]
+        pygame.key.set_mods(pygame.KMOD_SHIFT)
+        yield [mouse(pygame.MOUSEBUTTONDOWN, (-1.0, 1.2))]       # deposit r = 0.375
+        pygame.key.set_mods(0)
+        yield [mouse(pygame.MOUSEBUTTONDOWN, (2.5, 3.0))]        # only the ball: nothing
+        yield [mouse(pygame.MOUSEBUTTONDOWN, (0.0, 4.0))]        # empty space: nothing
+        yield [mouse(pygame.MOUSEMOTION, (0.0, 2.0))]
+
+    assert play(factory, SETTINGS, allow_headless=True, events=script()) == 0
+    world = worlds[0]
+    f = world.field("ground")            # user frame: the ground's top at y = 0.5
+    d = f.distance(np.array([[1.0, 0.3], [1.0, 0.15], [-1.0, 0.9], [-1.0, 1.1], [0.0, 0.4]]))
+    assert d[0] > 0.0 and d[1] < 0.0                             # a 0.3 m hole from y = 1.0
+    assert d[2] < 0.0 and d[3] > 0.0                             # a 0.375 m mound at y = 1.2
+    assert d[4] < 0.0
+    assert world.shapes[world.shape_id[1]].kind == "circle"
+    assert capsys.readouterr().err == ""

@@ -5,7 +5,7 @@
 shapes, exactness) are in ``sdfphys.sdf.base``.
 """
 
-from . import conics, curved, folded, gradient, grid, operators, polygonal  # noqa: F401  (they register fields)
+from . import conics, curved, folded, gradient, grid, image, operators, polygonal  # noqa: F401  (they register fields)
 from .base import FALLBACK_DIRECTION, OPERATORS, PRIMITIVES, Field, Param, safe_normalize
 from .build import field
 

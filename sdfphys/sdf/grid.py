@@ -147,6 +147,30 @@ class GridField(Field):
             self._values = values
         self._bounds = self.level_bounds(0.0)
 
+    @classmethod
+    def from_values(cls, values: np.ndarray, origin, cell: float, margin: float = 0.0,
+                    band: float | None = None) -> GridField:
+        """A float64 grid holding ``values`` (nx, ny), m, node (i, j) at ``origin +
+        cell * (i, j)`` (m), with no source field (``spec`` None): terrain from an image
+        (``sdf.image``) and the editable grids of ``sdfphys.terrain``. ``margin`` (m)
+        enters the extrapolation outside the grid (see the module docstring: 0 keeps it
+        a lower bound whatever the values); ``band`` clamps as in ``bake``."""
+        grid = cls.__new__(cls)
+        grid.cell = check_number(cell, "cell", low=0.0, low_open=True)
+        grid.margin = check_number(margin, "margin", low=0.0)
+        grid.band = band
+        grid.quantize = "none"
+        grid.scale = None
+        v = np.array(values, dtype=np.float64)
+        if v.ndim != 2 or min(v.shape) < 2:
+            raise SpecError("values", f"must be (nx, ny) with nx, ny >= 2, got {v.shape}")
+        grid._values = v if band is None else np.clip(v, -band, band)
+        grid._codes = None
+        grid.shape = v.shape
+        grid.origin = np.array(origin, dtype=np.float64)
+        grid._bounds = grid.level_bounds(0.0)
+        return grid
+
     # ----------------------------------------------------------------------------------
 
     def _sample(self, source: Field) -> np.ndarray:

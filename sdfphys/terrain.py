@@ -1,0 +1,233 @@
+"""Editable terrain: carving fields out of static and kinematic bodies, depositing them.
+
+``World.carve(body, field, position, angle)`` removes a FIELD placed at a world pose
+from a body, ``World.deposit`` adds one (docs/terrain.md). The body's field becomes a
+float64 baked grid in its body frame (``TerrainShape``) at its first edit, and every
+edit changes that grid's node values in place (``sdf.edit.edit_grid``): the array's
+shape and dtype never change, so no kernel recompiles and a step costs the same after
+one edit or a thousand.
+
+First edit of a body:
+
+- a top-level baked grid (``{op = "bake"}`` or an image, no ``offset``/``angle``) keeps
+  its nodes, cell, margin and band, decoded to float64 if quantized;
+- any other bounded field (an analytic SDF, a box, a polygon, a circle) is baked at
+  ``Settings.carve_cell`` over its bounds plus ``MARGIN_CELLS`` cells, with no band;
+- unbounded fields (a half-plane) and dynamic bodies are refused (SpecError).
+
+The edited body gets its own shape (bodies that shared its shape keep theirs). What is
+refreshed, for that body only: its contacts and warm-start impulses (dropped: the next
+step finds them anew), the sleeping islands it touches (woken, so bodies resting on it
+fall into a hole), its core radius, its sprite (``TerrainShape.revision``, which the
+renderer compares) and its constants in the queries' tables (``queries._packed``).
+The collision tables see the new shape once, at the first edit; later edits keep the
+grid's bounds (its whole box, grown where a rim node is inside), so nothing cached by
+shape needs rebuilding.
+
+Scheduled edits (a scene's ``[[carve]]`` tables, ``schedule``) are applied at the start
+of the first step whose time is at or after theirs, in time order then scene order; an
+edit with a ``blast`` then calls ``World.explode`` at its position.
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from .errors import SpecError
+from .limits import check_angle, check_position
+from .sdf.base import Field
+from .sdf.build import field as build_field
+from .sdf.build import suggest
+from .sdf.edit import edit_grid, write_window
+from .sdf.grid import GridField
+from .shapes import SdfShape, Shape
+
+__all__ = ["MARGIN_CELLS", "Edit", "TerrainShape", "apply_due", "edit", "schedule",
+           "user_field"]
+
+#: Space baked around an analytic field's bounds at its first edit, in cells: where a
+#: deposit can grow (edits beyond the grid are clipped).
+MARGIN_CELLS = 10
+
+#: Kind codes of ``limits.KINDS`` that may be edited.
+_DYNAMIC = 0
+
+
+class TerrainShape(Shape):
+    """An edited body's shape: ``field`` is a float64 ``GridField`` in the body frame.
+
+    ``origin`` is the body's (unchanged by edits); ``bounds()`` the grid's box, grown by
+    the depth of its most negative rim node (edits never lower a rim node below
+    min(value, 0)); ``revision`` counts the edits (the renderer redraws the body's
+    sprite when it changes). ``area`` and ``second_moment`` are inf (not tracked):
+    only static and kinematic bodies are edited.
+    """
+
+    kind = "sdf"
+
+    def __init__(self, grid: GridField, origin: np.ndarray):
+        self.grid = grid
+        self._origin = np.array(origin, dtype=np.float64)
+        v = grid.values
+        rim = min(v[0].min(), v[-1].min(), v[:, 0].min(), v[:, -1].min())
+        grow = max(0.0, -float(rim))
+        top = grid.origin + grid.cell * (np.array(grid.shape, dtype=np.float64) - 1.0)
+        self._box = np.concatenate([grid.origin - grow, top + grow])
+        grid._bounds = self._box.copy()
+        corners = self._box[[[0, 1], [2, 1], [2, 3], [0, 3]]]
+        self._radius = float(np.max(np.hypot(corners[:, 0], corners[:, 1])))
+        self.spec = {"type": "sdf", "field": grid}
+        self.revision = 0
+
+    @property
+    def field(self) -> Field:
+        return self.grid
+
+    @property
+    def origin(self) -> np.ndarray:
+        return self._origin
+
+    @property
+    def radius(self) -> float:
+        return self._radius
+
+    @property
+    def area(self) -> float:
+        """inf: not tracked (only static and kinematic bodies, of infinite mass, are
+        edited; as for unbounded shapes, the renderer's density is then 0)."""
+        return math.inf
+
+    second_moment = area
+
+    def bounds(self) -> np.ndarray:
+        return self._box.copy()
+
+
+class Edit(NamedTuple):
+    """One scheduled edit (a ``[[carve]]`` table): time (s), body (index or name), the
+    FIELD (a Field), world position (2,) m, angle rad, deposit, and the blast
+    (radius m, impulse N s/m) or None."""
+
+    time: float
+    body: Any
+    field: Field
+    position: tuple[float, float]
+    angle: float = 0.0
+    deposit: bool = False
+    blast: tuple[float, float] | None = None
+
+
+def body_index(world: Any, body: Any, path: str = "body") -> int:
+    """The index of ``body`` (an index, a name or a Body handle); SpecError naming
+    ``path`` if there is no such body."""
+    if isinstance(body, str):
+        if body not in world._name_set:
+            raise SpecError(path, f"no body named {body!r}" + suggest(body, world._names))
+        return world._names.index(body)
+    try:
+        index = operator.index(body)
+    except TypeError:
+        raise SpecError(path, f"must be a body index, name or handle, got {body!r}") from None
+    except IndexError as err:                   # a handle of a removed body
+        raise SpecError(path, str(err)) from None
+    if not -len(world) <= index < len(world):
+        raise SpecError(path, f"body index {index} out of range ({len(world)} bodies)")
+    return index % len(world)
+
+
+def _terrain(world: Any, i: int, path: str) -> TerrainShape:
+    """Body ``i``'s TerrainShape, made at its first edit (module docstring)."""
+    shape = world._shapes[int(world._data["shape_id"][i])]
+    if isinstance(shape, TerrainShape):
+        return shape
+    name = world._names[i]
+    if int(world._data["kind"][i]) == _DYNAMIC:
+        raise SpecError(path, f"body {name!r} is dynamic: only static and kinematic "
+                              "bodies can be carved or deposited on")
+    if not math.isfinite(shape.radius):
+        raise SpecError(path, f"body {name!r} is unbounded (e.g. a half-plane): only a "
+                              "bounded field can be carved (use a box)")
+    user = shape.user_field if isinstance(shape, SdfShape) else None
+    if type(user) is GridField:
+        # Keep the nodes; the body frame is the user frame moved by ``origin``.
+        grid = GridField.from_values(user.values, user.origin + shape.origin, user.cell,
+                                     user.margin, user.band)
+    else:
+        cell = world.settings.carve_cell
+        try:
+            baked = GridField(shape.field, cell, margin=MARGIN_CELLS * cell)
+        except SpecError as err:
+            raise SpecError("settings.carve_cell", f"body {name!r}: {err.message}") from None
+        grid = GridField.from_values(baked.values, baked.origin, cell, baked.margin)
+    terrain = TerrainShape(grid, shape.origin)
+    d = world._data
+    d["shape_id"][i] = world._shape_number(terrain)
+    d["radius"][i] = terrain.radius
+    return terrain
+
+
+def edit(world: Any, body: Any, spec: Any, position: Any, angle: float = 0.0,
+         deposit: bool = False) -> None:
+    """Carve ``spec`` (a FIELD dict or Field) placed at world ``position`` (2,) m and
+    ``angle`` rad out of ``body`` (or deposit it); see the module docstring."""
+    i = body_index(world, body)
+    shape = build_field(spec, "field")
+    position = np.array(check_position(position, "position"))
+    angle = check_angle(angle, "angle")
+    terrain = _terrain(world, i, "body")
+    d = world._data
+    com, turn = d["com"][i], float(d["angle"][i])
+    c, s = math.cos(turn), math.sin(turn)
+    dx, dy = position - com
+    local = (c * dx + s * dy, c * dy - s * dx)          # R(-turn) (position - com)
+    window = edit_grid(terrain.grid, shape, local, angle - turn, deposit)
+    if window is None:
+        return
+    # The ray and overlap queries pack a copy of every program's constants (cached on
+    # the world until a shape is added, ``queries._packed``): the window goes there too.
+    packed = world.__dict__.get("_query_pack")
+    if packed is not None and packed[0] == len(world._shapes):
+        tables = packed[1]
+        number = int(d["shape_id"][i])
+        write_window(tables.code, tables.consts, int(tables.cstart[number]), terrain.grid,
+                     window)
+    terrain.revision += 1
+    d["core_radius"][i] = -float(terrain.grid.distance(np.zeros((1, 2)))[0])
+    world._wake_touching(i)
+    kept = world._impulses
+    world._impulses = kept.take((kept.body_a != i) & (kept.body_b != i))
+    contacts = world._contacts
+    world._contacts = contacts.take((contacts.body_a != i) & (contacts.body_b != i))
+
+
+def user_field(world: Any, body: Any) -> Field:
+    """Body ``body``'s current field in its user frame (the frame of its scene
+    ``position``): the body-frame field moved by ``-origin``."""
+    i = body_index(world, body)
+    shape = world._shapes[int(world._data["shape_id"][i])]
+    if isinstance(shape, SdfShape) and not isinstance(shape, TerrainShape):
+        return shape.user_field
+    origin = np.asarray(shape.origin, dtype=np.float64)
+    if origin[0] == 0.0 and origin[1] == 0.0:
+        return shape.field
+    return build_field({"op": "translate", "by": (-origin).tolist(), "of": shape.field})
+
+
+def schedule(world: Any, edits: list[Edit]) -> None:
+    """Queue ``edits`` (applied by ``apply_due`` at the start of each step)."""
+    queued = world._scheduled + list(edits)
+    world._scheduled = sorted(queued, key=lambda e: e.time)      # stable: scene order
+
+
+def apply_due(world: Any) -> None:
+    """Apply the queued edits whose time is at or before the world's (1 ns slack for the
+    rounding of the accumulated time)."""
+    while world._scheduled and world._scheduled[0].time <= world.time + 1e-9:
+        e = world._scheduled.pop(0)
+        edit(world, e.body, e.field, e.position, e.angle, e.deposit)
+        if e.blast is not None:
+            world.explode(e.position, *e.blast)
