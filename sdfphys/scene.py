@@ -13,7 +13,7 @@ The format is the DESIGN.md contract::
               spring, collide_connected (``sdfphys.joints``)
     [[explode]] time, center, radius, impulse (``World.explode_at``: a blast at the
               start of the first step at or after ``time``; docs/toolkit.md)
-    [[carve]] time, body, field, position, angle, deposit, blast = {radius, impulse}
+    [[carve]] time, body, field, position, angle, deposit
               (``sdfphys.terrain``, docs/terrain.md)
 
 An image field's ``path`` (``{type = "image", ...}``) is relative to the scene file.
@@ -66,8 +66,7 @@ BODY_KEYS = ("name", "shape", "position", "angle", "velocity", "angular_velocity
              "category", "mask", "group", "sensor", "gravity_scale")
 SIM_EXTRA_KEYS = ("quality", "duration")
 EXPLODE_KEYS = ("time", "center", "radius", "impulse")
-CARVE_KEYS = ("time", "body", "field", "position", "angle", "deposit", "blast")
-BLAST_KEYS = ("radius", "impulse")
+CARVE_KEYS = ("time", "body", "field", "position", "angle", "deposit")
 
 
 @dataclass(frozen=True)
@@ -350,7 +349,7 @@ def _parse_carves(carves: Any, bodies: list[BodySpec], index: dict[str, int],
                   base: Path | None) -> list[Edit]:
     """The ``[[carve]]`` tables (``terrain.Edit``): time (s, >= 0), body (a name or an
     index of a static or kinematic bounded body), field (FIELD), position (world, m),
-    optional angle (rad), deposit (bool) and blast {radius (m, > 0), impulse (N s/m)}."""
+    optional angle (rad) and deposit (bool); a blast there is an ``[[explode]]`` table."""
     if not isinstance(carves, list):
         raise SpecError("carve", "must be an array of tables ([[carve]])")
     edits = []
@@ -380,18 +379,8 @@ def _parse_carves(carves: Any, bodies: list[BodySpec], index: dict[str, int],
         carved = build_field(_image_paths(table["field"], base), f"{path}.field")
         position = check_position(table["position"], f"{path}.position")
         angle = check_angle(table.get("angle", 0.0), f"{path}.angle")
-        blast = None
-        if "blast" in table:
-            where = f"{path}.blast"
-            spec = _table(table["blast"], where)
-            _known(spec, BLAST_KEYS, where)
-            for key in BLAST_KEYS:
-                if key not in spec:
-                    raise SpecError(f"{where}.{key}", "is required")
-            blast = (check_number(spec["radius"], f"{where}.radius", low=0.0, low_open=True),
-                     check_number(spec["impulse"], f"{where}.impulse", low=0.0))
         edits.append(Edit(time, number, carved, position, angle,
-                          _flag(table, "deposit", path), blast))
+                          _flag(table, "deposit", path)))
     return edits
 
 

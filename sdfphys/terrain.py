@@ -25,8 +25,9 @@ grid's bounds (its whole box, grown where a rim node is inside), so nothing cach
 shape needs rebuilding.
 
 Scheduled edits (a scene's ``[[carve]]`` tables, ``schedule``) are applied at the start
-of the first step whose time is at or after theirs, in time order then scene order; an
-edit with a ``blast`` then calls ``World.explode`` at its position.
+of the first step whose time is at or after theirs (``blasts.SLACK``: the rule of the
+``[[explode]]`` tables, which run after the edits due at the same step), in time order
+then scene order.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .blasts import SLACK
 from .errors import SpecError
 from .limits import check_angle, check_position
 from .sdf.base import Field
@@ -109,8 +111,7 @@ class TerrainShape(Shape):
 
 class Edit(NamedTuple):
     """One scheduled edit (a ``[[carve]]`` table): time (s), body (index or name), the
-    FIELD (a Field), world position (2,) m, angle rad, deposit, and the blast
-    (radius m, impulse N s/m) or None."""
+    FIELD (a Field), world position (2,) m, angle rad and deposit."""
 
     time: float
     body: Any
@@ -118,7 +119,6 @@ class Edit(NamedTuple):
     position: tuple[float, float]
     angle: float = 0.0
     deposit: bool = False
-    blast: tuple[float, float] | None = None
 
 
 def body_index(world: Any, body: Any, path: str = "body") -> int:
@@ -224,10 +224,9 @@ def schedule(world: Any, edits: list[Edit]) -> None:
 
 
 def apply_due(world: Any) -> None:
-    """Apply the queued edits whose time is at or before the world's (1 ns slack for the
-    rounding of the accumulated time)."""
-    while world._scheduled and world._scheduled[0].time <= world.time + 1e-9:
+    """Apply the queued edits due at the step about to begin at ``world.time`` (a
+    millionth of a step of slack for the accumulated time, ``blasts.SLACK``)."""
+    due = world.time + SLACK * world.settings.dt
+    while world._scheduled and world._scheduled[0].time <= due:
         e = world._scheduled.pop(0)
         edit(world, e.body, e.field, e.position, e.angle, e.deposit)
-        if e.blast is not None:
-            world.explode(e.position, *e.blast)

@@ -522,10 +522,10 @@ class World(WorldJoints):
         """
         if self.step_count == 0:
             _warm.start(self)
-        if self._blasts:
-            fire_due(self)
         if self._scheduled:
             terrain.apply_due(self)
+        if self._blasts:
+            fire_due(self)
         sleeping = self.settings.sleeping
         # What moves this step (awake dynamic bodies, moving kinematic ones), None
         # without sleeping: changed within a step only by waking islands.
