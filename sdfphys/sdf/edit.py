@@ -13,8 +13,9 @@ exact outside and a bound inside. So the window is then re-distanced: every node
 within R = ``REDISTANCE_CELLS`` cells of the new boundary gets its distance to it,
 with its sign kept. The boundary is the zero level of the nodes, piecewise linear:
 marching squares (a node is inside where v <= 0; the zero crossing of each cell edge
-by linear interpolation; a saddle cell split by the sign of its centre's mean), and a node's distance is the
-distance to the nearest such segment within R (cells searched: the window grown by R).
+by linear interpolation; a saddle cell split by the sign of its centre's mean), and a
+node's distance is the distance to the nearest such segment within R (cells searched:
+the window grown by R).
 Nodes with no segment within R keep sign(v) max(|v|, R): their true distance is at
 least R, and the side where max / min was exact already has |v| >= R.
 
