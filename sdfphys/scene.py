@@ -264,6 +264,24 @@ def _known(table: Mapping, keys: Sequence[str], path: str) -> None:
             raise SpecError(where, "unknown key" + suggest(str(key), list(keys)))
 
 
+def _event_tables(items: Any, name: str, keys: Sequence[str], required: Sequence[str]
+                  ) -> list[tuple[str, dict]]:
+    """The tables of a scene's ``[[name]]`` array, each as (its key path ``name[i]``, the
+    table) once its keys are known and the ``required`` ones present."""
+    if not isinstance(items, list):
+        raise SpecError(name, f"must be an array of tables ([[{name}]])")
+    out = []
+    for i, data in enumerate(items):
+        path = f"{name}[{i}]"
+        table = _table(data, path)
+        _known(table, keys, path)
+        for key in required:
+            if key not in table:
+                raise SpecError(f"{path}.{key}", "is required")
+        out.append((path, table))
+    return out
+
+
 def _known_sections(data: Mapping) -> None:
     """Every top-level key is a known section or ``version``; a misspelt one gets the
     nearest, also a longer or shorter word (``[simulation]``: did you mean 'sim'?)."""
@@ -316,18 +334,8 @@ def _parse(data: Any, source: str) -> Scene:
 
 def _parse_blasts(blasts: Any) -> list[Blast]:
     """The ``[[explode]]`` tables (``blasts.check_blast``); every key is required."""
-    if not isinstance(blasts, list):
-        raise SpecError("explode", "must be an array of tables ([[explode]])")
-    out = []
-    for i, data in enumerate(blasts):
-        path = f"explode[{i}]"
-        blast = _table(data, path)
-        _known(blast, EXPLODE_KEYS, path)
-        for key in EXPLODE_KEYS:
-            if key not in blast:
-                raise SpecError(f"{path}.{key}", "is required")
-        out.append(check_blast(path, **blast))
-    return out
+    return [check_blast(path, **table)
+            for path, table in _event_tables(blasts, "explode", EXPLODE_KEYS, EXPLODE_KEYS)]
 
 
 def _image_paths(spec: Any, base: Path | None) -> Any:
@@ -350,16 +358,9 @@ def _parse_carves(carves: Any, bodies: list[BodySpec], index: dict[str, int],
     """The ``[[carve]]`` tables (``terrain.Edit``): time (s, >= 0), body (a name or an
     index of a static or kinematic bounded body), field (FIELD), position (world, m),
     optional angle (rad) and deposit (bool); a blast there is an ``[[explode]]`` table."""
-    if not isinstance(carves, list):
-        raise SpecError("carve", "must be an array of tables ([[carve]])")
     edits = []
-    for k, data in enumerate(carves):
-        path = f"carve[{k}]"
-        table = _table(data, path)
-        _known(table, CARVE_KEYS, path)
-        for key in ("time", "body", "field", "position"):
-            if key not in table:
-                raise SpecError(f"{path}.{key}", "is required")
+    for path, table in _event_tables(carves, "carve", CARVE_KEYS,
+                                     ("time", "body", "field", "position")):
         time = check_number(table["time"], f"{path}.time", low=0.0, high=MAX_DURATION)
         body = table["body"]
         if isinstance(body, str):
