@@ -27,7 +27,11 @@ def rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
 
 def rotate_cs(v: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
     """Rows of ``v`` (N, 2) rotated counter-clockwise by the angles of ``cos``, ``sin`` (N,)."""
-    return np.stack([cos * v[:, 0] - sin * v[:, 1], sin * v[:, 0] + cos * v[:, 1]], axis=1)
+    x, y = v[:, 0], v[:, 1]
+    out = np.empty((len(v), 2))
+    out[:, 0] = cos * x - sin * y
+    out[:, 1] = sin * x + cos * y
+    return out
 
 
 def rows_dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:

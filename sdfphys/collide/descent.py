@@ -404,10 +404,12 @@ def _descend(problem: _TriangleProblem | field_pairs._PairProblem, points: np.nd
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     n_points = len(points)
-    tol = np.broadcast_to(np.asarray(tol, dtype=np.float64), (n_points,))
     programs = problem.programs() if USE_COMPILED else None
     if programs is not None:
+        tol = (np.full(n_points, tol, dtype=np.float64) if np.ndim(tol) == 0
+               else np.array(tol, dtype=np.float64))               # a copy: writable
         return _descend_compiled(problem, programs, points, iterations, sigma, tol)
+    tol = np.broadcast_to(np.asarray(tol, dtype=np.float64), (n_points,))
     least = float(tol.min()) if n_points else 0.0
     uneven = n_points > 0 and bool(tol.max() > least)
     phi, grad, data = problem.evaluate(points, np.arange(n_points))
@@ -465,7 +467,8 @@ def _descend_compiled(problem: _TriangleProblem | field_pairs._PairProblem,
                       sigma: np.ndarray, tol: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``_descend`` in one compiled call (``_compiled_descent.descend``): the same
-    arguments and results, the problem's fields given by their ``programs`` (a, b)."""
+    arguments (tol: (P,) float64, writable, as the kernel is compiled for) and results,
+    the problem's fields given by their ``programs`` (a, b)."""
     n_points = len(points)
     a, b = programs
     pair = problem.kind == paths.PAIR
@@ -478,7 +481,7 @@ def _descend_compiled(problem: _TriangleProblem | field_pairs._PairProblem,
         problem.at_vertex if not pair else _NO_CORNERS, problem.n_start if not pair else 0,
         not pair and problem.spanning, not pair and problem.convex, points,
         np.ascontiguousarray(sigma, dtype=np.float64), iterations,
-        np.array(tol, dtype=np.float64), _SHAPE_TOL,          # a copy: writable, as compiled for
+        tol, _SHAPE_TOL,
         *_scratch(n_points))
     _keep(cand, cand_i, candidates)
     return best, phi, data, rounds

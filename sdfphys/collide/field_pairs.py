@@ -18,6 +18,7 @@ starts over the intersection of the bounding boxes, normal from grad f_a - grad 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import cached_property
 
 import numpy as np
 
@@ -39,7 +40,9 @@ _SLIVER = 1e-9
 def _rotations(angle: np.ndarray) -> np.ndarray:
     """(P, 2, 2) counter-clockwise rotation matrices by angle (P,) rad."""
     c, s = np.cos(angle), np.sin(angle)
-    return np.stack([np.stack([c, -s], axis=1), np.stack([s, c], axis=1)], axis=1)
+    m = np.empty((len(angle), 2, 2))
+    m[:, 0, 0], m[:, 0, 1], m[:, 1, 0], m[:, 1, 1] = c, -s, s, c
+    return m
 
 
 def _times(v: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -76,10 +79,14 @@ class _PairProblem:
                  offset: np.ndarray, pair_of: np.ndarray):
         self.field_a, self.field_b = field_a, field_b
         self.rotation, self.offset = rotation, offset
-        self.inverse = np.ascontiguousarray(rotation.transpose(0, 2, 1))
         self.pair_of = pair_of
-        self.triangles = np.zeros((1, 3, 2))           # no triangle: paths are not projected
-        self.owner = np.zeros(0, dtype=np.int64)
+        self.triangles = _NO_TRIANGLE                  # no triangle: paths are not projected
+        self.owner = _NO_OWNER
+
+    @cached_property
+    def inverse(self) -> np.ndarray:
+        """(P, 2, 2) the rotations' transposes, contiguous (the numpy path's)."""
+        return np.ascontiguousarray(self.rotation.transpose(0, 2, 1))
 
     def known(self, points: np.ndarray, phi: np.ndarray, grad: np.ndarray
               ) -> tuple[np.ndarray, np.ndarray]:
@@ -111,6 +118,10 @@ class _PairProblem:
         """(N,) >= 0 at data (N, 6): zero at a balanced minimum (see the kernels)."""
         return paths.stationarity(paths.PAIR, data)
 
+
+#: A pair problem's triangle and owner arguments (read only: no triangle, no owner).
+_NO_TRIANGLE = np.zeros((1, 3, 2))
+_NO_OWNER = np.zeros(0, dtype=np.int64)
 
 _STARTS: dict[int, np.ndarray] = {}
 
@@ -317,11 +328,9 @@ def field_field_contacts(field_a: Field, field_b: Field, poses_b_in_a: np.ndarra
         raise ValueError(f"{len(poses)} poses but {len(regions)} regions")
     if not np.all(np.isfinite(regions)):
         raise ValueError(f"regions must be finite, got {regions}")
-    empty = (np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)),
-             np.zeros(0, dtype=np.int64))
     live = np.flatnonzero(np.all(regions[:, 2:] >= regions[:, :2], axis=1))
     if len(live) == 0 or n_starts < 1:
-        return empty
+        return _no_contacts()
     lo, hi = regions[live, :2], regions[live, 2:]
     pair_of = np.repeat(np.arange(len(live)), n_starts)                 # (S,) start -> pair
     problem = _PairProblem(field_a, field_b, _rotations(poses[live, 2]), poses[live, :2],
@@ -354,7 +363,7 @@ def field_field_contacts(field_a: Field, field_b: Field, poses_b_in_a: np.ndarra
     start_id = np.tile(np.arange(n_starts), len(live))
     hits = np.flatnonzero(hit)
     if len(hits) == 0:
-        return empty
+        return _no_contacts()
     head, chosen = _clusters(pair_of[hits], best[hits], start_id[hits], phi[hits],
                              problem.stationarity(data[hits]), _MERGE * scale_of[hits])
     take = hits[chosen]
@@ -381,6 +390,12 @@ def field_field_contacts(field_a: Field, field_b: Field, poses_b_in_a: np.ndarra
     head, chosen = _clusters(pair, point, start_id, -depth, start_id.astype(np.float64),
                              _MERGE * scale[pair])
     return live[pair[chosen]], point[chosen], depth[chosen], normal[chosen], start_id[head]
+
+
+def _no_contacts() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``field_field_contacts``' five results for no contact."""
+    return (np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)),
+            np.zeros(0, dtype=np.int64))
 
 
 def field_field_contacts_single(field_a: Field, field_b: Field, pose_b_in_a: Sequence[float],

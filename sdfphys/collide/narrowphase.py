@@ -306,15 +306,24 @@ def _overlap_region(bounds_a: np.ndarray, bounds_b: np.ndarray, angle: np.ndarra
     b is placed in a's frame by (angle (n,), offset (n, 2)). b's box is rotated by
     interval arithmetic, as in the broadphase, and intersected with a's. b is
     bounded: two unbounded shapes are both static and never pair.
+
+    A rotated corner is x = (c x_b - s y_b) + o_x, y = (s x_b + c y_b) + o_y; each
+    rounded operation is monotone in its operands, so the extremes over the four
+    corners are those of the extreme products, taken per axis.
     """
-    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
-    corners = np.array([[bounds_b[0], bounds_b[1]], [bounds_b[2], bounds_b[1]],
-                        [bounds_b[2], bounds_b[3]], [bounds_b[0], bounds_b[3]]])
-    x = c * corners[None, :, 0] - s * corners[None, :, 1] + offset[:, :1]
-    y = s * corners[None, :, 0] + c * corners[None, :, 1] + offset[:, 1:]
-    lo = np.maximum(np.stack([x.min(axis=1), y.min(axis=1)], axis=1), bounds_a[:2])
-    hi = np.minimum(np.stack([x.max(axis=1), y.max(axis=1)], axis=1), bounds_a[2:])
-    return np.concatenate([lo - margin, hi + margin], axis=1)
+    c, s = np.cos(angle), np.sin(angle)
+    cx0, cx1, sx0, sx1 = c * bounds_b[0], c * bounds_b[2], s * bounds_b[0], s * bounds_b[2]
+    cy0, cy1, sy0, sy1 = c * bounds_b[1], c * bounds_b[3], s * bounds_b[1], s * bounds_b[3]
+    region = np.empty((len(angle), 4))
+    region[:, 0] = np.maximum((np.minimum(cx0, cx1) - np.maximum(sy0, sy1)) + offset[:, 0],
+                              bounds_a[0]) - margin
+    region[:, 1] = np.maximum((np.minimum(sx0, sx1) + np.minimum(cy0, cy1)) + offset[:, 1],
+                              bounds_a[1]) - margin
+    region[:, 2] = np.minimum((np.maximum(cx0, cx1) - np.minimum(sy0, sy1)) + offset[:, 0],
+                              bounds_a[2]) + margin
+    region[:, 3] = np.minimum((np.maximum(sx0, sx1) + np.maximum(cy0, cy1)) + offset[:, 1],
+                              bounds_a[3]) + margin
+    return region
 
 
 def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
