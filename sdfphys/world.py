@@ -21,7 +21,6 @@ Materials mix per contact: friction sqrt(f_a f_b), restitution max(e_a, e_b).
 
 from __future__ import annotations
 
-import bisect
 import math
 import operator
 from collections.abc import Mapping
@@ -29,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _warm, queries, rays, terrain
+from . import _warm, queries, rays, scheduled, terrain
 from .blasts import Blast, check_blast, fire_due
 from .collide import Contacts, find_contacts
 from .collide.filter import PairFilter
@@ -737,11 +736,11 @@ class World(WorldJoints):
     def explode_at(self, time: float, center: Any, radius: float, impulse: float) -> None:
         """Schedule ``explode(center, radius, impulse)`` for the start of the first step
         that begins at or after ``time`` (s, >= 0; a step begins at ``self.time``, and
-        one within a millionth of a step before ``time`` counts: ``sdfphys.blasts``). A
+        one within a millionth of a step before ``time`` counts: ``sdfphys.scheduled``). A
         time already past runs at the next step. A scene's ``[[explode]]`` tables
         schedule these (docs/toolkit.md)."""
         blast = check_blast(time=time, center=center, radius=radius, impulse=impulse)
-        bisect.insort(self._blasts, blast, key=lambda b: b.time)
+        scheduled.add(self._blasts, (blast,))
 
     # ----------------------------------------------------------------------------------
     # Editable terrain (``sdfphys.terrain``, docs/terrain.md)
