@@ -1,9 +1,7 @@
 """World: body state as arrays, bodies added and removed, and ``step()``.
 
-Body state is a struct of arrays, split hot and cold as in Box2D v3: the solver reads
-and writes the centre-of-mass position, angle, velocities and inverse masses; shapes,
-materials, kinds and names are bookkeeping. Arrays grow by doubling, so adding B bodies
-costs O(B). Body indices are the order of ``add_body`` calls (scene order);
+Body state is a struct of arrays, split hot and cold as in Box2D v3 (``world_bodies``:
+the body table). Body indices are the order of ``add_body`` calls (scene order);
 ``remove_body(i)`` shifts the later bodies down by one. ``add_body`` returns a ``Body``
 handle that follows its body's index through removals (``World.body(name)`` too).
 
@@ -22,13 +20,12 @@ Materials mix per contact: friction sqrt(f_a f_b), restitution max(e_a, e_b).
 from __future__ import annotations
 
 import math
-import operator
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from . import _warm, queries, rays, scheduled, terrain
+from . import _warm, queries, rays, scheduled, terrain, world_bodies
 from .blasts import Blast, check_blast, fire_due
 from .collide import Contacts, find_contacts
 from .collide.filter import PairFilter
@@ -40,7 +37,6 @@ from .joints import JointTable, WorldJoints
 from .limits import (
     KINDS,
     MAX_BITS,
-    BodyValues,
     check_angle,
     check_angular_velocity,
     check_body,
@@ -63,11 +59,20 @@ from .solver import (
 )
 from .toi import _distance, fast_bodies, step_fractions
 from .vec2 import rotate
+from .world_bodies import (
+    ARRAYS,
+    DYNAMIC,
+    KINEMATIC,
+    STATIC,
+    Body,
+    add,
+    check_index,
+    read_only,
+    rotate_one,
+    shape_number,
+)
 
 __all__ = ["KINDS", "PAIR_STAGES", "STAGES", "Body", "World"]
-
-#: Body kinds, in the order of their integer codes (``limits.KINDS``).
-_DYNAMIC, _STATIC, _KINEMATIC = range(3)
 
 #: Narrowphase stages, one per pair kind (``collide.narrowphase.PAIR_FUNCTIONS``):
 #: ``circle_circle``, ``circle_mesh``, ..., ``sdf_sdf``, counted once per step in which
@@ -79,115 +84,6 @@ STAGES = ("collide",) + PAIR_STAGES + (
     "prepare", "integrate_velocities", "warm_start", "solve", "converge", "push_out",
     "integrate_positions", "relax", "friction", "restitution", "time_of_impact",
     "store_impulses")
-
-# Per-body arrays: name -> (trailing shape, dtype). Capacity grows by doubling.
-_ARRAYS: dict[str, tuple[tuple[int, ...], Any]] = {
-    "com": ((2,), np.float64),
-    "angle": ((), np.float64),
-    "velocity": ((2,), np.float64),
-    "angular_velocity": ((), np.float64),
-    "inv_mass": ((), np.float64),
-    "inv_inertia": ((), np.float64),
-    "linear_damping": ((), np.float64),
-    "angular_damping": ((), np.float64),
-    "round": ((), np.bool_),
-    "mass": ((), np.float64),
-    "inertia": ((), np.float64),
-    "friction": ((), np.float64),
-    "restitution": ((), np.float64),
-    "origin": ((2,), np.float64),
-    "radius": ((), np.float64),
-    "core_radius": ((), np.float64),
-    "shape_id": ((), np.int64),
-    "kind": ((), np.int8),
-    "sleep_time": ((), np.float64),
-    "asleep": ((), np.bool_),
-    "island": ((), np.int64),
-    "category": ((), np.uint64),
-    "mask": ((), np.uint64),
-    "group": ((), np.int64),
-    "sensor": ((), np.bool_),
-    "gravity_scale": ((), np.float64),
-    "force": ((2,), np.float64),
-    "torque": ((), np.float64),
-    "uid": ((), np.int64),
-}
-
-
-def _rotate_one(v: np.ndarray, angle: float) -> np.ndarray:
-    """(2,) ``v`` rotated counter-clockwise by ``angle`` rad (numpy's cos and sin, as
-    ``vec2.rotate``: the same bits)."""
-    a = np.array([angle], dtype=np.float64)
-    c, s = float(np.cos(a)[0]), float(np.sin(a)[0])
-    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
-
-
-class Body:
-    """A stable handle on one body of a World (``World.add_body``, ``World.body``).
-
-    ``id``: the body's creation number in its world (the k of its default name
-    ``body<k>``), never reused. The handle stands for the body's current index wherever
-    an index goes (``__index__``, ``__array__``: numpy indexing, also by lists of
-    handles, ``set_state``, ``remove_body``, ``apply_force``, ...), so it stays valid
-    while other bodies are removed; after its
-    own body is removed, using it raises IndexError. It equals its current index and the
-    handles of the same body, orders as its index, and hashes by ``id``.
-    """
-
-    __slots__ = ("_world", "id")
-
-    def __init__(self, world: World, uid: int):
-        self._world = world
-        self.id = uid
-
-    @property
-    def index(self) -> int:
-        """The body's current index (scene order); IndexError once it is removed."""
-        return self._world._index_of(self.id)
-
-    def __index__(self) -> int:
-        return self.index
-
-    __int__ = __index__
-
-    def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
-        """The index as a 0-d int64 array: numpy takes lists of handles as indices."""
-        return np.array(self.index, dtype=np.int64 if dtype is None else dtype)
-
-    @property
-    def name(self) -> str:
-        return self._world._names[self.index]
-
-    def __eq__(self, other: object) -> bool:
-        if isinstance(other, Body):
-            return self._world is other._world and self.id == other.id
-        if isinstance(other, (int, np.integer)) and not isinstance(other, bool):
-            try:
-                return self.index == other
-            except IndexError:
-                return False
-        return NotImplemented
-
-    def __lt__(self, other: object) -> bool:
-        """Handles order as their current indices (``sorted`` of handles: scene order)."""
-        if isinstance(other, (Body, int, np.integer)) and not isinstance(other, bool):
-            return self.index < int(other)
-        return NotImplemented
-
-    def __gt__(self, other: object) -> bool:
-        if isinstance(other, (Body, int, np.integer)) and not isinstance(other, bool):
-            return self.index > int(other)
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash(("Body", self.id))
-
-    def __repr__(self) -> str:
-        try:
-            return f"Body(id={self.id}, index={self.index}, name={self.name!r})"
-        except IndexError:
-            return f"Body(id={self.id}, removed)"
-
 
 def _width(shape: Shape, across: np.ndarray) -> np.ndarray:
     """(N,) m: ``shape``'s extent along the body-frame unit directions ``across`` (N, 2):
@@ -201,13 +97,6 @@ def _width(shape: Shape, across: np.ndarray) -> np.ndarray:
         points = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
     projection = across @ np.asarray(points, np.float64).T
     return projection.max(axis=1) - projection.min(axis=1)
-
-
-def _read_only(array: np.ndarray) -> np.ndarray:
-    """``array`` (a fresh copy) marked read-only: writing to it raises numpy's
-    "assignment destination is read-only"."""
-    array.flags.writeable = False
-    return array
 
 
 class World(WorldJoints):
@@ -230,7 +119,7 @@ class World(WorldJoints):
         self.stage_counts = dict.fromkeys(STAGES, 0)
         self._n = 0
         self._data = {name: np.zeros((16,) + shape, dtype)
-                      for name, (shape, dtype) in _ARRAYS.items()}
+                      for name, (shape, dtype) in ARRAYS.items()}
         self._shapes: list[Shape] = []
         self._shape_index: dict[int, int] = {}
         self._names: list[str] = []
@@ -253,6 +142,11 @@ class World(WorldJoints):
         self._blasts: list[Blast] = []  # ``explode_at``, by time
         self._scheduled: list[terrain.Edit] = []    # ``terrain.schedule``: [[carve]]
 
+    # Helpers of the modules beside this one, as methods: other modules and tests call
+    # them on a world (``Scene.build``, ``terrain``).
+    _add = add
+    _shape_number = shape_number
+
     # ----------------------------------------------------------------------------------
     # Bodies
     # ----------------------------------------------------------------------------------
@@ -262,7 +156,7 @@ class World(WorldJoints):
         """(2,) m/s^2, a read-only copy; assign a pair to change it (checked: finite,
         magnitude at most ``limits.MAX_GRAVITY``). Setting it wakes every sleeping
         island."""
-        return _read_only(self._gravity.copy())
+        return read_only(self._gravity.copy())
 
     @gravity.setter
     def gravity(self, value: Any) -> None:
@@ -327,15 +221,6 @@ class World(WorldJoints):
         i = self._names.index(name)
         return Body(self, int(self._data["uid"][i]))
 
-    def _index_of(self, uid: int) -> int:
-        """The current index of the body created as number ``uid`` (ids increase with
-        the index: one binary search); IndexError if it was removed."""
-        uids = self._view("uid")
-        k = int(np.searchsorted(uids, uid))
-        if k == len(uids) or uids[k] != uid:
-            raise IndexError(f"body {uid} was removed from this world")
-        return k
-
     def __getstate__(self) -> dict:
         """``pickle`` and ``copy.deepcopy``: everything but the caches keyed by object
         identity (rebuilt by ``__setstate__``); the copy steps on bit for bit as the
@@ -351,95 +236,12 @@ class World(WorldJoints):
         self.__dict__.update(state)
         self._shape_index = {id(shape): k for k, shape in enumerate(self._shapes)}
 
-    def _add(self, shape: Shape, values: BodyValues, name: str | None) -> int:
-        """Add a body whose values ``limits.check_body`` validated (``Scene.build`` calls
-        this directly: the scene was checked when read)."""
-        if name is None:
-            name = f"body{self._created}"
-        if name in self._name_set:
-            raise SpecError("name", f"duplicate body name {name!r}")
-        number, origin, radius, core_radius, area, second_moment = self._shape_row(shape)
-        code = KINDS.index(values.kind)
-        if code == _DYNAMIC:
-            m = values.mass if values.mass is not None else values.density * area
-            inertia = m / area * second_moment
-        else:
-            m = inertia = math.inf
-
-        i = self._n
-        self._reserve(i + 1)
-        self._n = i + 1
-        d = self._data
-        if origin[0] == 0.0 and origin[1] == 0.0:     # circles and boxes
-            d["com"][i] = values.position
-        else:
-            d["com"][i] = np.asarray(values.position) - _rotate_one(origin, values.angle)
-        d["angle"][i] = values.angle
-        d["velocity"][i] = values.velocity
-        d["angular_velocity"][i] = values.angular_velocity
-        d["mass"][i] = m
-        d["inertia"][i] = inertia
-        d["inv_mass"][i] = 1.0 / m
-        d["inv_inertia"][i] = 1.0 / inertia if inertia > 0.0 else 0.0
-        d["linear_damping"][i] = values.linear_damping
-        d["angular_damping"][i] = values.angular_damping
-        d["round"][i] = shape.kind == "circle"
-        d["friction"][i] = values.friction
-        d["restitution"][i] = values.restitution
-        d["origin"][i] = origin
-        d["radius"][i] = radius
-        d["core_radius"][i] = core_radius
-        d["shape_id"][i] = number
-        d["kind"][i] = code
-        d["sleep_time"][i] = 0.0
-        d["asleep"][i] = False
-        d["island"][i] = 0
-        d["category"][i] = values.category
-        d["mask"][i] = values.mask
-        d["group"][i] = values.group
-        d["sensor"][i] = values.sensor
-        d["gravity_scale"][i] = values.gravity_scale
-        d["force"][i] = 0.0
-        d["torque"][i] = 0.0
-        d["uid"][i] = self._created
-        self._filter_stale = True
-        self._names.append(name)
-        self._name_set.add(name)
-        self._created += 1
-        return i
-
-    def _shape_row(self, shape: Shape) -> tuple:
-        """(shape number, origin (2,), radius, core radius, area, second moment) of
-        ``shape``, computed once per distinct shape (area and second moment None for an
-        unbounded one). The core radius is -f(centre of mass): the deepest inside."""
-        row = self._shape_rows.get(id(shape))
-        if row is None:
-            bounded = math.isfinite(shape.radius)
-            row = (self._shape_number(shape), np.asarray(shape.origin, dtype=np.float64),
-                   shape.radius, -float(shape.field.distance(np.zeros((1, 2)))[0]),
-                   shape.area if bounded else None,
-                   shape.second_moment if bounded else None)
-            self._shape_rows[id(shape)] = row
-        return row
-
     def remove_body(self, index: int | Body) -> None:
         """Remove body ``index``; later bodies move down one index (their contacts too).
         Sleeping islands it belonged to or touched wake up."""
-        i = self._check(index)
+        i = check_index(self, index)
         self._wake_touching(i)
-        n = self._n
-        for array in self._data.values():
-            array[i:n - 1] = array[i + 1:n]
-        self._n = n - 1
-        self._name_set.discard(self._names[i])
-        del self._names[i]
-        self._impulses = self._impulses.without_body(i)
-        self._sleep_impulses = self._sleep_impulses.without_body(i)
-        self._contacts = self._contacts.without_body(i)
-        self._sleep_contacts = self._sleep_contacts.without_body(i)
-        self._joints.without_body(i)
-        self._report = self._report.without_body(i)
-        self._filter_stale = True
+        world_bodies.remove(self, i)
 
     def set_state(self, index: int | Body, *, position: Any = None, angle: float | None = None,
                   velocity: Any = None, angular_velocity: float | None = None) -> None:
@@ -450,7 +252,7 @@ class World(WorldJoints):
         islands it touches, wake up. Values are checked as ``add_body``'s (SpecError
         naming the argument); nothing changes if one is bad.
         """
-        i = self._check(index)
+        i = check_index(self, index)
         d = self._data
         if position is not None:
             position = check_position(position, "position")
@@ -460,7 +262,7 @@ class World(WorldJoints):
             velocity = check_velocity(velocity, "velocity")
         if angular_velocity is not None:
             angular_velocity = check_angular_velocity(angular_velocity, "angular_velocity")
-        if d["kind"][i] == _STATIC and ((velocity is not None and velocity != (0.0, 0.0))
+        if d["kind"][i] == STATIC and ((velocity is not None and velocity != (0.0, 0.0))
                                         or angular_velocity not in (None, 0.0)):
             raise SpecError("velocity", "a static body cannot move; use kind='kinematic'")
         self._wake_touching(i)
@@ -468,36 +270,11 @@ class World(WorldJoints):
             user = self.position[i] if position is None else np.array(position)
             if angle is not None:
                 d["angle"][i] = angle
-            d["com"][i] = user - _rotate_one(d["origin"][i], float(d["angle"][i]))
+            d["com"][i] = user - rotate_one(d["origin"][i], float(d["angle"][i]))
         if velocity is not None:
             d["velocity"][i] = velocity
         if angular_velocity is not None:
             d["angular_velocity"][i] = angular_velocity
-
-    def _shape_number(self, shape: Shape) -> int:
-        number = self._shape_index.get(id(shape))
-        if number is None:
-            number = len(self._shapes)
-            self._shapes.append(shape)
-            self._shape_index[id(shape)] = number
-        return number
-
-    def _reserve(self, count: int) -> None:
-        capacity = len(self._data["angle"])
-        if count <= capacity:
-            return
-        while capacity < count:
-            capacity *= 2
-        for name, array in self._data.items():
-            grown = np.zeros((capacity,) + array.shape[1:], array.dtype)
-            grown[:self._n] = array[:self._n]
-            self._data[name] = grown
-
-    def _check(self, index: int | Body) -> int:
-        index = operator.index(index)
-        if not -self._n <= index < self._n:
-            raise IndexError(f"body index {index} out of range ({self._n} bodies)")
-        return index % self._n
 
     def _view(self, name: str) -> np.ndarray:
         return self._data[name][:self._n]
@@ -618,7 +395,7 @@ class World(WorldJoints):
     @property
     def sensor_overlaps(self) -> np.ndarray:
         """(K, 2) int64 (sensor, visitor) pairs overlapping after the last step."""
-        return _read_only(self._report.sensors.copy())
+        return read_only(self._report.sensors.copy())
 
     # ----------------------------------------------------------------------------------
     # Forces and impulses
@@ -709,7 +486,7 @@ class World(WorldJoints):
         c = np.array(check_position(center, "center"))
         radius = check_number(radius, "radius", low=0.0, low_open=True)
         impulse = check_number(impulse, "impulse", low=0.0)
-        body = np.flatnonzero(self._view("kind") == _DYNAMIC)
+        body = np.flatnonzero(self._view("kind") == DYNAMIC)
         if len(body) == 0:
             return body
         com, angle = self._view("com"), self._view("angle")
@@ -801,13 +578,13 @@ class World(WorldJoints):
 
     def _awake(self) -> np.ndarray:
         """(B,) bool: dynamic bodies that are not asleep."""
-        return (self._view("kind") == _DYNAMIC) & ~self._view("asleep")
+        return (self._view("kind") == DYNAMIC) & ~self._view("asleep")
 
     def _active(self) -> np.ndarray:
         """(B,) bool: awake dynamic bodies and moving kinematic ones (what a step moves)."""
         v, w = self._view("velocity"), self._view("angular_velocity")
         moving = (v[:, 0] != 0.0) | (v[:, 1] != 0.0) | (w != 0.0)
-        return self._awake() | ((self._view("kind") == _KINEMATIC) & moving)
+        return self._awake() | ((self._view("kind") == KINEMATIC) & moving)
 
     def _wake_reached(self, contacts: Contacts, active: np.ndarray) -> bool:
         """Wake the sleeping islands that an active body (``active`` (B,) bool,
@@ -864,7 +641,7 @@ class World(WorldJoints):
                    start_com, start_angle, self._view("radius"), awake, sleep_time, s.dt,
                    s.sleep_speed)
         c = constraints
-        kinematic = active & (self._view("kind") == _KINEMATIC)
+        kinematic = active & (self._view("kind") == KINEMATIC)
         sleep_time[c.body_b[kinematic[c.body_a]]] = 0.0
         sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
         root = island_roots(bodies.inv_mass, *self._joints.linked(c.body_a, c.body_b))
@@ -905,7 +682,7 @@ class World(WorldJoints):
         contacts with a sensor are kept aside (``_sensor_pass``, for ``events``) and get
         no row."""
         ran: set[tuple[str, str]] = set()
-        movable = self._view("kind") == _DYNAMIC if active is None else active
+        movable = self._view("kind") == DYNAMIC if active is None else active
         pair_filter = self._pair_filter()
         contacts = find_contacts(self._collision_shapes(), self._view("shape_id"),
                                  bodies.com, bodies.angle, movable, self.settings,
@@ -972,7 +749,7 @@ class World(WorldJoints):
             return
         core = np.maximum(self._view("core_radius"), s.speculative_distance)
         radius = self._view("radius")
-        fast = fast_bodies(start_com, bodies.com, core, self._view("kind") == _DYNAMIC,
+        fast = fast_bodies(start_com, bodies.com, core, self._view("kind") == DYNAMIC,
                            bodies.angle - start_angle, radius)
         if len(fast) == 0:
             return
@@ -1004,28 +781,28 @@ class World(WorldJoints):
     @property
     def position(self) -> np.ndarray:
         """(B, 2) m, world position of each body's user frame origin."""
-        return _read_only(self._view("com") + rotate(self._view("origin"),
+        return read_only(self._view("com") + rotate(self._view("origin"),
                                                       self._view("angle")))
 
     @property
     def center_of_mass(self) -> np.ndarray:
         """(B, 2) m, world position of each body's centre of mass."""
-        return _read_only(self._view("com").copy())
+        return read_only(self._view("com").copy())
 
     @property
     def angle(self) -> np.ndarray:
         """(B,) rad, counter-clockwise."""
-        return _read_only(self._view("angle").copy())
+        return read_only(self._view("angle").copy())
 
     @property
     def velocity(self) -> np.ndarray:
         """(B, 2) m/s, velocity of each centre of mass."""
-        return _read_only(self._view("velocity").copy())
+        return read_only(self._view("velocity").copy())
 
     @property
     def angular_velocity(self) -> np.ndarray:
         """(B,) rad/s, counter-clockwise."""
-        return _read_only(self._view("angular_velocity").copy())
+        return read_only(self._view("angular_velocity").copy())
 
     @property
     def contacts(self) -> Contacts:
@@ -1040,7 +817,7 @@ class World(WorldJoints):
     @property
     def asleep(self) -> np.ndarray:
         """(B,) bool: bodies of sleeping islands (``settings.sleeping``)."""
-        return _read_only(self._view("asleep").copy())
+        return read_only(self._view("asleep").copy())
 
     @property
     def shapes(self) -> list[Shape]:
@@ -1050,7 +827,7 @@ class World(WorldJoints):
     @property
     def shape_id(self) -> np.ndarray:
         """(B,) int64, each body's index into ``shapes``."""
-        return _read_only(self._view("shape_id").copy())
+        return read_only(self._view("shape_id").copy())
 
     @property
     def names(self) -> list[str]:
@@ -1059,31 +836,31 @@ class World(WorldJoints):
     @property
     def mass(self) -> np.ndarray:
         """(B,) kg (inf for static and kinematic bodies)."""
-        return _read_only(self._view("mass").copy())
+        return read_only(self._view("mass").copy())
 
     @property
     def inertia(self) -> np.ndarray:
         """(B,) kg m^2 about the centre of mass (inf for static and kinematic bodies)."""
-        return _read_only(self._view("inertia").copy())
+        return read_only(self._view("inertia").copy())
 
     @property
     def kind(self) -> np.ndarray:
         """(B,) str: dynamic | static | kinematic."""
-        return _read_only(np.array(KINDS)[self._view("kind")])
+        return read_only(np.array(KINDS)[self._view("kind")])
 
     @property
     def friction(self) -> np.ndarray:
         """(B,) friction coefficients."""
-        return _read_only(self._view("friction").copy())
+        return read_only(self._view("friction").copy())
 
     @property
     def restitution(self) -> np.ndarray:
         """(B,) restitution coefficients."""
-        return _read_only(self._view("restitution").copy())
+        return read_only(self._view("restitution").copy())
 
     def kinetic_energy(self) -> float:
         """J: sum over dynamic bodies of m |v|^2 / 2 + I w^2 / 2."""
-        dynamic = self._view("kind") == _DYNAMIC
+        dynamic = self._view("kind") == DYNAMIC
         v, w = self._view("velocity")[dynamic], self._view("angular_velocity")[dynamic]
         return float(0.5 * np.sum(self._view("mass")[dynamic] * np.sum(v * v, axis=1))
                      + 0.5 * np.sum(self._view("inertia")[dynamic] * w * w))
@@ -1091,7 +868,7 @@ class World(WorldJoints):
     def potential_energy(self) -> float:
         """J: sum over dynamic bodies of -m g.com (zero at the origin, so at y = 0 for
         vertical gravity)."""
-        dynamic = self._view("kind") == _DYNAMIC
+        dynamic = self._view("kind") == DYNAMIC
         return float(-np.sum(self._view("mass")[dynamic]
                              * (self._view("com")[dynamic] @ self.gravity)))
 
