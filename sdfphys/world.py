@@ -25,14 +25,13 @@ from typing import Any
 
 import numpy as np
 
-from . import _warm, queries, rays, scheduled, terrain, world_bodies
+from . import _warm, queries, rays, scheduled, terrain, world_bodies, world_sleep
 from .blasts import Blast, check_blast, fire_due
 from .collide import Contacts, find_contacts
 from .collide.filter import PairFilter
 from .collide.narrowphase import PAIR_FUNCTIONS
 from .errors import SpecError, check_number
 from .events import Events, StepReport, WorldContacts, sensor_overlaps
-from .islands import island_roots
 from .joints import JointTable, WorldJoints
 from .limits import (
     KINDS,
@@ -47,7 +46,6 @@ from .limits import (
 from .sdf.build import suggest
 from .settings import Settings
 from .shapes import Shape, collision_shape, shape_from_spec
-from .sleep import falling_asleep, rest_times
 from .solver import (
     BodyState,
     ContactConstraints,
@@ -62,7 +60,6 @@ from .vec2 import rotate
 from .world_bodies import (
     ARRAYS,
     DYNAMIC,
-    KINEMATIC,
     STATIC,
     Body,
     add,
@@ -128,7 +125,7 @@ class World(WorldJoints):
         self._created = 0
         self._contacts = WorldContacts.empty()
         self._impulses = ImpulseCache.empty()
-        # Sleeping islands' contacts and impulses, kept for their warm start (``sleep``).
+        # Sleeping islands' contacts and impulses, kept for their warm start (``world_sleep``).
         self._sleep_contacts = WorldContacts.empty()
         self._sleep_impulses = ImpulseCache.empty()
         self._islands_made = 0
@@ -143,9 +140,10 @@ class World(WorldJoints):
         self._scheduled: list[terrain.Edit] = []    # ``terrain.schedule``: [[carve]]
 
     # Helpers of the modules beside this one, as methods: other modules and tests call
-    # them on a world (``Scene.build``, ``terrain``).
+    # them on a world (``Scene.build``, ``terrain``, ``joints``).
     _add = add
     _shape_number = shape_number
+    _wake_touching = world_sleep.wake_touching
 
     # ----------------------------------------------------------------------------------
     # Bodies
@@ -240,7 +238,7 @@ class World(WorldJoints):
         """Remove body ``index``; later bodies move down one index (their contacts too).
         Sleeping islands it belonged to or touched wake up."""
         i = check_index(self, index)
-        self._wake_touching(i)
+        world_sleep.wake_touching(self, i)
         world_bodies.remove(self, i)
 
     def set_state(self, index: int | Body, *, position: Any = None, angle: float | None = None,
@@ -265,7 +263,7 @@ class World(WorldJoints):
         if d["kind"][i] == STATIC and ((velocity is not None and velocity != (0.0, 0.0))
                                         or angular_velocity not in (None, 0.0)):
             raise SpecError("velocity", "a static body cannot move; use kind='kinematic'")
-        self._wake_touching(i)
+        world_sleep.wake_touching(self, i)
         if position is not None or angle is not None:
             user = self.position[i] if position is None else np.array(position)
             if angle is not None:
@@ -305,19 +303,19 @@ class World(WorldJoints):
         sleeping = self.settings.sleeping
         # What moves this step (awake dynamic bodies, moving kinematic ones), None
         # without sleeping: changed within a step only by waking islands.
-        active = self._active() if sleeping else None
+        active = world_sleep.active(self) if sleeping else None
         if not sleeping or np.any(active):
             bodies = self._body_state()
             start_com, start_angle = bodies.com.copy(), bodies.angle.copy()
             contacts = self._collide(bodies, active)
             if sleeping:
-                if self._wake_reached(contacts, active):
-                    active = self._active()
+                if world_sleep.wake_reached(self, contacts, active):
+                    active = world_sleep.active(self)
                     bodies = self._body_state()
                     contacts = self._collide(bodies, active)
                 # Kinematic-static pairs, found because moving kinematic bodies were
                 # movable for the wake test, carry no row.
-                awake = self._awake()
+                awake = world_sleep.awake(self)
                 keep = awake[contacts.body_a] | awake[contacts.body_b]
                 if not np.all(keep):
                     self._contacts = contacts = contacts.take(keep)
@@ -331,7 +329,8 @@ class World(WorldJoints):
             self._contacts = rows = WorldContacts.of(contacts, constraints.total_normal_impulse,
                                                      constraints.total_tangent_impulse)
             if sleeping:
-                self._fall_asleep(bodies, constraints, start_com, start_angle, awake, active)
+                world_sleep.fall_asleep(self, bodies, constraints, start_com, start_angle,
+                                        awake, active)
             self._record(rows, constraints.relative_velocity)
         else:
             self._report = self._report.idle()
@@ -435,12 +434,6 @@ class World(WorldJoints):
         r = p - self._view("com")[idx]
         return r[:, 0] * vectors[:, 1] - r[:, 1] * vectors[:, 0]
 
-    def _wake_bodies(self, idx: np.ndarray) -> None:
-        """Wake the sleeping islands of bodies ``idx``."""
-        asleep = self._view("asleep")[idx]
-        if np.any(asleep):
-            self._wake_islands(self._view("island")[idx[asleep]])
-
     def apply_force(self, i: Any, force: Any, point: Any = None) -> None:
         """Hold ``force`` (N, (2,) or (N, 2)) on body ``i`` (an index or (N,) indices)
         for the next step, at world ``point`` (m, (2,) or (N, 2); None: the centre of
@@ -453,7 +446,7 @@ class World(WorldJoints):
         np.add.at(self._data["force"], idx, f)
         np.add.at(self._data["torque"], idx, torque)
         self._forces = True
-        self._wake_bodies(idx)
+        world_sleep.wake_bodies(self, idx)
 
     def apply_torque(self, i: Any, torque: Any) -> None:
         """Hold ``torque`` (N m, counter-clockwise; a number or (N,)) on body ``i`` (an
@@ -461,7 +454,7 @@ class World(WorldJoints):
         idx, t = self._targets(i, torque, "torque", width=1)
         np.add.at(self._data["torque"], idx, t)
         self._forces = True
-        self._wake_bodies(idx)
+        world_sleep.wake_bodies(self, idx)
 
     def apply_impulse(self, i: Any, impulse: Any, point: Any = None) -> None:
         """Apply ``impulse`` (N s, (2,) or (N, 2)) to body ``i`` (an index or (N,)
@@ -469,7 +462,7 @@ class World(WorldJoints):
         w += (r x J) / I. Static and kinematic bodies ignore it; sleeping ones wake."""
         idx, j = self._targets(i, impulse, "impulse")
         torque = self._lever(idx, j, point)
-        self._wake_bodies(idx)
+        world_sleep.wake_bodies(self, idx)
         np.add.at(self._data["velocity"], idx, j * self._view("inv_mass")[idx, None])
         np.add.at(self._data["angular_velocity"], idx, torque * self._view("inv_inertia")[idx])
 
@@ -555,8 +548,9 @@ class World(WorldJoints):
         bodies = self._body_state()
         constraints = ContactConstraints.empty()
         if self.settings.sleeping:
-            self._fall_asleep(bodies, constraints, bodies.com.copy(), bodies.angle.copy(),
-                              self._awake(), self._active())
+            world_sleep.fall_asleep(self, bodies, constraints, bodies.com.copy(),
+                                    bodies.angle.copy(), world_sleep.awake(self),
+                                    world_sleep.active(self))
         apply_restitution(bodies, constraints, self.settings)
         self._substeps(constraints, bodies)
 
@@ -573,99 +567,12 @@ class World(WorldJoints):
                          v("angular_damping"), v("round"), v("radius"))
 
     # ----------------------------------------------------------------------------------
-    # Sleeping (``sdfphys.sleep``)
+    # Sleeping (``sdfphys.sleep``, ``sdfphys.world_sleep``)
     # ----------------------------------------------------------------------------------
-
-    def _awake(self) -> np.ndarray:
-        """(B,) bool: dynamic bodies that are not asleep."""
-        return (self._view("kind") == DYNAMIC) & ~self._view("asleep")
-
-    def _active(self) -> np.ndarray:
-        """(B,) bool: awake dynamic bodies and moving kinematic ones (what a step moves)."""
-        v, w = self._view("velocity"), self._view("angular_velocity")
-        moving = (v[:, 0] != 0.0) | (v[:, 1] != 0.0) | (w != 0.0)
-        return self._awake() | ((self._view("kind") == KINEMATIC) & moving)
-
-    def _wake_reached(self, contacts: Contacts, active: np.ndarray) -> bool:
-        """Wake the sleeping islands that an active body (``active`` (B,) bool,
-        ``_active``) has a contact with; True if any."""
-        asleep = self._view("asleep")
-        if len(contacts) == 0 or not np.any(asleep):
-            return False
-        a, b = contacts.body_a, contacts.body_b
-        reached = np.r_[b[active[a] & asleep[b]], a[asleep[a] & active[b]]]
-        if len(reached) == 0:
-            return False
-        self._wake_islands(self._view("island")[reached])
-        return True
-
-    def _wake_touching(self, index: int) -> None:
-        """Wake body ``index``'s island and the sleeping islands that touch it."""
-        c = self._sleep_contacts
-        touching = np.r_[c.body_a[c.body_b == index], c.body_b[c.body_a == index], index]
-        touching = touching[self._view("asleep")[touching]]
-        if len(touching):
-            self._wake_islands(self._view("island")[touching])
 
     def wake(self) -> None:
         """Wake every sleeping island."""
-        self._wake_islands(self._view("island")[self._view("asleep")])
-
-    def _wake_islands(self, islands: np.ndarray) -> None:
-        """Wake every body of the given sleeping islands; their contacts' impulses return
-        to the warm-start cache."""
-        if len(islands) == 0:
-            return
-        d = self._data
-        woken = self._view("asleep") & np.isin(self._view("island"), islands)
-        d["asleep"][:self._n][woken] = False
-        d["sleep_time"][:self._n][woken] = 0.0
-        rows = woken[self._sleep_impulses.body_a] | woken[self._sleep_impulses.body_b]
-        self._impulses = ImpulseCache.concatenate(
-            [self._impulses, self._sleep_impulses.take(rows)]).sorted()
-        self._sleep_impulses = self._sleep_impulses.take(~rows)
-        c = self._sleep_contacts
-        self._sleep_contacts = c.take(~(woken[c.body_a] | woken[c.body_b]))
-
-    def _fall_asleep(self, bodies: BodyState, constraints: ContactConstraints,
-                     start_com: np.ndarray, start_angle: np.ndarray, awake: np.ndarray,
-                     active: np.ndarray) -> None:
-        """Count each awake body's rest (``sleep.rest_times``) and put to sleep the
-        islands that have rested ``time_to_sleep``: velocities zeroed, their contacts and
-        impulses moved to the sleeping caches. start_com, start_angle: the poses at the
-        start of the step (a body pushed out of overlap moves without velocity); awake,
-        active: (B,) bool, ``_awake`` and ``_active`` of this step."""
-        s = self.settings
-        sleep_time = self._view("sleep_time")
-        rest_times(bodies.velocity, bodies.angular_velocity, bodies.com, bodies.angle,
-                   start_com, start_angle, self._view("radius"), awake, sleep_time, s.dt,
-                   s.sleep_speed)
-        c = constraints
-        kinematic = active & (self._view("kind") == KINEMATIC)
-        sleep_time[c.body_b[kinematic[c.body_a]]] = 0.0
-        sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
-        root = island_roots(bodies.inv_mass, *self._joints.linked(c.body_a, c.body_b))
-        falling = falling_asleep(root, awake, sleep_time, s.time_to_sleep)
-        if not np.any(falling):
-            return
-        d = self._data
-        n = self._n
-        d["asleep"][:n][falling] = True
-        d["velocity"][:n][falling] = 0.0
-        d["angular_velocity"][:n][falling] = 0.0
-        roots, label = np.unique(root[falling], return_inverse=True)
-        d["island"][:n][falling] = self._islands_made + label
-        self._islands_made += len(roots)
-        cache = self._impulses
-        rows = falling[cache.body_a] | falling[cache.body_b]
-        self._sleep_impulses = ImpulseCache.concatenate([self._sleep_impulses,
-                                                         cache.take(rows)])
-        self._impulses = cache.take(~rows)
-        contacts = self._contacts
-        rows = falling[contacts.body_a] | falling[contacts.body_b]
-        self._sleep_contacts = WorldContacts.concatenate([self._sleep_contacts,
-                                                          contacts.take(rows)])
-        self._contacts = contacts.take(~rows)
+        world_sleep.wake_islands(self, self._view("island")[self._view("asleep")])
 
     def _collision_shapes(self) -> list[Shape]:
         """The distinct shapes as collisions see them under the field knobs."""
