@@ -25,12 +25,12 @@ from typing import Any
 
 import numpy as np
 
-from . import _warm, queries, rays, scheduled, terrain, world_bodies, world_sleep
+from . import _warm, queries, rays, scheduled, terrain, world_bodies, world_forces, world_sleep
 from .blasts import Blast, check_blast, fire_due
 from .collide import Contacts, find_contacts
 from .collide.filter import PairFilter
 from .collide.narrowphase import PAIR_FUNCTIONS
-from .errors import SpecError, check_number
+from .errors import SpecError
 from .events import Events, StepReport, WorldContacts, sensor_overlaps
 from .joints import JointTable, WorldJoints
 from .limits import (
@@ -55,7 +55,7 @@ from .solver import (
     solve_substeps,
     store_impulses,
 )
-from .toi import _distance, fast_bodies, step_fractions
+from .toi import fast_bodies, step_fractions
 from .vec2 import rotate
 from .world_bodies import (
     ARRAYS,
@@ -81,20 +81,6 @@ STAGES = ("collide",) + PAIR_STAGES + (
     "prepare", "integrate_velocities", "warm_start", "solve", "converge", "push_out",
     "integrate_positions", "relax", "friction", "restitution", "time_of_impact",
     "store_impulses")
-
-def _width(shape: Shape, across: np.ndarray) -> np.ndarray:
-    """(N,) m: ``shape``'s extent along the body-frame unit directions ``across`` (N, 2):
-    2 r for a circle, the vertices' spread for a polygon, the body-frame bounding box's
-    corners' spread otherwise."""
-    if shape.kind == "circle":
-        return np.full(len(across), 2.0 * shape.radius)
-    points = getattr(shape, "vertices", None)
-    if points is None:
-        x0, y0, x1, y1 = shape.bounds()
-        points = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
-    projection = across @ np.asarray(points, np.float64).T
-    return projection.max(axis=1) - projection.min(axis=1)
-
 
 class World(WorldJoints):
     """A 2D rigid-body world: bodies as arrays, ``step()`` advances ``settings.dt``.
@@ -397,42 +383,8 @@ class World(WorldJoints):
         return read_only(self._report.sensors.copy())
 
     # ----------------------------------------------------------------------------------
-    # Forces and impulses
+    # Forces, impulses and blasts (``sdfphys.world_forces``)
     # ----------------------------------------------------------------------------------
-
-    def _targets(self, index: Any, vectors: Any, name: str,
-                 width: int = 2) -> tuple[np.ndarray, np.ndarray]:
-        """(bodies (N,), values (N, width) or (N,)): ``index`` an int or index array
-        (negative counts from the end), ``vectors`` one value or one per body; checked
-        (SpecError naming ``name``, IndexError for a bad index)."""
-        idx = np.atleast_1d(np.asarray(index))          # Body handles: their __array__
-        if idx.ndim != 1 or not (np.issubdtype(idx.dtype, np.integer) or len(idx) == 0):
-            raise SpecError("i", f"must be a body index or an array of them, got {index!r}")
-        idx = idx.astype(np.int64)
-        if np.any((idx < -self._n) | (idx >= self._n)):
-            bad = idx[(idx < -self._n) | (idx >= self._n)][0]
-            raise IndexError(f"body index {bad} out of range ({self._n} bodies)")
-        idx = idx % max(self._n, 1)
-        try:
-            values = np.asarray(vectors, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise SpecError(name, f"must be numbers, got {vectors!r}") from None
-        shape = (width,) if width > 1 else ()
-        if values.shape not in (shape, (len(idx),) + shape):
-            want = "(2,) or (N, 2)" if width > 1 else "a number or (N,)"
-            raise SpecError(name, f"must be {want} for N = {len(idx)} bodies, "
-                                  f"got shape {values.shape}")
-        if not np.all(np.isfinite(values)):
-            raise SpecError(name, "must be finite")
-        return idx, np.broadcast_to(values, (len(idx),) + shape)
-
-    def _lever(self, idx: np.ndarray, vectors: np.ndarray, point: Any) -> np.ndarray:
-        """(N,) the torque arm cross product (point - com) x vector, 0 without a point."""
-        if point is None:
-            return np.zeros(len(idx))
-        _, p = self._targets(idx, point, "point")
-        r = p - self._view("com")[idx]
-        return r[:, 0] * vectors[:, 1] - r[:, 1] * vectors[:, 0]
 
     def apply_force(self, i: Any, force: Any, point: Any = None) -> None:
         """Hold ``force`` (N, (2,) or (N, 2)) on body ``i`` (an index or (N,) indices)
@@ -441,8 +393,8 @@ class World(WorldJoints):
         the angular velocity (r = point - centre of mass when applied). Forces add up
         (repeated indices too) and are released after the step. Static and kinematic
         bodies ignore them; sleeping ones wake."""
-        idx, f = self._targets(i, force, "force")
-        torque = self._lever(idx, f, point)
+        idx, f = world_forces.targets(self, i, force, "force")
+        torque = world_forces.lever(self, idx, f, point)
         np.add.at(self._data["force"], idx, f)
         np.add.at(self._data["torque"], idx, torque)
         self._forces = True
@@ -451,7 +403,7 @@ class World(WorldJoints):
     def apply_torque(self, i: Any, torque: Any) -> None:
         """Hold ``torque`` (N m, counter-clockwise; a number or (N,)) on body ``i`` (an
         index or (N,) indices) for the next step (as ``apply_force``)."""
-        idx, t = self._targets(i, torque, "torque", width=1)
+        idx, t = world_forces.targets(self, i, torque, "torque", width=1)
         np.add.at(self._data["torque"], idx, t)
         self._forces = True
         world_sleep.wake_bodies(self, idx)
@@ -460,8 +412,8 @@ class World(WorldJoints):
         """Apply ``impulse`` (N s, (2,) or (N, 2)) to body ``i`` (an index or (N,)
         indices) now, at world ``point`` (m; None: the centre of mass): v += J / m,
         w += (r x J) / I. Static and kinematic bodies ignore it; sleeping ones wake."""
-        idx, j = self._targets(i, impulse, "impulse")
-        torque = self._lever(idx, j, point)
+        idx, j = world_forces.targets(self, i, impulse, "impulse")
+        torque = world_forces.lever(self, idx, j, point)
         world_sleep.wake_bodies(self, idx)
         np.add.at(self._data["velocity"], idx, j * self._view("inv_mass")[idx, None])
         np.add.at(self._data["angular_velocity"], idx, torque * self._view("inv_inertia")[idx])
@@ -476,32 +428,7 @@ class World(WorldJoints):
         from its centre of mass. Widths: exact for circles and polygons, the body-frame
         bounding box's for SDF bodies. Returns the indices of the bodies pushed (sleeping
         ones wake)."""
-        c = np.array(check_position(center, "center"))
-        radius = check_number(radius, "radius", low=0.0, low_open=True)
-        impulse = check_number(impulse, "impulse", low=0.0)
-        body = np.flatnonzero(self._view("kind") == DYNAMIC)
-        if len(body) == 0:
-            return body
-        com, angle = self._view("com"), self._view("angle")
-        shape_id = self._view("shape_id")
-        d, g = _distance([shape.field for shape in self._shapes], shape_id, com, angle, body,
-                         np.broadcast_to(c, (len(body), 2)), gradient=True)
-        near = d < radius
-        body, d, g = body[near], d[near], g[near]
-        inside = d <= 0.0
-        point = np.where(inside[:, None], com[body], c - d[:, None] * g)
-        away = point - c
-        length = np.hypot(away[:, 0], away[:, 1])
-        away = np.where(length[:, None] > 0.0, away / np.where(length > 0.0, length, 1.0)[:, None],
-                        np.array([1.0, 0.0]))
-        # Width across the blast: the body's extent along the perpendicular, in its frame.
-        across = rotate(np.column_stack([-away[:, 1], away[:, 0]]), -angle[body])
-        width = np.empty(len(body))
-        for sid in np.unique(shape_id[body]):
-            rows = np.flatnonzero(shape_id[body] == sid)
-            width[rows] = _width(self._shapes[sid], across[rows])
-        self.apply_impulse(body, (impulse * width)[:, None] * away, point)
-        return body
+        return world_forces.explode(self, center, radius, impulse)
 
     def explode_at(self, time: float, center: Any, radius: float, impulse: float) -> None:
         """Schedule ``explode(center, radius, impulse)`` for the start of the first step
