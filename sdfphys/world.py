@@ -15,6 +15,11 @@ Kinds: ``dynamic`` bodies have mass and feel gravity and contacts; ``static`` bo
 never move; ``kinematic`` bodies move with their velocity and are pushed by nothing.
 Static and kinematic bodies have zero inverse mass and inertia (``mass`` reports inf).
 Materials mix per contact: friction sqrt(f_a f_b), restitution max(e_a, e_b).
+
+This module is the public class; its parts live beside it: ``world_bodies`` (the body
+arrays, ``Body`` handles, adding and removing), ``world_stages`` (the stages of
+``step``), ``world_sleep`` (sleeping islands), ``world_forces`` (forces, impulses,
+blasts); the joints' methods come from ``joints.WorldJoints``.
 """
 
 from __future__ import annotations
@@ -26,12 +31,12 @@ from typing import Any
 import numpy as np
 
 from . import _warm, queries, rays, scheduled, terrain, world_bodies, world_forces, world_sleep
+from . import world_stages as stage
 from .blasts import Blast, check_blast, fire_due
-from .collide import Contacts, find_contacts
+from .collide import Contacts
 from .collide.filter import PairFilter
-from .collide.narrowphase import PAIR_FUNCTIONS
 from .errors import SpecError
-from .events import Events, StepReport, WorldContacts, sensor_overlaps
+from .events import Events, StepReport, WorldContacts
 from .joints import JointTable, WorldJoints
 from .limits import (
     KINDS,
@@ -45,17 +50,8 @@ from .limits import (
 )
 from .sdf.build import suggest
 from .settings import Settings
-from .shapes import Shape, collision_shape, shape_from_spec
-from .solver import (
-    BodyState,
-    ContactConstraints,
-    ImpulseCache,
-    apply_restitution,
-    prepare_contacts,
-    solve_substeps,
-    store_impulses,
-)
-from .toi import fast_bodies, step_fractions
+from .shapes import Shape, shape_from_spec
+from .solver import ImpulseCache
 from .vec2 import rotate
 from .world_bodies import (
     ARRAYS,
@@ -68,19 +64,10 @@ from .world_bodies import (
     rotate_one,
     shape_number,
 )
+from .world_stages import PAIR_STAGES, STAGES
 
 __all__ = ["KINDS", "PAIR_STAGES", "STAGES", "Body", "World"]
 
-#: Narrowphase stages, one per pair kind (``collide.narrowphase.PAIR_FUNCTIONS``):
-#: ``circle_circle``, ``circle_mesh``, ..., ``sdf_sdf``, counted once per step in which
-#: that pair function ran (some candidate pair of that kind was near enough).
-PAIR_STAGES = tuple(f"{a}_{b}" for a, b in PAIR_FUNCTIONS)
-
-#: The stages of ``World.step``, as counted in ``World.stage_counts``.
-STAGES = ("collide",) + PAIR_STAGES + (
-    "prepare", "integrate_velocities", "warm_start", "solve", "converge", "push_out",
-    "integrate_positions", "relax", "friction", "restitution", "time_of_impact",
-    "store_impulses")
 
 class World(WorldJoints):
     """A 2D rigid-body world: bodies as arrays, ``step()`` advances ``settings.dt``.
@@ -116,9 +103,9 @@ class World(WorldJoints):
         self._sleep_impulses = ImpulseCache.empty()
         self._islands_made = 0
         self._joints = JointTable()     # ``joints.WorldJoints``
-        self._filter: PairFilter | None = None   # ``_pair_filter``
+        self._filter: PairFilter | None = None   # ``world_stages.pair_filter``
         self._filter_stale = False
-        self._scaled = False            # some gravity_scale is not 1 (``_pair_filter``)
+        self._scaled = False            # some gravity_scale is not 1 (``pair_filter``)
         self._forces = False            # some force or torque held for the next step
         self._report = StepReport()     # ``events``
         self._sensor_pass: tuple[Contacts, np.ndarray] | None = None
@@ -126,10 +113,13 @@ class World(WorldJoints):
         self._scheduled: list[terrain.Edit] = []    # ``terrain.schedule``: [[carve]]
 
     # Helpers of the modules beside this one, as methods: other modules and tests call
-    # them on a world (``Scene.build``, ``terrain``, ``joints``).
+    # them on a world (``Scene.build``, ``terrain``, ``joints``, ``_warm``).
     _add = add
     _shape_number = shape_number
     _wake_touching = world_sleep.wake_touching
+    _pair_filter = stage.pair_filter
+    _body_state = stage.body_state
+    _compile_ahead = stage.compile_ahead
 
     # ----------------------------------------------------------------------------------
     # Bodies
@@ -264,7 +254,7 @@ class World(WorldJoints):
         return self._data[name][:self._n]
 
     # ----------------------------------------------------------------------------------
-    # Step
+    # Step (``sdfphys.world_stages``, docs/architecture.md)
     # ----------------------------------------------------------------------------------
 
     def step(self) -> None:
@@ -291,33 +281,33 @@ class World(WorldJoints):
         # without sleeping: changed within a step only by waking islands.
         active = world_sleep.active(self) if sleeping else None
         if not sleeping or np.any(active):
-            bodies = self._body_state()
+            bodies = stage.body_state(self)
             start_com, start_angle = bodies.com.copy(), bodies.angle.copy()
-            contacts = self._collide(bodies, active)
+            contacts = stage.collide(self, bodies, active)
             if sleeping:
                 if world_sleep.wake_reached(self, contacts, active):
                     active = world_sleep.active(self)
-                    bodies = self._body_state()
-                    contacts = self._collide(bodies, active)
+                    bodies = stage.body_state(self)
+                    contacts = stage.collide(self, bodies, active)
                 # Kinematic-static pairs, found because moving kinematic bodies were
                 # movable for the wake test, carry no row.
                 awake = world_sleep.awake(self)
                 keep = awake[contacts.body_a] | awake[contacts.body_b]
                 if not np.all(keep):
                     self._contacts = contacts = contacts.take(keep)
-            constraints = self._prepare(contacts, bodies)
+            constraints = stage.prepare(self, contacts, bodies)
             if self.step_count == 0:
                 _warm.join()
-            self._substeps(constraints, bodies)
-            self._restitution(constraints, bodies)
-            self._time_of_impact(bodies, start_com, start_angle)
-            self._store_impulses(constraints)
+            stage.substeps(self, constraints, bodies)
+            stage.restitution(self, constraints, bodies)
+            stage.time_of_impact(self, bodies, start_com, start_angle)
+            stage.store_impulses(self, constraints)
             self._contacts = rows = WorldContacts.of(contacts, constraints.total_normal_impulse,
                                                      constraints.total_tangent_impulse)
             if sleeping:
                 world_sleep.fall_asleep(self, bodies, constraints, start_com, start_angle,
                                         awake, active)
-            self._record(rows, constraints.relative_velocity)
+            stage.record(self, rows, constraints.relative_velocity)
         else:
             self._report = self._report.idle()
         if self._forces:
@@ -326,46 +316,6 @@ class World(WorldJoints):
             self._forces = False
         self.time += self.settings.dt
         self.step_count += 1
-
-    def _pair_filter(self) -> PairFilter | None:
-        """The bodies' collision filter, or None while every body has the default
-        category, mask and group and none is a sensor (then nothing is filtered and
-        nothing computed); rebuilt, with ``_scaled``, after bodies are added or removed."""
-        if self._filter_stale:
-            v = self._view
-            special = (np.any(v("category") != 1) or np.any(v("mask") != MAX_BITS)
-                       or np.any(v("group") != 0) or np.any(v("sensor")))
-            self._filter = (PairFilter(v("category"), v("mask"), v("group"), v("sensor"))
-                            if special else None)
-            self._scaled = bool(np.any(v("gravity_scale") != 1.0))
-            self._filter_stale = False
-        return self._filter
-
-    def _accelerations(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """Per body, (linear (B, 2) m/s^2, angular (B,) rad/s^2): gravity_scale * gravity
-        plus the held force / mass and torque / inertia, for the substeps; None while
-        every gravity scale is 1 and no force is held (gravity alone, as before)."""
-        self._pair_filter()                     # refreshes _scaled
-        if not (self._forces or self._scaled):
-            return None
-        scale = self._view("gravity_scale")
-        inv_mass = self._view("inv_mass")
-        linear = scale[:, None] * self._gravity + self._view("force") * inv_mass[:, None]
-        return linear, self._view("torque") * self._view("inv_inertia")
-
-    def _record(self, rows: WorldContacts, relative_velocity: np.ndarray) -> None:
-        """Keep what ``events`` needs of this step (references; sensor overlaps, if any
-        sensor took part, resolved now: they carry over steps that do not test them)."""
-        s = self.settings
-        before = self._report
-        sensors = before.sensors[:0]
-        if self._sensor_pass is not None:
-            found, movable = self._sensor_pass
-            sensors = sensor_overlaps(found, self._view("sensor"), before.sensors, movable)
-            self._sensor_pass = None
-        self._report = StepReport([self._contacts, self._sleep_contacts], before.touching,
-                                  sensors, before.sensors, rows, relative_velocity,
-                                  s.linear_slop, s.hit_speed)
 
     @property
     def events(self) -> Events:
@@ -467,32 +417,6 @@ class World(WorldJoints):
         one its ``position`` and ``angle`` place: after edits, the edited grid."""
         return terrain.user_field(self, body)
 
-    def _compile_ahead(self) -> None:
-        """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
-        the kernels' sake: the stages after the preparation of the contact rows, which
-        the parent compiles itself after the collisions, once on no contacts, last
-        stage first."""
-        bodies = self._body_state()
-        constraints = ContactConstraints.empty()
-        if self.settings.sleeping:
-            world_sleep.fall_asleep(self, bodies, constraints, bodies.com.copy(),
-                                    bodies.angle.copy(), world_sleep.awake(self),
-                                    world_sleep.active(self))
-        apply_restitution(bodies, constraints, self.settings)
-        self._substeps(constraints, bodies)
-
-    def _body_state(self) -> BodyState:
-        """The solver's view; sleeping bodies take part with zero inverse mass."""
-        v = self._view
-        inv_mass, inv_inertia = v("inv_mass"), v("inv_inertia")
-        asleep = v("asleep")
-        if np.any(asleep):
-            inv_mass = np.where(asleep, 0.0, inv_mass)
-            inv_inertia = np.where(asleep, 0.0, inv_inertia)
-        return BodyState(v("com"), v("angle"), v("velocity"), v("angular_velocity"),
-                         inv_mass, inv_inertia, v("linear_damping"),
-                         v("angular_damping"), v("round"), v("radius"))
-
     # ----------------------------------------------------------------------------------
     # Sleeping (``sdfphys.sleep``, ``sdfphys.world_sleep``)
     # ----------------------------------------------------------------------------------
@@ -500,110 +424,6 @@ class World(WorldJoints):
     def wake(self) -> None:
         """Wake every sleeping island."""
         world_sleep.wake_islands(self, self._view("island")[self._view("asleep")])
-
-    def _collision_shapes(self) -> list[Shape]:
-        """The distinct shapes as collisions see them under the field knobs."""
-        s = self.settings
-        return [collision_shape(shape, s.gradient, s.field_representation, s.grid_cell)
-                for shape in self._shapes]
-
-    def _collide(self, bodies: BodyState, active: np.ndarray | None) -> Contacts:
-        """Stage 1: every contact closer than the speculative distance plus the pair's
-        reach at the step's starting velocities (``sdfphys.collide``), once per step;
-        each pair kind whose narrowphase ran is counted (PAIR_STAGES). active: (B,)
-        bool, the bodies that move (``_active``) with sleeping, None without: the
-        dynamic ones. Pairs the collision filter rejects never reach the narrowphase;
-        contacts with a sensor are kept aside (``_sensor_pass``, for ``events``) and get
-        no row."""
-        ran: set[tuple[str, str]] = set()
-        movable = self._view("kind") == DYNAMIC if active is None else active
-        pair_filter = self._pair_filter()
-        contacts = find_contacts(self._collision_shapes(), self._view("shape_id"),
-                                 bodies.com, bodies.angle, movable, self.settings,
-                                 bodies.velocity, bodies.angular_velocity, ran,
-                                 exclude=self._joints.excluded_pairs(self._n),
-                                 pair_filter=pair_filter)
-        if pair_filter is not None and pair_filter.has_sensors:
-            sensor = pair_filter.sensor
-            touches = sensor[contacts.body_a] | sensor[contacts.body_b]
-            self._sensor_pass = (contacts.take(touches), movable)
-            contacts = contacts.take(~touches)
-        self._contacts = contacts
-        self.stage_counts["collide"] += 1
-        for a, b in ran:
-            self.stage_counts[f"{a}_{b}"] += 1
-        return self._contacts
-
-    def _prepare(self, contacts: Contacts, bodies: BodyState) -> ContactConstraints:
-        """Stage 2: anchors, masses, base separations, warm-start impulses."""
-        constraints = prepare_contacts(contacts, bodies, self._view("friction"),
-                                       self._view("restitution"), self._impulses,
-                                       self.settings.warm_starting, self._gravity,
-                                       self.settings.linear_slop)
-        if len(constraints):
-            self.stage_counts["prepare"] += 1
-        return constraints
-
-    def _substeps(self, constraints: ContactConstraints, bodies: BodyState) -> None:
-        """Stage 3: per substep integrate v, warm start, solve, integrate x, relax; loaded
-        islands (mass ratios, heavy loads: ``solver.row_softness``) get extra passes until
-        converged, counted one by one as ``converge``; ``push_out`` counts the substeps
-        with a row deeper than ``soft_depth`` (its overlap pushed out through
-        pseudo-velocities, solver "Split push-out")."""
-        s = self.settings
-        use_friction = bool(np.any(constraints.friction > 0.0))
-        extra, push_outs = solve_substeps(bodies, constraints, self._gravity, s, use_friction,
-                                          (self._joints.rows, self._joints.stiffness_cap),
-                                          self._accelerations())
-        counts = self.stage_counts
-        counts["converge"] += extra
-        counts["push_out"] += push_outs
-        counts["integrate_velocities"] += s.substeps
-        counts["integrate_positions"] += s.substeps
-        if len(constraints):
-            counts["warm_start"] += s.substeps
-            counts["solve"] += s.substeps
-            counts["relax"] += s.substeps * s.relax_passes
-        if use_friction:
-            counts["friction"] += s.substeps * (1 + s.relax_passes)
-
-    def _restitution(self, constraints: ContactConstraints, bodies: BodyState) -> None:
-        """Stage 4: restitution passes, if some contact has restitution and approached fast."""
-        needed = (constraints.restitution > 0.0) & (
-            constraints.relative_velocity < -self.settings.restitution_threshold)
-        if np.any(needed):
-            apply_restitution(bodies, constraints, self.settings)
-            self.stage_counts["restitution"] += self.settings.restitution_passes
-
-    def _time_of_impact(self, bodies: BodyState, start_com: np.ndarray,
-                        start_angle: np.ndarray) -> None:
-        """Stage 5: fast bodies stopped at their time of impact (``sdfphys.toi``)."""
-        s = self.settings
-        if not s.time_of_impact:
-            return
-        core = np.maximum(self._view("core_radius"), s.speculative_distance)
-        radius = self._view("radius")
-        fast = fast_bodies(start_com, bodies.com, core, self._view("kind") == DYNAMIC,
-                           bodies.angle - start_angle, radius)
-        if len(fast) == 0:
-            return
-        group = self._joints.groups(self._n)
-        fraction = step_fractions([shape.field for shape in self._shapes],
-                                  [getattr(shape, "vertices", None) for shape in self._shapes],
-                                  self._view("shape_id"), start_com, bodies.com, start_angle,
-                                  bodies.angle, radius, core, fast, s.linear_slop, group,
-                                  self._pair_filter())
-        fast, fraction = self._joints.spread_fractions(group, fast, fraction)
-        t = fraction[:, None]
-        bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])
-        bodies.angle[fast] = start_angle[fast] + fraction * (bodies.angle[fast]
-                                                             - start_angle[fast])
-        self.stage_counts["time_of_impact"] += 1
-
-    def _store_impulses(self, constraints: ContactConstraints) -> None:
-        """Stage 6: keep this step's impulses for the next step's warm start."""
-        self._impulses = store_impulses(constraints)
-        self.stage_counts["store_impulses"] += 1
 
     # ----------------------------------------------------------------------------------
     # State (read-only copies, scene order: set_state changes a body)
