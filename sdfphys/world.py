@@ -237,7 +237,7 @@ class World(WorldJoints):
         if angular_velocity is not None:
             angular_velocity = check_angular_velocity(angular_velocity, "angular_velocity")
         if d["kind"][i] == STATIC and ((velocity is not None and velocity != (0.0, 0.0))
-                                        or angular_velocity not in (None, 0.0)):
+                                       or angular_velocity not in (None, 0.0)):
             raise SpecError("velocity", "a static body cannot move; use kind='kinematic'")
         world_sleep.wake_touching(self, i)
         if position is not None or angle is not None:
@@ -436,7 +436,7 @@ class World(WorldJoints):
     def position(self) -> np.ndarray:
         """(B, 2) m, world position of each body's user frame origin."""
         return read_only(self._view("com") + rotate(self._view("origin"),
-                                                      self._view("angle")))
+                                                    self._view("angle")))
 
     @property
     def center_of_mass(self) -> np.ndarray:
