@@ -1,12 +1,11 @@
 """Timed blasts: ``World.explode_at`` and a scene's ``[[explode]]`` tables.
 
 A blast scheduled at ``time`` (s) runs ``World.explode(center, radius, impulse)`` at
-the start of the first step that begins at or after ``time``: before that step's
-collisions, so the step already moves the bodies with their new velocities. A step
-begins at ``world.time``, a sum of dt's whose rounding may leave it a hair under
-``k dt``; the comparison allows a millionth of a step (``SLACK``), so that a blast at
-``time = k dt`` runs at the start of step k (counted from 0). Blasts due at the same
-step run in the order they were scheduled.
+the start of the first step that begins at or after ``time``, before that step's
+collisions, so the step already moves the bodies with their new velocities: the rule of
+every scheduled event (``sdfphys.scheduled``, with its millionth-of-a-step ``SLACK``),
+after the terrain edits due at the same step. Blasts due at the same step run in the
+order they were scheduled.
 """
 
 from __future__ import annotations
@@ -15,11 +14,9 @@ from typing import Any, NamedTuple
 
 from .errors import check_number
 from .limits import MAX_DURATION, check_position
+from .scheduled import SLACK, due
 
 __all__ = ["SLACK", "Blast", "check_blast", "fire_due"]
-
-#: A step that begins within SLACK * dt before a blast's time runs it.
-SLACK = 1e-6
 
 
 class Blast(NamedTuple):
@@ -47,8 +44,6 @@ def check_blast(prefix: str = "", *, time: Any, center: Any, radius: Any,
 
 def fire_due(world) -> None:
     """Run (``world.explode``) and drop the blasts of ``world._blasts`` (sorted by
-    time) that are due at the step about to begin at ``world.time``."""
-    due = world.time + SLACK * world.settings.dt
-    while world._blasts and world._blasts[0].time <= due:
-        blast = world._blasts.pop(0)
+    time) that are due at the step about to begin at ``world.time`` (``scheduled.due``)."""
+    for blast in due(world._blasts, world.time, world.settings.dt):
         world.explode(blast.center, blast.radius, blast.impulse)

@@ -25,9 +25,9 @@ grid's bounds (its whole box, grown where a rim node is inside), so nothing cach
 shape needs rebuilding.
 
 Scheduled edits (a scene's ``[[carve]]`` tables, ``schedule``) are applied at the start
-of the first step whose time is at or after theirs (``blasts.SLACK``: the rule of the
-``[[explode]]`` tables, which run after the edits due at the same step), in time order
-then scene order.
+of the first step whose time is at or after theirs (``sdfphys.scheduled``: the rule of
+the ``[[explode]]`` tables, which run after the edits due at the same step), in time
+order then scene order.
 """
 
 from __future__ import annotations
@@ -38,9 +38,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .blasts import SLACK
 from .errors import SpecError
 from .limits import check_angle, check_position
+from .scheduled import add, due
 from .sdf.base import Field
 from .sdf.build import field as build_field
 from .sdf.build import suggest
@@ -218,15 +218,13 @@ def user_field(world: Any, body: Any) -> Field:
 
 
 def schedule(world: Any, edits: list[Edit]) -> None:
-    """Queue ``edits`` (applied by ``apply_due`` at the start of each step)."""
-    queued = world._scheduled + list(edits)
-    world._scheduled = sorted(queued, key=lambda e: e.time)      # stable: scene order
+    """Queue ``edits`` (applied by ``apply_due`` at the start of each step; equal times
+    in the order given: scene order)."""
+    add(world._scheduled, edits)
 
 
 def apply_due(world: Any) -> None:
-    """Apply the queued edits due at the step about to begin at ``world.time`` (a
-    millionth of a step of slack for the accumulated time, ``blasts.SLACK``)."""
-    due = world.time + SLACK * world.settings.dt
-    while world._scheduled and world._scheduled[0].time <= due:
-        e = world._scheduled.pop(0)
+    """Apply the queued edits due at the step about to begin at ``world.time``
+    (``scheduled.due``)."""
+    for e in due(world._scheduled, world.time, world.settings.dt):
         edit(world, e.body, e.field, e.position, e.angle, e.deposit)

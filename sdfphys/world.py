@@ -1,9 +1,7 @@
 """World: body state as arrays, bodies added and removed, and ``step()``.
 
-Body state is a struct of arrays, split hot and cold as in Box2D v3: the solver reads
-and writes the centre-of-mass position, angle, velocities and inverse masses; shapes,
-materials, kinds and names are bookkeeping. Arrays grow by doubling, so adding B bodies
-costs O(B). Body indices are the order of ``add_body`` calls (scene order);
+Body state is a struct of arrays, split hot and cold as in Box2D v3 (``world_bodies``:
+the body table). Body indices are the order of ``add_body`` calls (scene order);
 ``remove_body(i)`` shifts the later bodies down by one. ``add_body`` returns a ``Body``
 handle that follows its body's index through removals (``World.body(name)`` too).
 
@@ -17,31 +15,32 @@ Kinds: ``dynamic`` bodies have mass and feel gravity and contacts; ``static`` bo
 never move; ``kinematic`` bodies move with their velocity and are pushed by nothing.
 Static and kinematic bodies have zero inverse mass and inertia (``mass`` reports inf).
 Materials mix per contact: friction sqrt(f_a f_b), restitution max(e_a, e_b).
+
+This module is the public class; its parts live beside it: ``world_bodies`` (the body
+arrays, ``Body`` handles, adding and removing), ``world_stages`` (the stages of
+``step``), ``world_sleep`` (sleeping islands), ``world_forces`` (forces, impulses,
+blasts); the joints' methods come from ``joints.WorldJoints``.
 """
 
 from __future__ import annotations
 
-import bisect
 import math
-import operator
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from . import _warm, queries, rays, terrain
+from . import _warm, queries, rays, scheduled, terrain, world_bodies, world_forces, world_sleep
+from . import world_stages as stage
 from .blasts import Blast, check_blast, fire_due
-from .collide import Contacts, find_contacts
+from .collide import Contacts
 from .collide.filter import PairFilter
-from .collide.narrowphase import PAIR_FUNCTIONS
-from .errors import SpecError, check_number
-from .events import Events, StepReport, WorldContacts, sensor_overlaps
-from .islands import island_roots
+from .errors import SpecError
+from .events import Events, StepReport, WorldContacts
 from .joints import JointTable, WorldJoints
 from .limits import (
     KINDS,
     MAX_BITS,
-    BodyValues,
     check_angle,
     check_angular_velocity,
     check_body,
@@ -51,164 +50,23 @@ from .limits import (
 )
 from .sdf.build import suggest
 from .settings import Settings
-from .shapes import Shape, collision_shape, shape_from_spec
-from .sleep import falling_asleep, rest_times
-from .solver import (
-    BodyState,
-    ContactConstraints,
-    ImpulseCache,
-    apply_restitution,
-    prepare_contacts,
-    solve_substeps,
-    store_impulses,
-)
-from .toi import _distance, fast_bodies, step_fractions
+from .shapes import Shape, shape_from_spec
+from .solver import ImpulseCache
 from .vec2 import rotate
+from .world_bodies import (
+    ARRAYS,
+    DYNAMIC,
+    STATIC,
+    Body,
+    add,
+    check_index,
+    read_only,
+    rotate_one,
+    shape_number,
+)
+from .world_stages import PAIR_STAGES, STAGES
 
 __all__ = ["KINDS", "PAIR_STAGES", "STAGES", "Body", "World"]
-
-#: Body kinds, in the order of their integer codes (``limits.KINDS``).
-_DYNAMIC, _STATIC, _KINEMATIC = range(3)
-
-#: Narrowphase stages, one per pair kind (``collide.narrowphase.PAIR_FUNCTIONS``):
-#: ``circle_circle``, ``circle_mesh``, ..., ``sdf_sdf``, counted once per step in which
-#: that pair function ran (some candidate pair of that kind was near enough).
-PAIR_STAGES = tuple(f"{a}_{b}" for a, b in PAIR_FUNCTIONS)
-
-#: The stages of ``World.step``, as counted in ``World.stage_counts``.
-STAGES = ("collide",) + PAIR_STAGES + (
-    "prepare", "integrate_velocities", "warm_start", "solve", "converge", "push_out",
-    "integrate_positions", "relax", "friction", "restitution", "time_of_impact",
-    "store_impulses")
-
-# Per-body arrays: name -> (trailing shape, dtype). Capacity grows by doubling.
-_ARRAYS: dict[str, tuple[tuple[int, ...], Any]] = {
-    "com": ((2,), np.float64),
-    "angle": ((), np.float64),
-    "velocity": ((2,), np.float64),
-    "angular_velocity": ((), np.float64),
-    "inv_mass": ((), np.float64),
-    "inv_inertia": ((), np.float64),
-    "linear_damping": ((), np.float64),
-    "angular_damping": ((), np.float64),
-    "round": ((), np.bool_),
-    "mass": ((), np.float64),
-    "inertia": ((), np.float64),
-    "friction": ((), np.float64),
-    "restitution": ((), np.float64),
-    "origin": ((2,), np.float64),
-    "radius": ((), np.float64),
-    "core_radius": ((), np.float64),
-    "shape_id": ((), np.int64),
-    "kind": ((), np.int8),
-    "sleep_time": ((), np.float64),
-    "asleep": ((), np.bool_),
-    "island": ((), np.int64),
-    "category": ((), np.uint64),
-    "mask": ((), np.uint64),
-    "group": ((), np.int64),
-    "sensor": ((), np.bool_),
-    "gravity_scale": ((), np.float64),
-    "force": ((2,), np.float64),
-    "torque": ((), np.float64),
-    "uid": ((), np.int64),
-}
-
-
-def _rotate_one(v: np.ndarray, angle: float) -> np.ndarray:
-    """(2,) ``v`` rotated counter-clockwise by ``angle`` rad (numpy's cos and sin, as
-    ``vec2.rotate``: the same bits)."""
-    a = np.array([angle], dtype=np.float64)
-    c, s = float(np.cos(a)[0]), float(np.sin(a)[0])
-    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
-
-
-class Body:
-    """A stable handle on one body of a World (``World.add_body``, ``World.body``).
-
-    ``id``: the body's creation number in its world (the k of its default name
-    ``body<k>``), never reused. The handle stands for the body's current index wherever
-    an index goes (``__index__``, ``__array__``: numpy indexing, also by lists of
-    handles, ``set_state``, ``remove_body``, ``apply_force``, ...), so it stays valid
-    while other bodies are removed; after its
-    own body is removed, using it raises IndexError. It equals its current index and the
-    handles of the same body, orders as its index, and hashes by ``id``.
-    """
-
-    __slots__ = ("_world", "id")
-
-    def __init__(self, world: World, uid: int):
-        self._world = world
-        self.id = uid
-
-    @property
-    def index(self) -> int:
-        """The body's current index (scene order); IndexError once it is removed."""
-        return self._world._index_of(self.id)
-
-    def __index__(self) -> int:
-        return self.index
-
-    __int__ = __index__
-
-    def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
-        """The index as a 0-d int64 array: numpy takes lists of handles as indices."""
-        return np.array(self.index, dtype=np.int64 if dtype is None else dtype)
-
-    @property
-    def name(self) -> str:
-        return self._world._names[self.index]
-
-    def __eq__(self, other: object) -> bool:
-        if isinstance(other, Body):
-            return self._world is other._world and self.id == other.id
-        if isinstance(other, (int, np.integer)) and not isinstance(other, bool):
-            try:
-                return self.index == other
-            except IndexError:
-                return False
-        return NotImplemented
-
-    def __lt__(self, other: object) -> bool:
-        """Handles order as their current indices (``sorted`` of handles: scene order)."""
-        if isinstance(other, (Body, int, np.integer)) and not isinstance(other, bool):
-            return self.index < int(other)
-        return NotImplemented
-
-    def __gt__(self, other: object) -> bool:
-        if isinstance(other, (Body, int, np.integer)) and not isinstance(other, bool):
-            return self.index > int(other)
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash(("Body", self.id))
-
-    def __repr__(self) -> str:
-        try:
-            return f"Body(id={self.id}, index={self.index}, name={self.name!r})"
-        except IndexError:
-            return f"Body(id={self.id}, removed)"
-
-
-def _width(shape: Shape, across: np.ndarray) -> np.ndarray:
-    """(N,) m: ``shape``'s extent along the body-frame unit directions ``across`` (N, 2):
-    2 r for a circle, the vertices' spread for a polygon, the body-frame bounding box's
-    corners' spread otherwise."""
-    if shape.kind == "circle":
-        return np.full(len(across), 2.0 * shape.radius)
-    points = getattr(shape, "vertices", None)
-    if points is None:
-        x0, y0, x1, y1 = shape.bounds()
-        points = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
-    projection = across @ np.asarray(points, np.float64).T
-    return projection.max(axis=1) - projection.min(axis=1)
-
-
-def _read_only(array: np.ndarray) -> np.ndarray:
-    """``array`` (a fresh copy) marked read-only: writing to it raises numpy's
-    "assignment destination is read-only"."""
-    array.flags.writeable = False
-    return array
 
 
 class World(WorldJoints):
@@ -231,7 +89,7 @@ class World(WorldJoints):
         self.stage_counts = dict.fromkeys(STAGES, 0)
         self._n = 0
         self._data = {name: np.zeros((16,) + shape, dtype)
-                      for name, (shape, dtype) in _ARRAYS.items()}
+                      for name, (shape, dtype) in ARRAYS.items()}
         self._shapes: list[Shape] = []
         self._shape_index: dict[int, int] = {}
         self._names: list[str] = []
@@ -240,19 +98,28 @@ class World(WorldJoints):
         self._created = 0
         self._contacts = WorldContacts.empty()
         self._impulses = ImpulseCache.empty()
-        # Sleeping islands' contacts and impulses, kept for their warm start (``sleep``).
+        # Sleeping islands' contacts and impulses, kept for their warm start (``world_sleep``).
         self._sleep_contacts = WorldContacts.empty()
         self._sleep_impulses = ImpulseCache.empty()
         self._islands_made = 0
         self._joints = JointTable()     # ``joints.WorldJoints``
-        self._filter: PairFilter | None = None   # ``_pair_filter``
+        self._filter: PairFilter | None = None   # ``world_stages.pair_filter``
         self._filter_stale = False
-        self._scaled = False            # some gravity_scale is not 1 (``_pair_filter``)
+        self._scaled = False            # some gravity_scale is not 1 (``pair_filter``)
         self._forces = False            # some force or torque held for the next step
         self._report = StepReport()     # ``events``
         self._sensor_pass: tuple[Contacts, np.ndarray] | None = None
         self._blasts: list[Blast] = []  # ``explode_at``, by time
         self._scheduled: list[terrain.Edit] = []    # ``terrain.schedule``: [[carve]]
+
+    # Helpers of the modules beside this one, as methods: other modules and tests call
+    # them on a world (``Scene.build``, ``terrain``, ``joints``, ``_warm``).
+    _add = add
+    _shape_number = shape_number
+    _wake_touching = world_sleep.wake_touching
+    _pair_filter = stage.pair_filter
+    _body_state = stage.body_state
+    _compile_ahead = stage.compile_ahead
 
     # ----------------------------------------------------------------------------------
     # Bodies
@@ -263,7 +130,7 @@ class World(WorldJoints):
         """(2,) m/s^2, a read-only copy; assign a pair to change it (checked: finite,
         magnitude at most ``limits.MAX_GRAVITY``). Setting it wakes every sleeping
         island."""
-        return _read_only(self._gravity.copy())
+        return read_only(self._gravity.copy())
 
     @gravity.setter
     def gravity(self, value: Any) -> None:
@@ -328,15 +195,6 @@ class World(WorldJoints):
         i = self._names.index(name)
         return Body(self, int(self._data["uid"][i]))
 
-    def _index_of(self, uid: int) -> int:
-        """The current index of the body created as number ``uid`` (ids increase with
-        the index: one binary search); IndexError if it was removed."""
-        uids = self._view("uid")
-        k = int(np.searchsorted(uids, uid))
-        if k == len(uids) or uids[k] != uid:
-            raise IndexError(f"body {uid} was removed from this world")
-        return k
-
     def __getstate__(self) -> dict:
         """``pickle`` and ``copy.deepcopy``: everything but the caches keyed by object
         identity (rebuilt by ``__setstate__``); the copy steps on bit for bit as the
@@ -352,95 +210,12 @@ class World(WorldJoints):
         self.__dict__.update(state)
         self._shape_index = {id(shape): k for k, shape in enumerate(self._shapes)}
 
-    def _add(self, shape: Shape, values: BodyValues, name: str | None) -> int:
-        """Add a body whose values ``limits.check_body`` validated (``Scene.build`` calls
-        this directly: the scene was checked when read)."""
-        if name is None:
-            name = f"body{self._created}"
-        if name in self._name_set:
-            raise SpecError("name", f"duplicate body name {name!r}")
-        number, origin, radius, core_radius, area, second_moment = self._shape_row(shape)
-        code = KINDS.index(values.kind)
-        if code == _DYNAMIC:
-            m = values.mass if values.mass is not None else values.density * area
-            inertia = m / area * second_moment
-        else:
-            m = inertia = math.inf
-
-        i = self._n
-        self._reserve(i + 1)
-        self._n = i + 1
-        d = self._data
-        if origin[0] == 0.0 and origin[1] == 0.0:     # circles and boxes
-            d["com"][i] = values.position
-        else:
-            d["com"][i] = np.asarray(values.position) - _rotate_one(origin, values.angle)
-        d["angle"][i] = values.angle
-        d["velocity"][i] = values.velocity
-        d["angular_velocity"][i] = values.angular_velocity
-        d["mass"][i] = m
-        d["inertia"][i] = inertia
-        d["inv_mass"][i] = 1.0 / m
-        d["inv_inertia"][i] = 1.0 / inertia if inertia > 0.0 else 0.0
-        d["linear_damping"][i] = values.linear_damping
-        d["angular_damping"][i] = values.angular_damping
-        d["round"][i] = shape.kind == "circle"
-        d["friction"][i] = values.friction
-        d["restitution"][i] = values.restitution
-        d["origin"][i] = origin
-        d["radius"][i] = radius
-        d["core_radius"][i] = core_radius
-        d["shape_id"][i] = number
-        d["kind"][i] = code
-        d["sleep_time"][i] = 0.0
-        d["asleep"][i] = False
-        d["island"][i] = 0
-        d["category"][i] = values.category
-        d["mask"][i] = values.mask
-        d["group"][i] = values.group
-        d["sensor"][i] = values.sensor
-        d["gravity_scale"][i] = values.gravity_scale
-        d["force"][i] = 0.0
-        d["torque"][i] = 0.0
-        d["uid"][i] = self._created
-        self._filter_stale = True
-        self._names.append(name)
-        self._name_set.add(name)
-        self._created += 1
-        return i
-
-    def _shape_row(self, shape: Shape) -> tuple:
-        """(shape number, origin (2,), radius, core radius, area, second moment) of
-        ``shape``, computed once per distinct shape (area and second moment None for an
-        unbounded one). The core radius is -f(centre of mass): the deepest inside."""
-        row = self._shape_rows.get(id(shape))
-        if row is None:
-            bounded = math.isfinite(shape.radius)
-            row = (self._shape_number(shape), np.asarray(shape.origin, dtype=np.float64),
-                   shape.radius, -float(shape.field.distance(np.zeros((1, 2)))[0]),
-                   shape.area if bounded else None,
-                   shape.second_moment if bounded else None)
-            self._shape_rows[id(shape)] = row
-        return row
-
     def remove_body(self, index: int | Body) -> None:
         """Remove body ``index``; later bodies move down one index (their contacts too).
         Sleeping islands it belonged to or touched wake up."""
-        i = self._check(index)
-        self._wake_touching(i)
-        n = self._n
-        for array in self._data.values():
-            array[i:n - 1] = array[i + 1:n]
-        self._n = n - 1
-        self._name_set.discard(self._names[i])
-        del self._names[i]
-        self._impulses = self._impulses.without_body(i)
-        self._sleep_impulses = self._sleep_impulses.without_body(i)
-        self._contacts = self._contacts.without_body(i)
-        self._sleep_contacts = self._sleep_contacts.without_body(i)
-        self._joints.without_body(i)
-        self._report = self._report.without_body(i)
-        self._filter_stale = True
+        i = check_index(self, index)
+        world_sleep.wake_touching(self, i)
+        world_bodies.remove(self, i)
 
     def set_state(self, index: int | Body, *, position: Any = None, angle: float | None = None,
                   velocity: Any = None, angular_velocity: float | None = None) -> None:
@@ -451,7 +226,7 @@ class World(WorldJoints):
         islands it touches, wake up. Values are checked as ``add_body``'s (SpecError
         naming the argument); nothing changes if one is bad.
         """
-        i = self._check(index)
+        i = check_index(self, index)
         d = self._data
         if position is not None:
             position = check_position(position, "position")
@@ -461,50 +236,25 @@ class World(WorldJoints):
             velocity = check_velocity(velocity, "velocity")
         if angular_velocity is not None:
             angular_velocity = check_angular_velocity(angular_velocity, "angular_velocity")
-        if d["kind"][i] == _STATIC and ((velocity is not None and velocity != (0.0, 0.0))
-                                        or angular_velocity not in (None, 0.0)):
+        if d["kind"][i] == STATIC and ((velocity is not None and velocity != (0.0, 0.0))
+                                       or angular_velocity not in (None, 0.0)):
             raise SpecError("velocity", "a static body cannot move; use kind='kinematic'")
-        self._wake_touching(i)
+        world_sleep.wake_touching(self, i)
         if position is not None or angle is not None:
             user = self.position[i] if position is None else np.array(position)
             if angle is not None:
                 d["angle"][i] = angle
-            d["com"][i] = user - _rotate_one(d["origin"][i], float(d["angle"][i]))
+            d["com"][i] = user - rotate_one(d["origin"][i], float(d["angle"][i]))
         if velocity is not None:
             d["velocity"][i] = velocity
         if angular_velocity is not None:
             d["angular_velocity"][i] = angular_velocity
 
-    def _shape_number(self, shape: Shape) -> int:
-        number = self._shape_index.get(id(shape))
-        if number is None:
-            number = len(self._shapes)
-            self._shapes.append(shape)
-            self._shape_index[id(shape)] = number
-        return number
-
-    def _reserve(self, count: int) -> None:
-        capacity = len(self._data["angle"])
-        if count <= capacity:
-            return
-        while capacity < count:
-            capacity *= 2
-        for name, array in self._data.items():
-            grown = np.zeros((capacity,) + array.shape[1:], array.dtype)
-            grown[:self._n] = array[:self._n]
-            self._data[name] = grown
-
-    def _check(self, index: int | Body) -> int:
-        index = operator.index(index)
-        if not -self._n <= index < self._n:
-            raise IndexError(f"body index {index} out of range ({self._n} bodies)")
-        return index % self._n
-
     def _view(self, name: str) -> np.ndarray:
         return self._data[name][:self._n]
 
     # ----------------------------------------------------------------------------------
-    # Step
+    # Step (``sdfphys.world_stages``, docs/architecture.md)
     # ----------------------------------------------------------------------------------
 
     def step(self) -> None:
@@ -529,34 +279,35 @@ class World(WorldJoints):
         sleeping = self.settings.sleeping
         # What moves this step (awake dynamic bodies, moving kinematic ones), None
         # without sleeping: changed within a step only by waking islands.
-        active = self._active() if sleeping else None
+        active = world_sleep.active(self) if sleeping else None
         if not sleeping or np.any(active):
-            bodies = self._body_state()
+            bodies = stage.body_state(self)
             start_com, start_angle = bodies.com.copy(), bodies.angle.copy()
-            contacts = self._collide(bodies, active)
+            contacts = stage.collide(self, bodies, active)
             if sleeping:
-                if self._wake_reached(contacts, active):
-                    active = self._active()
-                    bodies = self._body_state()
-                    contacts = self._collide(bodies, active)
+                if world_sleep.wake_reached(self, contacts, active):
+                    active = world_sleep.active(self)
+                    bodies = stage.body_state(self)
+                    contacts = stage.collide(self, bodies, active)
                 # Kinematic-static pairs, found because moving kinematic bodies were
                 # movable for the wake test, carry no row.
-                awake = self._awake()
+                awake = world_sleep.awake(self)
                 keep = awake[contacts.body_a] | awake[contacts.body_b]
                 if not np.all(keep):
                     self._contacts = contacts = contacts.take(keep)
-            constraints = self._prepare(contacts, bodies)
+            constraints = stage.prepare(self, contacts, bodies)
             if self.step_count == 0:
                 _warm.join()
-            self._substeps(constraints, bodies)
-            self._restitution(constraints, bodies)
-            self._time_of_impact(bodies, start_com, start_angle)
-            self._store_impulses(constraints)
+            stage.substeps(self, constraints, bodies)
+            stage.restitution(self, constraints, bodies)
+            stage.time_of_impact(self, bodies, start_com, start_angle)
+            stage.store_impulses(self, constraints)
             self._contacts = rows = WorldContacts.of(contacts, constraints.total_normal_impulse,
                                                      constraints.total_tangent_impulse)
             if sleeping:
-                self._fall_asleep(bodies, constraints, start_com, start_angle, awake, active)
-            self._record(rows, constraints.relative_velocity)
+                world_sleep.fall_asleep(self, bodies, constraints, start_com, start_angle,
+                                        awake, active)
+            stage.record(self, rows, constraints.relative_velocity)
         else:
             self._report = self._report.idle()
         if self._forces:
@@ -565,46 +316,6 @@ class World(WorldJoints):
             self._forces = False
         self.time += self.settings.dt
         self.step_count += 1
-
-    def _pair_filter(self) -> PairFilter | None:
-        """The bodies' collision filter, or None while every body has the default
-        category, mask and group and none is a sensor (then nothing is filtered and
-        nothing computed); rebuilt, with ``_scaled``, after bodies are added or removed."""
-        if self._filter_stale:
-            v = self._view
-            special = (np.any(v("category") != 1) or np.any(v("mask") != MAX_BITS)
-                       or np.any(v("group") != 0) or np.any(v("sensor")))
-            self._filter = (PairFilter(v("category"), v("mask"), v("group"), v("sensor"))
-                            if special else None)
-            self._scaled = bool(np.any(v("gravity_scale") != 1.0))
-            self._filter_stale = False
-        return self._filter
-
-    def _accelerations(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """Per body, (linear (B, 2) m/s^2, angular (B,) rad/s^2): gravity_scale * gravity
-        plus the held force / mass and torque / inertia, for the substeps; None while
-        every gravity scale is 1 and no force is held (gravity alone, as before)."""
-        self._pair_filter()                     # refreshes _scaled
-        if not (self._forces or self._scaled):
-            return None
-        scale = self._view("gravity_scale")
-        inv_mass = self._view("inv_mass")
-        linear = scale[:, None] * self._gravity + self._view("force") * inv_mass[:, None]
-        return linear, self._view("torque") * self._view("inv_inertia")
-
-    def _record(self, rows: WorldContacts, relative_velocity: np.ndarray) -> None:
-        """Keep what ``events`` needs of this step (references; sensor overlaps, if any
-        sensor took part, resolved now: they carry over steps that do not test them)."""
-        s = self.settings
-        before = self._report
-        sensors = before.sensors[:0]
-        if self._sensor_pass is not None:
-            found, movable = self._sensor_pass
-            sensors = sensor_overlaps(found, self._view("sensor"), before.sensors, movable)
-            self._sensor_pass = None
-        self._report = StepReport([self._contacts, self._sleep_contacts], before.touching,
-                                  sensors, before.sensors, rows, relative_velocity,
-                                  s.linear_slop, s.hit_speed)
 
     @property
     def events(self) -> Events:
@@ -619,51 +330,11 @@ class World(WorldJoints):
     @property
     def sensor_overlaps(self) -> np.ndarray:
         """(K, 2) int64 (sensor, visitor) pairs overlapping after the last step."""
-        return _read_only(self._report.sensors.copy())
+        return read_only(self._report.sensors.copy())
 
     # ----------------------------------------------------------------------------------
-    # Forces and impulses
+    # Forces, impulses and blasts (``sdfphys.world_forces``)
     # ----------------------------------------------------------------------------------
-
-    def _targets(self, index: Any, vectors: Any, name: str,
-                 width: int = 2) -> tuple[np.ndarray, np.ndarray]:
-        """(bodies (N,), values (N, width) or (N,)): ``index`` an int or index array
-        (negative counts from the end), ``vectors`` one value or one per body; checked
-        (SpecError naming ``name``, IndexError for a bad index)."""
-        idx = np.atleast_1d(np.asarray(index))          # Body handles: their __array__
-        if idx.ndim != 1 or not (np.issubdtype(idx.dtype, np.integer) or len(idx) == 0):
-            raise SpecError("i", f"must be a body index or an array of them, got {index!r}")
-        idx = idx.astype(np.int64)
-        if np.any((idx < -self._n) | (idx >= self._n)):
-            bad = idx[(idx < -self._n) | (idx >= self._n)][0]
-            raise IndexError(f"body index {bad} out of range ({self._n} bodies)")
-        idx = idx % max(self._n, 1)
-        try:
-            values = np.asarray(vectors, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise SpecError(name, f"must be numbers, got {vectors!r}") from None
-        shape = (width,) if width > 1 else ()
-        if values.shape not in (shape, (len(idx),) + shape):
-            want = "(2,) or (N, 2)" if width > 1 else "a number or (N,)"
-            raise SpecError(name, f"must be {want} for N = {len(idx)} bodies, "
-                                  f"got shape {values.shape}")
-        if not np.all(np.isfinite(values)):
-            raise SpecError(name, "must be finite")
-        return idx, np.broadcast_to(values, (len(idx),) + shape)
-
-    def _lever(self, idx: np.ndarray, vectors: np.ndarray, point: Any) -> np.ndarray:
-        """(N,) the torque arm cross product (point - com) x vector, 0 without a point."""
-        if point is None:
-            return np.zeros(len(idx))
-        _, p = self._targets(idx, point, "point")
-        r = p - self._view("com")[idx]
-        return r[:, 0] * vectors[:, 1] - r[:, 1] * vectors[:, 0]
-
-    def _wake_bodies(self, idx: np.ndarray) -> None:
-        """Wake the sleeping islands of bodies ``idx``."""
-        asleep = self._view("asleep")[idx]
-        if np.any(asleep):
-            self._wake_islands(self._view("island")[idx[asleep]])
 
     def apply_force(self, i: Any, force: Any, point: Any = None) -> None:
         """Hold ``force`` (N, (2,) or (N, 2)) on body ``i`` (an index or (N,) indices)
@@ -672,28 +343,28 @@ class World(WorldJoints):
         the angular velocity (r = point - centre of mass when applied). Forces add up
         (repeated indices too) and are released after the step. Static and kinematic
         bodies ignore them; sleeping ones wake."""
-        idx, f = self._targets(i, force, "force")
-        torque = self._lever(idx, f, point)
+        idx, f = world_forces.targets(self, i, force, "force")
+        torque = world_forces.lever(self, idx, f, point)
         np.add.at(self._data["force"], idx, f)
         np.add.at(self._data["torque"], idx, torque)
         self._forces = True
-        self._wake_bodies(idx)
+        world_sleep.wake_bodies(self, idx)
 
     def apply_torque(self, i: Any, torque: Any) -> None:
         """Hold ``torque`` (N m, counter-clockwise; a number or (N,)) on body ``i`` (an
         index or (N,) indices) for the next step (as ``apply_force``)."""
-        idx, t = self._targets(i, torque, "torque", width=1)
+        idx, t = world_forces.targets(self, i, torque, "torque", width=1)
         np.add.at(self._data["torque"], idx, t)
         self._forces = True
-        self._wake_bodies(idx)
+        world_sleep.wake_bodies(self, idx)
 
     def apply_impulse(self, i: Any, impulse: Any, point: Any = None) -> None:
         """Apply ``impulse`` (N s, (2,) or (N, 2)) to body ``i`` (an index or (N,)
         indices) now, at world ``point`` (m; None: the centre of mass): v += J / m,
         w += (r x J) / I. Static and kinematic bodies ignore it; sleeping ones wake."""
-        idx, j = self._targets(i, impulse, "impulse")
-        torque = self._lever(idx, j, point)
-        self._wake_bodies(idx)
+        idx, j = world_forces.targets(self, i, impulse, "impulse")
+        torque = world_forces.lever(self, idx, j, point)
+        world_sleep.wake_bodies(self, idx)
         np.add.at(self._data["velocity"], idx, j * self._view("inv_mass")[idx, None])
         np.add.at(self._data["angular_velocity"], idx, torque * self._view("inv_inertia")[idx])
 
@@ -707,41 +378,16 @@ class World(WorldJoints):
         from its centre of mass. Widths: exact for circles and polygons, the body-frame
         bounding box's for SDF bodies. Returns the indices of the bodies pushed (sleeping
         ones wake)."""
-        c = np.array(check_position(center, "center"))
-        radius = check_number(radius, "radius", low=0.0, low_open=True)
-        impulse = check_number(impulse, "impulse", low=0.0)
-        body = np.flatnonzero(self._view("kind") == _DYNAMIC)
-        if len(body) == 0:
-            return body
-        com, angle = self._view("com"), self._view("angle")
-        shape_id = self._view("shape_id")
-        d, g = _distance([shape.field for shape in self._shapes], shape_id, com, angle, body,
-                         np.broadcast_to(c, (len(body), 2)), gradient=True)
-        near = d < radius
-        body, d, g = body[near], d[near], g[near]
-        inside = d <= 0.0
-        point = np.where(inside[:, None], com[body], c - d[:, None] * g)
-        away = point - c
-        length = np.hypot(away[:, 0], away[:, 1])
-        away = np.where(length[:, None] > 0.0, away / np.where(length > 0.0, length, 1.0)[:, None],
-                        np.array([1.0, 0.0]))
-        # Width across the blast: the body's extent along the perpendicular, in its frame.
-        across = rotate(np.column_stack([-away[:, 1], away[:, 0]]), -angle[body])
-        width = np.empty(len(body))
-        for sid in np.unique(shape_id[body]):
-            rows = np.flatnonzero(shape_id[body] == sid)
-            width[rows] = _width(self._shapes[sid], across[rows])
-        self.apply_impulse(body, (impulse * width)[:, None] * away, point)
-        return body
+        return world_forces.explode(self, center, radius, impulse)
 
     def explode_at(self, time: float, center: Any, radius: float, impulse: float) -> None:
         """Schedule ``explode(center, radius, impulse)`` for the start of the first step
         that begins at or after ``time`` (s, >= 0; a step begins at ``self.time``, and
-        one within a millionth of a step before ``time`` counts: ``sdfphys.blasts``). A
+        one within a millionth of a step before ``time`` counts: ``sdfphys.scheduled``). A
         time already past runs at the next step. A scene's ``[[explode]]`` tables
         schedule these (docs/toolkit.md)."""
         blast = check_blast(time=time, center=center, radius=radius, impulse=impulse)
-        bisect.insort(self._blasts, blast, key=lambda b: b.time)
+        scheduled.add(self._blasts, (blast,))
 
     # ----------------------------------------------------------------------------------
     # Editable terrain (``sdfphys.terrain``, docs/terrain.md)
@@ -771,229 +417,13 @@ class World(WorldJoints):
         one its ``position`` and ``angle`` place: after edits, the edited grid."""
         return terrain.user_field(self, body)
 
-    def _compile_ahead(self) -> None:
-        """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
-        the kernels' sake: the stages after the preparation of the contact rows, which
-        the parent compiles itself after the collisions, once on no contacts, last
-        stage first."""
-        bodies = self._body_state()
-        constraints = ContactConstraints.empty()
-        if self.settings.sleeping:
-            self._fall_asleep(bodies, constraints, bodies.com.copy(), bodies.angle.copy(),
-                              self._awake(), self._active())
-        apply_restitution(bodies, constraints, self.settings)
-        self._substeps(constraints, bodies)
-
-    def _body_state(self) -> BodyState:
-        """The solver's view; sleeping bodies take part with zero inverse mass."""
-        v = self._view
-        inv_mass, inv_inertia = v("inv_mass"), v("inv_inertia")
-        asleep = v("asleep")
-        if np.any(asleep):
-            inv_mass = np.where(asleep, 0.0, inv_mass)
-            inv_inertia = np.where(asleep, 0.0, inv_inertia)
-        return BodyState(v("com"), v("angle"), v("velocity"), v("angular_velocity"),
-                         inv_mass, inv_inertia, v("linear_damping"),
-                         v("angular_damping"), v("round"), v("radius"))
-
     # ----------------------------------------------------------------------------------
-    # Sleeping (``sdfphys.sleep``)
+    # Sleeping (``sdfphys.sleep``, ``sdfphys.world_sleep``)
     # ----------------------------------------------------------------------------------
-
-    def _awake(self) -> np.ndarray:
-        """(B,) bool: dynamic bodies that are not asleep."""
-        return (self._view("kind") == _DYNAMIC) & ~self._view("asleep")
-
-    def _active(self) -> np.ndarray:
-        """(B,) bool: awake dynamic bodies and moving kinematic ones (what a step moves)."""
-        v, w = self._view("velocity"), self._view("angular_velocity")
-        moving = (v[:, 0] != 0.0) | (v[:, 1] != 0.0) | (w != 0.0)
-        return self._awake() | ((self._view("kind") == _KINEMATIC) & moving)
-
-    def _wake_reached(self, contacts: Contacts, active: np.ndarray) -> bool:
-        """Wake the sleeping islands that an active body (``active`` (B,) bool,
-        ``_active``) has a contact with; True if any."""
-        asleep = self._view("asleep")
-        if len(contacts) == 0 or not np.any(asleep):
-            return False
-        a, b = contacts.body_a, contacts.body_b
-        reached = np.r_[b[active[a] & asleep[b]], a[asleep[a] & active[b]]]
-        if len(reached) == 0:
-            return False
-        self._wake_islands(self._view("island")[reached])
-        return True
-
-    def _wake_touching(self, index: int) -> None:
-        """Wake body ``index``'s island and the sleeping islands that touch it."""
-        c = self._sleep_contacts
-        touching = np.r_[c.body_a[c.body_b == index], c.body_b[c.body_a == index], index]
-        touching = touching[self._view("asleep")[touching]]
-        if len(touching):
-            self._wake_islands(self._view("island")[touching])
 
     def wake(self) -> None:
         """Wake every sleeping island."""
-        self._wake_islands(self._view("island")[self._view("asleep")])
-
-    def _wake_islands(self, islands: np.ndarray) -> None:
-        """Wake every body of the given sleeping islands; their contacts' impulses return
-        to the warm-start cache."""
-        if len(islands) == 0:
-            return
-        d = self._data
-        woken = self._view("asleep") & np.isin(self._view("island"), islands)
-        d["asleep"][:self._n][woken] = False
-        d["sleep_time"][:self._n][woken] = 0.0
-        rows = woken[self._sleep_impulses.body_a] | woken[self._sleep_impulses.body_b]
-        self._impulses = ImpulseCache.concatenate(
-            [self._impulses, self._sleep_impulses.take(rows)]).sorted()
-        self._sleep_impulses = self._sleep_impulses.take(~rows)
-        c = self._sleep_contacts
-        self._sleep_contacts = c.take(~(woken[c.body_a] | woken[c.body_b]))
-
-    def _fall_asleep(self, bodies: BodyState, constraints: ContactConstraints,
-                     start_com: np.ndarray, start_angle: np.ndarray, awake: np.ndarray,
-                     active: np.ndarray) -> None:
-        """Count each awake body's rest (``sleep.rest_times``) and put to sleep the
-        islands that have rested ``time_to_sleep``: velocities zeroed, their contacts and
-        impulses moved to the sleeping caches. start_com, start_angle: the poses at the
-        start of the step (a body pushed out of overlap moves without velocity); awake,
-        active: (B,) bool, ``_awake`` and ``_active`` of this step."""
-        s = self.settings
-        sleep_time = self._view("sleep_time")
-        rest_times(bodies.velocity, bodies.angular_velocity, bodies.com, bodies.angle,
-                   start_com, start_angle, self._view("radius"), awake, sleep_time, s.dt,
-                   s.sleep_speed)
-        c = constraints
-        kinematic = active & (self._view("kind") == _KINEMATIC)
-        sleep_time[c.body_b[kinematic[c.body_a]]] = 0.0
-        sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
-        root = island_roots(bodies.inv_mass, *self._joints.linked(c.body_a, c.body_b))
-        falling = falling_asleep(root, awake, sleep_time, s.time_to_sleep)
-        if not np.any(falling):
-            return
-        d = self._data
-        n = self._n
-        d["asleep"][:n][falling] = True
-        d["velocity"][:n][falling] = 0.0
-        d["angular_velocity"][:n][falling] = 0.0
-        roots, label = np.unique(root[falling], return_inverse=True)
-        d["island"][:n][falling] = self._islands_made + label
-        self._islands_made += len(roots)
-        cache = self._impulses
-        rows = falling[cache.body_a] | falling[cache.body_b]
-        self._sleep_impulses = ImpulseCache.concatenate([self._sleep_impulses,
-                                                         cache.take(rows)])
-        self._impulses = cache.take(~rows)
-        contacts = self._contacts
-        rows = falling[contacts.body_a] | falling[contacts.body_b]
-        self._sleep_contacts = WorldContacts.concatenate([self._sleep_contacts,
-                                                          contacts.take(rows)])
-        self._contacts = contacts.take(~rows)
-
-    def _collision_shapes(self) -> list[Shape]:
-        """The distinct shapes as collisions see them under the field knobs."""
-        s = self.settings
-        return [collision_shape(shape, s.gradient, s.field_representation, s.grid_cell)
-                for shape in self._shapes]
-
-    def _collide(self, bodies: BodyState, active: np.ndarray | None) -> Contacts:
-        """Stage 1: every contact closer than the speculative distance plus the pair's
-        reach at the step's starting velocities (``sdfphys.collide``), once per step;
-        each pair kind whose narrowphase ran is counted (PAIR_STAGES). active: (B,)
-        bool, the bodies that move (``_active``) with sleeping, None without: the
-        dynamic ones. Pairs the collision filter rejects never reach the narrowphase;
-        contacts with a sensor are kept aside (``_sensor_pass``, for ``events``) and get
-        no row."""
-        ran: set[tuple[str, str]] = set()
-        movable = self._view("kind") == _DYNAMIC if active is None else active
-        pair_filter = self._pair_filter()
-        contacts = find_contacts(self._collision_shapes(), self._view("shape_id"),
-                                 bodies.com, bodies.angle, movable, self.settings,
-                                 bodies.velocity, bodies.angular_velocity, ran,
-                                 exclude=self._joints.excluded_pairs(self._n),
-                                 pair_filter=pair_filter)
-        if pair_filter is not None and pair_filter.has_sensors:
-            sensor = pair_filter.sensor
-            touches = sensor[contacts.body_a] | sensor[contacts.body_b]
-            self._sensor_pass = (contacts.take(touches), movable)
-            contacts = contacts.take(~touches)
-        self._contacts = contacts
-        self.stage_counts["collide"] += 1
-        for a, b in ran:
-            self.stage_counts[f"{a}_{b}"] += 1
-        return self._contacts
-
-    def _prepare(self, contacts: Contacts, bodies: BodyState) -> ContactConstraints:
-        """Stage 2: anchors, masses, base separations, warm-start impulses."""
-        constraints = prepare_contacts(contacts, bodies, self._view("friction"),
-                                       self._view("restitution"), self._impulses,
-                                       self.settings.warm_starting, self._gravity,
-                                       self.settings.linear_slop)
-        if len(constraints):
-            self.stage_counts["prepare"] += 1
-        return constraints
-
-    def _substeps(self, constraints: ContactConstraints, bodies: BodyState) -> None:
-        """Stage 3: per substep integrate v, warm start, solve, integrate x, relax; loaded
-        islands (mass ratios, heavy loads: ``solver.row_softness``) get extra passes until
-        converged, counted one by one as ``converge``; ``push_out`` counts the substeps
-        with a row deeper than ``soft_depth`` (its overlap pushed out through
-        pseudo-velocities, solver "Split push-out")."""
-        s = self.settings
-        use_friction = bool(np.any(constraints.friction > 0.0))
-        extra, push_outs = solve_substeps(bodies, constraints, self._gravity, s, use_friction,
-                                          (self._joints.rows, self._joints.stiffness_cap),
-                                          self._accelerations())
-        counts = self.stage_counts
-        counts["converge"] += extra
-        counts["push_out"] += push_outs
-        counts["integrate_velocities"] += s.substeps
-        counts["integrate_positions"] += s.substeps
-        if len(constraints):
-            counts["warm_start"] += s.substeps
-            counts["solve"] += s.substeps
-            counts["relax"] += s.substeps * s.relax_passes
-        if use_friction:
-            counts["friction"] += s.substeps * (1 + s.relax_passes)
-
-    def _restitution(self, constraints: ContactConstraints, bodies: BodyState) -> None:
-        """Stage 4: restitution passes, if some contact has restitution and approached fast."""
-        needed = (constraints.restitution > 0.0) & (
-            constraints.relative_velocity < -self.settings.restitution_threshold)
-        if np.any(needed):
-            apply_restitution(bodies, constraints, self.settings)
-            self.stage_counts["restitution"] += self.settings.restitution_passes
-
-    def _time_of_impact(self, bodies: BodyState, start_com: np.ndarray,
-                        start_angle: np.ndarray) -> None:
-        """Stage 5: fast bodies stopped at their time of impact (``sdfphys.toi``)."""
-        s = self.settings
-        if not s.time_of_impact:
-            return
-        core = np.maximum(self._view("core_radius"), s.speculative_distance)
-        radius = self._view("radius")
-        fast = fast_bodies(start_com, bodies.com, core, self._view("kind") == _DYNAMIC,
-                           bodies.angle - start_angle, radius)
-        if len(fast) == 0:
-            return
-        group = self._joints.groups(self._n)
-        fraction = step_fractions([shape.field for shape in self._shapes],
-                                  [getattr(shape, "vertices", None) for shape in self._shapes],
-                                  self._view("shape_id"), start_com, bodies.com, start_angle,
-                                  bodies.angle, radius, core, fast, s.linear_slop, group,
-                                  self._pair_filter())
-        fast, fraction = self._joints.spread_fractions(group, fast, fraction)
-        t = fraction[:, None]
-        bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])
-        bodies.angle[fast] = start_angle[fast] + fraction * (bodies.angle[fast]
-                                                             - start_angle[fast])
-        self.stage_counts["time_of_impact"] += 1
-
-    def _store_impulses(self, constraints: ContactConstraints) -> None:
-        """Stage 6: keep this step's impulses for the next step's warm start."""
-        self._impulses = store_impulses(constraints)
-        self.stage_counts["store_impulses"] += 1
+        world_sleep.wake_islands(self, self._view("island")[self._view("asleep")])
 
     # ----------------------------------------------------------------------------------
     # State (read-only copies, scene order: set_state changes a body)
@@ -1005,28 +435,28 @@ class World(WorldJoints):
     @property
     def position(self) -> np.ndarray:
         """(B, 2) m, world position of each body's user frame origin."""
-        return _read_only(self._view("com") + rotate(self._view("origin"),
-                                                      self._view("angle")))
+        return read_only(self._view("com") + rotate(self._view("origin"),
+                                                    self._view("angle")))
 
     @property
     def center_of_mass(self) -> np.ndarray:
         """(B, 2) m, world position of each body's centre of mass."""
-        return _read_only(self._view("com").copy())
+        return read_only(self._view("com").copy())
 
     @property
     def angle(self) -> np.ndarray:
         """(B,) rad, counter-clockwise."""
-        return _read_only(self._view("angle").copy())
+        return read_only(self._view("angle").copy())
 
     @property
     def velocity(self) -> np.ndarray:
         """(B, 2) m/s, velocity of each centre of mass."""
-        return _read_only(self._view("velocity").copy())
+        return read_only(self._view("velocity").copy())
 
     @property
     def angular_velocity(self) -> np.ndarray:
         """(B,) rad/s, counter-clockwise."""
-        return _read_only(self._view("angular_velocity").copy())
+        return read_only(self._view("angular_velocity").copy())
 
     @property
     def contacts(self) -> Contacts:
@@ -1041,7 +471,7 @@ class World(WorldJoints):
     @property
     def asleep(self) -> np.ndarray:
         """(B,) bool: bodies of sleeping islands (``settings.sleeping``)."""
-        return _read_only(self._view("asleep").copy())
+        return read_only(self._view("asleep").copy())
 
     @property
     def shapes(self) -> list[Shape]:
@@ -1051,7 +481,7 @@ class World(WorldJoints):
     @property
     def shape_id(self) -> np.ndarray:
         """(B,) int64, each body's index into ``shapes``."""
-        return _read_only(self._view("shape_id").copy())
+        return read_only(self._view("shape_id").copy())
 
     @property
     def names(self) -> list[str]:
@@ -1060,31 +490,31 @@ class World(WorldJoints):
     @property
     def mass(self) -> np.ndarray:
         """(B,) kg (inf for static and kinematic bodies)."""
-        return _read_only(self._view("mass").copy())
+        return read_only(self._view("mass").copy())
 
     @property
     def inertia(self) -> np.ndarray:
         """(B,) kg m^2 about the centre of mass (inf for static and kinematic bodies)."""
-        return _read_only(self._view("inertia").copy())
+        return read_only(self._view("inertia").copy())
 
     @property
     def kind(self) -> np.ndarray:
         """(B,) str: dynamic | static | kinematic."""
-        return _read_only(np.array(KINDS)[self._view("kind")])
+        return read_only(np.array(KINDS)[self._view("kind")])
 
     @property
     def friction(self) -> np.ndarray:
         """(B,) friction coefficients."""
-        return _read_only(self._view("friction").copy())
+        return read_only(self._view("friction").copy())
 
     @property
     def restitution(self) -> np.ndarray:
         """(B,) restitution coefficients."""
-        return _read_only(self._view("restitution").copy())
+        return read_only(self._view("restitution").copy())
 
     def kinetic_energy(self) -> float:
         """J: sum over dynamic bodies of m |v|^2 / 2 + I w^2 / 2."""
-        dynamic = self._view("kind") == _DYNAMIC
+        dynamic = self._view("kind") == DYNAMIC
         v, w = self._view("velocity")[dynamic], self._view("angular_velocity")[dynamic]
         return float(0.5 * np.sum(self._view("mass")[dynamic] * np.sum(v * v, axis=1))
                      + 0.5 * np.sum(self._view("inertia")[dynamic] * w * w))
@@ -1092,7 +522,7 @@ class World(WorldJoints):
     def potential_energy(self) -> float:
         """J: sum over dynamic bodies of -m g.com (zero at the origin, so at y = 0 for
         vertical gravity)."""
-        dynamic = self._view("kind") == _DYNAMIC
+        dynamic = self._view("kind") == DYNAMIC
         return float(-np.sum(self._view("mass")[dynamic]
                              * (self._view("com")[dynamic] @ self.gravity)))
 

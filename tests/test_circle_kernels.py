@@ -16,7 +16,7 @@ import functools
 import numpy as np
 import pytest
 
-import sdfphys.world as world_module
+import sdfphys.world_stages as stages_module
 from sdfphys.collide import REACH_CAP_RADII, UNBOUNDED_RADIUS, find_contacts, speculative_reach
 from sdfphys.collide import broadphase
 from sdfphys.collide.broadphase import world_bounds
@@ -165,7 +165,7 @@ def test_world_trajectory_is_bit_identical_with_the_general_path(monkeypatch):
     fast = build()
     for _ in range(60):
         fast.step()
-    monkeypatch.setattr(world_module, "find_contacts",
+    monkeypatch.setattr(stages_module, "find_contacts",
                         functools.partial(find_contacts, fast_circles=False))
     general = build()
     for _ in range(60):

@@ -13,7 +13,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-import sdfphys.world as world_module
+import sdfphys.world_stages as stages_module
 from sdfphys.settings import Settings
 from sdfphys.solver import MASS_RATIO, contact_softness, row_softness, soft_coefficients
 from sdfphys.world import World
@@ -210,12 +210,12 @@ def test_a_scene_without_loaded_islands_runs_bit_for_bit_as_the_plain_soft_step(
 
 def test_stiff_iterations_one_runs_no_extra_pass(monkeypatch):
     calls = []
-    real = world_module.solve_substeps
+    real = stages_module.solve_substeps
 
     def spy(*args):
         calls.append(real(*args))
         return calls[-1]
 
-    monkeypatch.setattr(world_module, "solve_substeps", spy)
+    monkeypatch.setattr(stages_module, "solve_substeps", spy)
     _, world = heavy_on_light(100.0, SETTINGS.with_values(stiff_iterations=1), seconds=0.5)
     assert world.stage_counts["converge"] == 0 and {extra for extra, _ in calls} == {0}

@@ -338,17 +338,17 @@ def test_a_box_resting_on_a_box_keeps_its_warm_start_every_step(monkeypatch):
     the reduction keeps flips as a heavy box rocks. With the match by place every
     touching contact after the first 10 steps starts from last step's impulse;
     matching by key alone, 4 of 436 started cold here (49 of 440 at 100:1)."""
-    import sdfphys.world as world_module
+    import sdfphys.world_stages as stages_module
 
     warm = []
-    real = world_module.solve_substeps
+    real = stages_module.solve_substeps
 
     def spy(bodies, constraints, *args):
         touching = constraints.separation < 0.0
         warm.append(constraints.normal_impulse[touching].copy())
         return real(bodies, constraints, *args)
 
-    monkeypatch.setattr(world_module, "solve_substeps", spy)
+    monkeypatch.setattr(stages_module, "solve_substeps", spy)
     world = World(gravity=(0.0, -9.81), settings=Settings(sleeping=False))
     world.add_body({"type": "box", "size": [20.0, 2.0]}, position=(0.0, -1.0), kind="static")
     world.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 0.5), mass=1.0)

@@ -1,0 +1,132 @@
+"""The world's sleeping islands: which bodies a step moves, falling asleep, waking.
+
+The rule is ``sdfphys.sleep``'s (its docstring; the per-body kernels ``rest_times`` and
+``falling_asleep``): this module keeps the world's books. A sleeping body has
+``asleep`` set and the number of its island in ``island``; the contacts and impulses of
+sleeping islands move to ``World._sleep_contacts`` and ``World._sleep_impulses`` as they
+fall asleep (``fall_asleep``) and come back to the warm-start cache when they wake
+(``wake_islands``). An island wakes whole: when an active body reaches it
+(``wake_reached``, in ``World.step``), when a body of it or touching it is set, removed
+or carved (``wake_touching``), when a force or impulse is applied to one of its bodies
+(``wake_bodies``), or on ``World.wake``.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .collide import Contacts
+from .events import WorldContacts
+from .islands import island_roots
+from .sleep import falling_asleep, rest_times
+from .solver import BodyState, ContactConstraints, ImpulseCache
+from .world_bodies import DYNAMIC, KINEMATIC
+
+if TYPE_CHECKING:
+    from .world import World
+
+__all__ = ["active", "awake", "fall_asleep", "wake_bodies", "wake_islands", "wake_reached",
+           "wake_touching"]
+
+
+def awake(world: World) -> np.ndarray:
+    """(B,) bool: dynamic bodies that are not asleep."""
+    return (world._view("kind") == DYNAMIC) & ~world._view("asleep")
+
+
+def active(world: World) -> np.ndarray:
+    """(B,) bool: awake dynamic bodies and moving kinematic ones (what a step moves)."""
+    v, w = world._view("velocity"), world._view("angular_velocity")
+    moving = (v[:, 0] != 0.0) | (v[:, 1] != 0.0) | (w != 0.0)
+    return awake(world) | ((world._view("kind") == KINEMATIC) & moving)
+
+
+def wake_reached(world: World, contacts: Contacts, active: np.ndarray) -> bool:
+    """Wake the sleeping islands that an active body (``active`` (B,) bool,
+    ``active()``) has a contact with; True if any."""
+    asleep = world._view("asleep")
+    if len(contacts) == 0 or not np.any(asleep):
+        return False
+    a, b = contacts.body_a, contacts.body_b
+    reached = np.r_[b[active[a] & asleep[b]], a[asleep[a] & active[b]]]
+    if len(reached) == 0:
+        return False
+    wake_islands(world, world._view("island")[reached])
+    return True
+
+
+def wake_touching(world: World, index: int) -> None:
+    """Wake body ``index``'s island and the sleeping islands that touch it
+    (``World._wake_touching``)."""
+    c = world._sleep_contacts
+    touching = np.r_[c.body_a[c.body_b == index], c.body_b[c.body_a == index], index]
+    touching = touching[world._view("asleep")[touching]]
+    if len(touching):
+        wake_islands(world, world._view("island")[touching])
+
+
+def wake_bodies(world: World, idx: np.ndarray) -> None:
+    """Wake the sleeping islands of bodies ``idx``."""
+    asleep = world._view("asleep")[idx]
+    if np.any(asleep):
+        wake_islands(world, world._view("island")[idx[asleep]])
+
+
+def wake_islands(world: World, islands: np.ndarray) -> None:
+    """Wake every body of the given sleeping islands; their contacts' impulses return
+    to the warm-start cache."""
+    if len(islands) == 0:
+        return
+    d = world._data
+    woken = world._view("asleep") & np.isin(world._view("island"), islands)
+    d["asleep"][:world._n][woken] = False
+    d["sleep_time"][:world._n][woken] = 0.0
+    rows = woken[world._sleep_impulses.body_a] | woken[world._sleep_impulses.body_b]
+    world._impulses = ImpulseCache.concatenate(
+        [world._impulses, world._sleep_impulses.take(rows)]).sorted()
+    world._sleep_impulses = world._sleep_impulses.take(~rows)
+    c = world._sleep_contacts
+    world._sleep_contacts = c.take(~(woken[c.body_a] | woken[c.body_b]))
+
+
+def fall_asleep(world: World, bodies: BodyState, constraints: ContactConstraints,
+                start_com: np.ndarray, start_angle: np.ndarray, awake: np.ndarray,
+                active: np.ndarray) -> None:
+    """Stage 7: count each awake body's rest (``sleep.rest_times``) and put to sleep the
+    islands that have rested ``time_to_sleep``: velocities zeroed, their contacts and
+    impulses moved to the sleeping caches. start_com, start_angle: the poses at the
+    start of the step (a body pushed out of overlap moves without velocity); awake,
+    active: (B,) bool, ``awake()`` and ``active()`` of this step."""
+    s = world.settings
+    sleep_time = world._view("sleep_time")
+    rest_times(bodies.velocity, bodies.angular_velocity, bodies.com, bodies.angle,
+               start_com, start_angle, world._view("radius"), awake, sleep_time, s.dt,
+               s.sleep_speed)
+    c = constraints
+    kinematic = active & (world._view("kind") == KINEMATIC)
+    sleep_time[c.body_b[kinematic[c.body_a]]] = 0.0
+    sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
+    root = island_roots(bodies.inv_mass, *world._joints.linked(c.body_a, c.body_b))
+    falling = falling_asleep(root, awake, sleep_time, s.time_to_sleep)
+    if not np.any(falling):
+        return
+    d = world._data
+    n = world._n
+    d["asleep"][:n][falling] = True
+    d["velocity"][:n][falling] = 0.0
+    d["angular_velocity"][:n][falling] = 0.0
+    roots, label = np.unique(root[falling], return_inverse=True)
+    d["island"][:n][falling] = world._islands_made + label
+    world._islands_made += len(roots)
+    cache = world._impulses
+    rows = falling[cache.body_a] | falling[cache.body_b]
+    world._sleep_impulses = ImpulseCache.concatenate([world._sleep_impulses,
+                                                      cache.take(rows)])
+    world._impulses = cache.take(~rows)
+    contacts = world._contacts
+    rows = falling[contacts.body_a] | falling[contacts.body_b]
+    world._sleep_contacts = WorldContacts.concatenate([world._sleep_contacts,
+                                                       contacts.take(rows)])
+    world._contacts = contacts.take(~rows)

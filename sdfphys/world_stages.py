@@ -1,0 +1,233 @@
+"""The stages of ``World.step``, one function each, and what they share.
+
+``World.step`` (``sdfphys/world.py``) calls them in order; docs/architecture.md maps each
+stage to the module that implements it and docs/solver.md gives the design. Each stage
+takes the world and the step's ``BodyState`` (``body_state``: the solver's view of the
+body arrays, updated in place) and counts itself in ``World.stage_counts`` (keys:
+``STAGES``) when it ran; a stage with nothing to do is skipped and not counted.
+Falling asleep (stage 7) is ``world_sleep.fall_asleep``.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from . import world_sleep
+from .collide import Contacts, find_contacts
+from .collide.filter import PairFilter
+from .collide.narrowphase import PAIR_FUNCTIONS
+from .events import StepReport, WorldContacts, sensor_overlaps
+from .limits import MAX_BITS
+from .shapes import Shape, collision_shape
+from .solver import (
+    BodyState,
+    ContactConstraints,
+    apply_restitution,
+    prepare_contacts,
+    solve_substeps,
+)
+from .solver import store_impulses as impulse_cache
+from .toi import fast_bodies, step_fractions
+from .world_bodies import DYNAMIC
+
+if TYPE_CHECKING:
+    from .world import World
+
+__all__ = ["PAIR_STAGES", "STAGES", "accelerations", "body_state", "collide",
+           "collision_shapes", "compile_ahead", "pair_filter", "prepare", "record",
+           "restitution", "store_impulses", "substeps", "time_of_impact"]
+
+#: Narrowphase stages, one per pair kind (``collide.narrowphase.PAIR_FUNCTIONS``):
+#: ``circle_circle``, ``circle_mesh``, ..., ``sdf_sdf``, counted once per step in which
+#: that pair function ran (some candidate pair of that kind was near enough).
+PAIR_STAGES = tuple(f"{a}_{b}" for a, b in PAIR_FUNCTIONS)
+
+#: The stages of ``World.step``, as counted in ``World.stage_counts``.
+STAGES = ("collide",) + PAIR_STAGES + (
+    "prepare", "integrate_velocities", "warm_start", "solve", "converge", "push_out",
+    "integrate_positions", "relax", "friction", "restitution", "time_of_impact",
+    "store_impulses")
+
+
+def body_state(world: World) -> BodyState:
+    """The solver's view; sleeping bodies take part with zero inverse mass."""
+    v = world._view
+    inv_mass, inv_inertia = v("inv_mass"), v("inv_inertia")
+    asleep = v("asleep")
+    if np.any(asleep):
+        inv_mass = np.where(asleep, 0.0, inv_mass)
+        inv_inertia = np.where(asleep, 0.0, inv_inertia)
+    return BodyState(v("com"), v("angle"), v("velocity"), v("angular_velocity"),
+                     inv_mass, inv_inertia, v("linear_damping"),
+                     v("angular_damping"), v("round"), v("radius"))
+
+
+def pair_filter(world: World) -> PairFilter | None:
+    """The bodies' collision filter, or None while every body has the default
+    category, mask and group and none is a sensor (then nothing is filtered and
+    nothing computed); rebuilt, with ``_scaled``, after bodies are added or removed."""
+    if world._filter_stale:
+        v = world._view
+        special = (np.any(v("category") != 1) or np.any(v("mask") != MAX_BITS)
+                   or np.any(v("group") != 0) or np.any(v("sensor")))
+        world._filter = (PairFilter(v("category"), v("mask"), v("group"), v("sensor"))
+                         if special else None)
+        world._scaled = bool(np.any(v("gravity_scale") != 1.0))
+        world._filter_stale = False
+    return world._filter
+
+
+def accelerations(world: World) -> tuple[np.ndarray, np.ndarray] | None:
+    """Per body, (linear (B, 2) m/s^2, angular (B,) rad/s^2): gravity_scale * gravity
+    plus the held force / mass and torque / inertia, for the substeps; None while
+    every gravity scale is 1 and no force is held (gravity alone, as before)."""
+    pair_filter(world)                      # refreshes _scaled
+    if not (world._forces or world._scaled):
+        return None
+    scale = world._view("gravity_scale")
+    inv_mass = world._view("inv_mass")
+    linear = scale[:, None] * world._gravity + world._view("force") * inv_mass[:, None]
+    return linear, world._view("torque") * world._view("inv_inertia")
+
+
+def collision_shapes(world: World) -> list[Shape]:
+    """The distinct shapes as collisions see them under the field knobs."""
+    s = world.settings
+    return [collision_shape(shape, s.gradient, s.field_representation, s.grid_cell)
+            for shape in world._shapes]
+
+
+def collide(world: World, bodies: BodyState, active: np.ndarray | None) -> Contacts:
+    """Stage 1: every contact closer than the speculative distance plus the pair's
+    reach at the step's starting velocities (``sdfphys.collide``), once per step;
+    each pair kind whose narrowphase ran is counted (PAIR_STAGES). active: (B,)
+    bool, the bodies that move (``world_sleep.active``) with sleeping, None without: the
+    dynamic ones. Pairs the collision filter rejects never reach the narrowphase;
+    contacts with a sensor are kept aside (``_sensor_pass``, for ``events``) and get
+    no row."""
+    ran: set[tuple[str, str]] = set()
+    movable = world._view("kind") == DYNAMIC if active is None else active
+    filter_ = pair_filter(world)
+    contacts = find_contacts(collision_shapes(world), world._view("shape_id"),
+                             bodies.com, bodies.angle, movable, world.settings,
+                             bodies.velocity, bodies.angular_velocity, ran,
+                             exclude=world._joints.excluded_pairs(world._n),
+                             pair_filter=filter_)
+    if filter_ is not None and filter_.has_sensors:
+        sensor = filter_.sensor
+        touches = sensor[contacts.body_a] | sensor[contacts.body_b]
+        world._sensor_pass = (contacts.take(touches), movable)
+        contacts = contacts.take(~touches)
+    world._contacts = contacts
+    world.stage_counts["collide"] += 1
+    for a, b in ran:
+        world.stage_counts[f"{a}_{b}"] += 1
+    return world._contacts
+
+
+def prepare(world: World, contacts: Contacts, bodies: BodyState) -> ContactConstraints:
+    """Stage 2: anchors, masses, base separations, warm-start impulses."""
+    constraints = prepare_contacts(contacts, bodies, world._view("friction"),
+                                   world._view("restitution"), world._impulses,
+                                   world.settings.warm_starting, world._gravity,
+                                   world.settings.linear_slop)
+    if len(constraints):
+        world.stage_counts["prepare"] += 1
+    return constraints
+
+
+def substeps(world: World, constraints: ContactConstraints, bodies: BodyState) -> None:
+    """Stage 3: per substep integrate v, warm start, solve, integrate x, relax; loaded
+    islands (mass ratios, heavy loads: ``solver.row_softness``) get extra passes until
+    converged, counted one by one as ``converge``; ``push_out`` counts the substeps
+    with a row deeper than ``soft_depth`` (its overlap pushed out through
+    pseudo-velocities, solver "Split push-out")."""
+    s = world.settings
+    use_friction = bool(np.any(constraints.friction > 0.0))
+    extra, push_outs = solve_substeps(bodies, constraints, world._gravity, s, use_friction,
+                                      (world._joints.rows, world._joints.stiffness_cap),
+                                      accelerations(world))
+    counts = world.stage_counts
+    counts["converge"] += extra
+    counts["push_out"] += push_outs
+    counts["integrate_velocities"] += s.substeps
+    counts["integrate_positions"] += s.substeps
+    if len(constraints):
+        counts["warm_start"] += s.substeps
+        counts["solve"] += s.substeps
+        counts["relax"] += s.substeps * s.relax_passes
+    if use_friction:
+        counts["friction"] += s.substeps * (1 + s.relax_passes)
+
+
+def restitution(world: World, constraints: ContactConstraints, bodies: BodyState) -> None:
+    """Stage 4: restitution passes, if some contact has restitution and approached fast."""
+    needed = (constraints.restitution > 0.0) & (
+        constraints.relative_velocity < -world.settings.restitution_threshold)
+    if np.any(needed):
+        apply_restitution(bodies, constraints, world.settings)
+        world.stage_counts["restitution"] += world.settings.restitution_passes
+
+
+def time_of_impact(world: World, bodies: BodyState, start_com: np.ndarray,
+                   start_angle: np.ndarray) -> None:
+    """Stage 5: fast bodies stopped at their time of impact (``sdfphys.toi``)."""
+    s = world.settings
+    if not s.time_of_impact:
+        return
+    core = np.maximum(world._view("core_radius"), s.speculative_distance)
+    radius = world._view("radius")
+    fast = fast_bodies(start_com, bodies.com, core, world._view("kind") == DYNAMIC,
+                       bodies.angle - start_angle, radius)
+    if len(fast) == 0:
+        return
+    group = world._joints.groups(world._n)
+    fraction = step_fractions([shape.field for shape in world._shapes],
+                              [getattr(shape, "vertices", None) for shape in world._shapes],
+                              world._view("shape_id"), start_com, bodies.com, start_angle,
+                              bodies.angle, radius, core, fast, s.linear_slop, group,
+                              pair_filter(world))
+    fast, fraction = world._joints.spread_fractions(group, fast, fraction)
+    t = fraction[:, None]
+    bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])
+    bodies.angle[fast] = start_angle[fast] + fraction * (bodies.angle[fast]
+                                                         - start_angle[fast])
+    world.stage_counts["time_of_impact"] += 1
+
+
+def store_impulses(world: World, constraints: ContactConstraints) -> None:
+    """Stage 6: keep this step's impulses for the next step's warm start."""
+    world._impulses = impulse_cache(constraints)
+    world.stage_counts["store_impulses"] += 1
+
+
+def record(world: World, rows: WorldContacts, relative_velocity: np.ndarray) -> None:
+    """Stage 8: keep what ``events`` needs of this step (references; sensor overlaps, if
+    any sensor took part, resolved now: they carry over steps that do not test them)."""
+    s = world.settings
+    before = world._report
+    sensors = before.sensors[:0]
+    if world._sensor_pass is not None:
+        found, movable = world._sensor_pass
+        sensors = sensor_overlaps(found, world._view("sensor"), before.sensors, movable)
+        world._sensor_pass = None
+    world._report = StepReport([world._contacts, world._sleep_contacts], before.touching,
+                               sensors, before.sensors, rows, relative_velocity,
+                               s.linear_slop, s.hit_speed)
+
+
+def compile_ahead(world: World) -> None:
+    """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
+    the kernels' sake (``World._compile_ahead``): the stages after the preparation of
+    the contact rows, which the parent compiles itself after the collisions, once on no
+    contacts, last stage first."""
+    bodies = body_state(world)
+    constraints = ContactConstraints.empty()
+    if world.settings.sleeping:
+        world_sleep.fall_asleep(world, bodies, constraints, bodies.com.copy(),
+                                bodies.angle.copy(), world_sleep.awake(world),
+                                world_sleep.active(world))
+    apply_restitution(bodies, constraints, world.settings)
+    substeps(world, constraints, bodies)
