@@ -3,7 +3,8 @@
 ``mesh_contacts.mesh_in_field`` and ``mesh_sdf.sdf_in_mesh`` run their stages in
 compiled kernels when the fields compile and in numpy otherwise (each module's
 ``USE_COMPILED = False``, the reference), as does the tail of
-``field_pairs.field_field_contacts`` (``_compiled_descent.field_contacts``). The bench
+``field_pairs.field_field_contacts`` (``_compiled_descent.field_contacts``) and the
+whole of ``field_pairs.placed_field_contacts`` (``_placed_fields``). The bench
 scene's pair kinds (boxes on boxes, walls and a half-plane ground, a ring and a
 smooth union) and concave meshes, at random poses and margins, must give the same
 rows (pair, point, normal, depth, keys) in the same order, with the same bits.
@@ -15,7 +16,6 @@ import numpy as np
 import pytest
 
 from sdfphys.collide import mesh_contacts, mesh_sdf
-from sdfphys.collide.narrowphase import _overlap_region, _to_local
 from sdfphys.settings import Settings
 from sdfphys.shapes import shape_from_spec
 
@@ -87,11 +87,8 @@ def test_sdf_in_mesh_compiled_equals_numpy(monkeypatch):
             pose_mesh[:, 2] += rng.uniform(-0.05, 0.05, n)          # slightly tilted
             pose_sdf[:, 2] = 0.0
         margin = float(rng.choice([0.0, 0.01, 0.05]))
-        angle = pose_mesh[:, 2] - pose_sdf[:, 2]
-        region = _overlap_region(sdf.bounds(), mesh.bounds(), angle,
-                                 _to_local(pose_mesh[:, :2], pose_sdf), margin)
         reference, got = _both(monkeypatch, mesh_sdf, mesh_sdf.sdf_in_mesh, mesh, sdf,
-                               pose_mesh, pose_sdf, region, margin, Settings())
+                               pose_mesh, pose_sdf, margin, Settings())
         assert _same(reference, got)
         contacts += len(reference[0])
         far_ends += int(np.sum(reference[5] >= mesh_sdf.FAR_END))
@@ -152,3 +149,32 @@ def test_mesh_in_field_kink_on_a_face_compiled_equals_numpy(monkeypatch):
         assert _same(reference, got)
         deepest = max(deepest, float(np.max(reference[3], initial=0.0)))
     assert deepest > 0.0179
+
+
+def test_placed_field_contacts_in_one_call_equal_the_numpy_glue(monkeypatch):
+    """``field_pairs.placed_field_contacts`` in one compiled call (``_placed_fields``)
+    gives the regions of ``narrowphase._overlap_region`` and the contacts of
+    ``field_field_contacts`` over them, bit for bit: sdf-sdf placements (a bounded or a
+    half-plane), mesh fields placed in sdfs, pairs whose regions are empty among them."""
+    from sdfphys.collide import descent, field_pairs
+
+    rng = np.random.default_rng(2026)
+    sdfs = [shape_from_spec(s) for s in SDFS]
+    meshes = [shape_from_spec(s) for s in MESHES]
+    contacts = empty = 0
+    for _ in range(80):
+        a = sdfs[rng.integers(len(sdfs))]
+        b = (meshes + sdfs[:2])[rng.integers(len(meshes) + 2)]
+        n = int(rng.integers(1, 8))
+        offset = rng.uniform(-0.9, 0.9, (n, 2))
+        angle = rng.uniform(-4.0, 4.0, n)
+        margin = float(rng.choice([0.0, 0.02]))
+        args = (a.field, b.field, offset, angle, a.bounds(), b.bounds(), margin, 7, 24)
+        monkeypatch.setattr(descent, "USE_COMPILED", False)
+        reference = field_pairs.placed_field_contacts(*args)
+        monkeypatch.setattr(descent, "USE_COMPILED", True)
+        got = field_pairs.placed_field_contacts(*args)
+        assert _same(reference, got)
+        contacts += len(got[1])
+        empty += int(np.sum(np.any(got[0][:, 2:] < got[0][:, :2], axis=1)))
+    assert contacts > 150 and empty > 5

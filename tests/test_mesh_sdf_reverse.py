@@ -7,6 +7,7 @@ its top face y = 0.1. Normal from a toward b, depth > 0 overlapping, point midwa
 """
 
 import importlib
+import inspect
 import math
 
 import numpy as np
@@ -135,7 +136,6 @@ def test_a_mesh_corner_in_an_sdf_face_gives_no_reverse_point_on_its_medial_axis(
     face point on the corner's bisector (at 45 deg (0.2, 0.1), 0.01 sin 45 deg from
     both bottom sides), with one side's normal. It is dropped: the forward direction
     holds the vertex (the sdf corners pressing into mesh faces above keep theirs)."""
-    from sdfphys.collide.narrowphase import _overlap_region, _to_local
     from sdfphys.shapes import shape_from_spec
 
     monkeypatch.setattr(mesh_sdf, "USE_COMPILED", compiled)
@@ -146,10 +146,7 @@ def test_a_mesh_corner_in_an_sdf_face_gives_no_reverse_point_on_its_medial_axis(
     for tilt in (0.0, 0.02, -0.3):
         y = 0.1 - 0.01 + 0.25 * math.sqrt(2.0) * math.cos(tilt)
         pose_mesh = np.array([[0.2, y, math.pi / 4 + tilt]])
-        region = _overlap_region(ground.bounds(), mesh.bounds(), pose_mesh[:, 2],
-                                 _to_local(pose_mesh[:, :2], pose_sdf), 0.0)
-        rows.append(mesh_sdf.sdf_in_mesh(mesh, ground, pose_mesh, pose_sdf, region, 0.0,
-                                         Settings()))
+        rows.append(mesh_sdf.sdf_in_mesh(mesh, ground, pose_mesh, pose_sdf, 0.0, Settings()))
     assert [len(row[0]) for row in rows] == [0, 0, 0]
 
 
@@ -259,7 +256,6 @@ def test_reverse_keys_are_stable_and_unique(rng):
 
 def test_sdf_in_mesh_batched_over_pairs_equals_one_by_one(rng):
     """One call for n pairs gives each pair what a call for that pair alone gives."""
-    from sdfphys.collide.narrowphase import _overlap_region, _to_local
     from sdfphys.shapes import shape_from_spec
 
     mesh, sdf = shape_from_spec(PLANK), shape_from_spec(SDF_BOX)
@@ -272,11 +268,8 @@ def test_sdf_in_mesh_batched_over_pairs_equals_one_by_one(rng):
     pose_sdf = np.column_stack([pose_mesh[:, :2] + world, pose_mesh[:, 2] + angle])
 
     def run(index):
-        region = _overlap_region(sdf.bounds(), mesh.bounds(),
-                                 pose_mesh[index, 2] - pose_sdf[index, 2],
-                                 _to_local(pose_mesh[index, :2], pose_sdf[index]), 0.02)
-        return mesh_sdf.sdf_in_mesh(mesh, sdf, pose_mesh[index], pose_sdf[index], region,
-                                    0.02, settings)
+        return mesh_sdf.sdf_in_mesh(mesh, sdf, pose_mesh[index], pose_sdf[index], 0.02,
+                                    settings)
 
     batch = run(np.arange(n))
     assert len(np.unique(batch[0])) > n // 2
@@ -352,13 +345,14 @@ def test_field_descent_knobs_reach_mesh_sdf_pairs(monkeypatch):
     from sdfphys.collide import field_pairs
 
     seen = []
-    real = field_pairs.field_field_contacts
+    real = field_pairs.placed_field_contacts
 
     def spy(*args, **kwargs):
-        seen.append((kwargs["n_starts"], kwargs["iterations"]))
+        given = inspect.signature(real).bind(*args, **kwargs).arguments
+        seen.append((given["n_starts"], given["iterations"]))
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(field_pairs, "field_field_contacts", spy)
+    monkeypatch.setattr(field_pairs, "placed_field_contacts", spy)
     settings = Settings(field_descent_starts=3, field_descent_iterations=5)
     collide(PLANK, (0.0, 0.0, 0.0), SDF_BOX, (0.3, 0.34, 0.0), settings=settings)
     assert seen == [(3, 5)]

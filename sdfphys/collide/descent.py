@@ -169,7 +169,7 @@ START_BARYCENTRIC = np.array([
 
 #: Tolerance of the plane and cone fits of ``_descent_starts.triangle_known``
 #: (unit gradients; values relative to the coordinates' and values' size).
-_SHAPE_TOL = 1e-12
+SHAPE_TOL = 1e-12
 #: Run the descent with the fields compiled in (``_compiled_descent``) when they
 #: compile (``sdf.compiled``). False forces the Python-driven loop (the tests
 #: compare the two).
@@ -320,7 +320,7 @@ class _TriangleProblem:
         first tries the point closest to its apex.
         """
         return start_kernels.triangle_known(self.triangles, self.at_vertex, points, phi, grad,
-                                      self.n_start, self.spanning, self.convex, _SHAPE_TOL)
+                                      self.n_start, self.spanning, self.convex, SHAPE_TOL)
 
 
 class _Workspace(threading.local):
@@ -361,11 +361,17 @@ def _scratch(n_points: int) -> tuple:
     between calls): state, flags, running, and the candidate buffers cand, cand_i, points."""
     return (_WORK.rows("state", n_points, paths.N_STATE),
             _WORK.rows("flags", n_points, paths.N_FLAGS, np.int64),
-            _WORK.rows("running", n_points, 1, np.int64)[:, 0],
-            _WORK.whole("cand", 5), _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2))
+            _WORK.rows("running", n_points, 1, np.int64)[:, 0], *round_buffers())
 
 
-def _keep(cand: np.ndarray, cand_i: np.ndarray, points: np.ndarray) -> None:
+def round_buffers() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """This thread's candidate buffers of the compiled descents: cand (C, 5), cand_i
+    (C, 2) int64, points (C, 2), contents undefined (a descent may grow them: give
+    back what it returns with ``keep_round_buffers``)."""
+    return _WORK.whole("cand", 5), _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2)
+
+
+def keep_round_buffers(cand: np.ndarray, cand_i: np.ndarray, points: np.ndarray) -> None:
     """Keep the candidate buffers a compiled descent returned (it may have grown them)."""
     _WORK.keep("cand", cand)
     _WORK.keep("cand_i", cand_i)
@@ -442,7 +448,7 @@ def _descend(problem: _TriangleProblem | field_pairs._PairProblem, points: np.nd
         before = state[:, paths.BEST:paths.BEST + 2].copy() if uneven else None
         n_running, size = kernels.accept(problem.kind, problem.triangles, problem.owner, corner,
                                          state, flags, data, cand, cand_i, value, gradient,
-                                         cand_data, least, running[:n_running], shape, _SHAPE_TOL)
+                                         cand_data, least, running[:n_running], shape, SHAPE_TOL)
         if uneven:
             kept = running[:n_running]
             step = state[kept, paths.BEST:paths.BEST + 2] - before[kept]
@@ -478,12 +484,12 @@ def _descend_compiled(problem: _TriangleProblem | field_pairs._PairProblem,
         np.ascontiguousarray(problem.rotation) if pair else _NO_ROTATION,
         np.ascontiguousarray(problem.offset) if pair else _NO_OFFSET,
         problem.pair_of if pair else problem.owner, problem.triangles, problem.owner,
-        problem.at_vertex if not pair else _NO_CORNERS, problem.n_start if not pair else 0,
+        problem.at_vertex if not pair else NO_CORNERS, problem.n_start if not pair else 0,
         not pair and problem.spanning, not pair and problem.convex, points,
         np.ascontiguousarray(sigma, dtype=np.float64), iterations,
-        tol, _SHAPE_TOL,
+        tol, SHAPE_TOL,
         *_scratch(n_points))
-    _keep(cand, cand_i, candidates)
+    keep_round_buffers(cand, cand_i, candidates)
     return best, phi, data, rounds
 
 
@@ -491,7 +497,7 @@ def _descend_compiled(problem: _TriangleProblem | field_pairs._PairProblem,
 # (1, 2, 2) and (1, 2)) and of a pair problem's vertex starts (1, 3).
 _NO_ROTATION = np.zeros((1, 2, 2))
 _NO_OFFSET = np.zeros((1, 2))
-_NO_CORNERS = np.zeros((1, 3), dtype=np.int64)
+NO_CORNERS = np.zeros((1, 3), dtype=np.int64)
 
 
 def _triangle_minima(field: Field, triangles: np.ndarray, iterations: int,
@@ -636,16 +642,16 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
         n_points = n_tri * k
         best, value, _, _, cand, cand_i, candidates = descend_sampled(
             program.code, program.consts, program.depth, program.nesting, tri, weights,
-            with_slots, edges, 1.0 / degree, k, iterations, float(tol), _SHAPE_TOL,
+            with_slots, edges, 1.0 / degree, k, iterations, float(tol), SHAPE_TOL,
             *_scratch(n_points))
-        _keep(cand, cand_i, candidates)
+        keep_round_buffers(cand, cand_i, candidates)
         return best.reshape(n_tri, k, 2), value.reshape(n_tri, k)
     spoints, _, ssigma, sat = start_kernels.triangle_starts(tri, weights)
     sphi, sgrad = field.evaluate(spoints)
     sphi = np.ascontiguousarray(sphi, dtype=np.float64)
     sgrad = np.ascontiguousarray(sgrad, dtype=np.float64)
     known = start_kernels.triangle_known(tri, sat, spoints, sphi, sgrad, n_sample, True, False,
-                                   _SHAPE_TOL)
+                                   SHAPE_TOL)
     dip_points, dip_place = start_kernels.present_dips(start_kernels.hidden_dips(
         spoints, sphi, sgrad, n_sample, edges, HIDDEN_DIPS))
     dip_phi, dip_grad = field.evaluate(dip_points)

@@ -28,8 +28,9 @@ from ..vec2 import TINY
 from . import _descent_paths as paths
 from . import descent
 from ._compiled_descent import field_contacts, patch_ends
+from ._placed_fields import placed_contacts
 
-__all__ = ["field_field_contacts", "field_field_contacts_single"]
+__all__ = ["field_field_contacts", "field_field_contacts_single", "placed_field_contacts"]
 
 #: Contacts of two fields closer than this fraction of the region's diagonal are one.
 _MERGE = 1e-3
@@ -390,6 +391,42 @@ def field_field_contacts(field_a: Field, field_b: Field, poses_b_in_a: np.ndarra
     head, chosen = _clusters(pair, point, start_id, -depth, start_id.astype(np.float64),
                              _MERGE * scale[pair])
     return live[pair[chosen]], point[chosen], depth[chosen], normal[chosen], start_id[head]
+
+
+def placed_field_contacts(field_a: Field, field_b: Field, offset: np.ndarray, angle: np.ndarray,
+                          bounds_a: np.ndarray, bounds_b: np.ndarray, margin: float,
+                          n_starts: int, iterations: int
+                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                     np.ndarray]:
+    """``field_field_contacts`` of b placed in a's frame, over the overlap of the bounds.
+
+    offset (n, 2), angle (n,): b's origin and angle in a's frame (m, rad); bounds_a,
+    bounds_b (4,): the body-frame AABBs (a's may be infinite, b's finite); margin:
+    m, the regions are grown by it and contacts with depth > -margin reported.
+    Returns the regions (n, 4) (``narrowphase._overlap_region``) and
+    ``field_field_contacts``' five results for those regions. When both fields
+    compile, everything runs in one compiled call (``_placed_fields``), the same
+    operations as the numpy glue, so the same bits.
+    """
+    cos, sin = np.cos(angle), np.sin(angle)
+    programs = ((compile_field(field_a), compile_field(field_b))
+                if descent.USE_COMPILED and n_starts >= 1 else (None, None))
+    a, b = programs
+    if a is not None and b is not None:
+        region, pair, point, depth, normal, start_id, *work = placed_contacts(
+            paths.PAIR, True, 6, a.code, a.consts, a.depth, a.nesting, b.code, b.consts,
+            b.depth, b.nesting, np.asarray(bounds_a, np.float64),
+            np.asarray(bounds_b, np.float64), np.ascontiguousarray(offset, np.float64), cos, sin,
+            float(margin), _starts(n_starts), iterations, _MERGE, _SLIVER, descent.SHAPE_TOL,
+            _NO_TRIANGLE, _NO_OWNER, descent.NO_CORNERS, *descent.round_buffers())
+        descent.keep_round_buffers(*work)
+        return region, pair, point, depth, normal, start_id
+    from .narrowphase import _overlap_region
+
+    region = _overlap_region(bounds_a, bounds_b, angle, offset, margin)
+    return (region, *field_field_contacts(field_a, field_b, np.column_stack([offset, angle]),
+                                          region, n_starts=n_starts, iterations=iterations,
+                                          margin=margin))
 
 
 def _no_contacts() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -357,15 +357,15 @@ def _on_medial_axis(vertices: np.ndarray, z: np.ndarray, depth: np.ndarray, g: n
 
 
 def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.ndarray,
-                region: np.ndarray, margin: float, settings: Settings
+                margin: float, settings: Settings
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                            np.ndarray]:
     """Contacts of the sdf body's points inside ``mesh`` for n pairs (see the module doc).
 
     pose_mesh, pose_sdf: (n, 3) centre-of-mass poses (x, y, angle), world (m, rad).
-    region: (n, 4) boxes (xmin, ymin, xmax, ymax) in the SDF's body frame where the
-    two may overlap, grown by the margin (``narrowphase._overlap_region``).
-    margin: m, contacts with depth > -margin are returned. Field-field starts and
+    margin: m, contacts with depth > -margin are returned. The search runs over the
+    overlap of the two bounds in the SDF's body frame, grown by the margin
+    (``narrowphase._overlap_region``). Field-field starts and
     iterations: ``settings.field_descent_starts`` / ``field_descent_iterations``.
     Returns pair index (C,), midway point (C, 2) world, normal (C, 2) world (unit,
     outward of the mesh: from the mesh toward the sdf body), depth (C,) m, the mesh
@@ -376,10 +376,9 @@ def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.nda
     angle = pose_mesh[:, 2] - pose_sdf[:, 2]
     co, so = np.cos(pose_sdf[:, 2]), np.sin(pose_sdf[:, 2])
     offset = rotate_cs(pose_mesh[:, :2] - pose_sdf[:, :2], co, -so)      # mesh in sdf frame
-    pair, point, depth, _, start = field_pairs.field_field_contacts(
-        sdf.field, mesh.field, np.column_stack([offset, angle]), region,
-        n_starts=settings.field_descent_starts, iterations=settings.field_descent_iterations,
-        margin=margin)
+    region, pair, point, depth, _, start = field_pairs.placed_field_contacts(
+        sdf.field, mesh.field, offset, angle, sdf.bounds(), mesh.bounds(), margin,
+        settings.field_descent_starts, settings.field_descent_iterations)
     empty = (pair, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), pair.copy(), pair.copy())
     if len(pair) == 0:
         return empty

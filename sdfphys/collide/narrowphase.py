@@ -288,11 +288,8 @@ def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b
                        feature_key(SOURCE_A_IN_B, tri, start))
     if _flat(sdf_b.field):
         return forward
-    angle = pose_a[:, 2] - pose_b[:, 2]
-    offset = _to_local(pose_a[:, :2], pose_b)
-    region = _overlap_region(sdf_b.bounds(), mesh_a.bounds(), angle, offset, margin)
     pair, point, normal, depth, edge, start = sdf_in_mesh(mesh_a, sdf_b, pose_a, pose_b,
-                                                          region, margin, settings)
+                                                          margin, settings)
     reverse = Contacts(body_a[pair], body_b[pair], point, normal, depth,
                        feature_key(SOURCE_SDF_IN_MESH, edge << _EDGE_SHIFT, start))
     return Contacts.concatenate([forward, reverse])
@@ -346,7 +343,7 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     descent iteration is one evaluation of each field over the points of all
     pairs.
     """
-    from .field_pairs import field_field_contacts
+    from .field_pairs import placed_field_contacts
 
     if not np.all(np.isfinite(sdf_b.bounds())) and np.all(np.isfinite(sdf_a.bounds())):
         # The descent's region is b's bounds placed in a's frame: solve with the
@@ -355,11 +352,9 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
         return Contacts(c.body_b, c.body_a, c.point, -c.normal, c.depth, c.feature)
     angle = pose_b[:, 2] - pose_a[:, 2]
     offset = _to_local(pose_b[:, :2], pose_a)
-    region = _overlap_region(sdf_a.bounds(), sdf_b.bounds(), angle, offset, margin)
-    pair, point, depth, normal, start = field_field_contacts(
-        sdf_a.field, sdf_b.field, np.column_stack([offset, angle]), region,
-        n_starts=settings.field_descent_starts, iterations=settings.field_descent_iterations,
-        margin=margin)
+    _, pair, point, depth, normal, start = placed_field_contacts(
+        sdf_a.field, sdf_b.field, offset, angle, sdf_a.bounds(), sdf_b.bounds(), margin,
+        settings.field_descent_starts, settings.field_descent_iterations)
     rot = pose_a[pair, 2]
     return Contacts(body_a[pair], body_b[pair], rotate(point, rot) + pose_a[pair, :2],
                     rotate(normal, rot), depth, feature_key(SOURCE_FIELDS, 0, start))
