@@ -288,7 +288,7 @@ class _TriangleProblem:
     def __init__(self, field: Field, triangles: np.ndarray, owner: np.ndarray,
                  at_vertex: np.ndarray, n_start: int, spanning: bool):
         self.field = field
-        self.convex = field_convex(field)
+        self.convex = _field_convex(field)
         self.triangles = triangles
         self.owner = owner
         self.at_vertex = at_vertex
@@ -394,8 +394,8 @@ def _point_starts(cand_i: np.ndarray, flags: np.ndarray, proposing: np.ndarray, 
     return start
 
 
-def _descend(problem: _TriangleProblem | field_pairs._PairProblem, points: np.ndarray,
-             iterations: int, sigma: np.ndarray, tol: float | np.ndarray
+def _descend(problem: _TriangleProblem | field_pairs._PairProblem, points: np.ndarray, iterations: int,
+             sigma: np.ndarray, tol: float | np.ndarray
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Minimise the problem's objective from each start (P, 2) (see the module docstring).
 
@@ -481,8 +481,8 @@ def _descend_compiled(problem: _TriangleProblem | field_pairs._PairProblem,
     best, phi, data, rounds, _, cand, cand_i, candidates = descend(
         problem.kind, problem.barzilai_borwein, 6 if pair else 2,
         a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth, b.nesting,
-        np.ascontiguousarray(problem.rotation) if pair else NO_ROTATION,
-        np.ascontiguousarray(problem.offset) if pair else NO_OFFSET,
+        np.ascontiguousarray(problem.rotation) if pair else _NO_ROTATION,
+        np.ascontiguousarray(problem.offset) if pair else _NO_OFFSET,
         problem.pair_of if pair else problem.owner, problem.triangles, problem.owner,
         problem.at_vertex if not pair else NO_CORNERS, problem.n_start if not pair else 0,
         not pair and problem.spanning, not pair and problem.convex, points,
@@ -495,8 +495,8 @@ def _descend_compiled(problem: _TriangleProblem | field_pairs._PairProblem,
 
 # Placeholders of the arguments a triangle problem does not use (placements of b,
 # (1, 2, 2) and (1, 2)) and of a pair problem's vertex starts (1, 3).
-NO_ROTATION = np.zeros((1, 2, 2))
-NO_OFFSET = np.zeros((1, 2))
+_NO_ROTATION = np.zeros((1, 2, 2))
+_NO_OFFSET = np.zeros((1, 2))
 NO_CORNERS = np.zeros((1, 3), dtype=np.int64)
 
 
@@ -511,9 +511,8 @@ def _triangle_minima(field: Field, triangles: np.ndarray, iterations: int,
     if n_tri == 0:
         return np.zeros((0, n_start, 2)), np.zeros((0, n_start)), np.zeros((0, n_start), int)
     tri = np.ascontiguousarray(tri)
-    points, owner, sigma, at_vertex = start_kernels.triangle_starts(
-        tri, np.ascontiguousarray(weights))
-    problem = _TriangleProblem(field, tri, owner, at_vertex, n_start, spanning_weights(weights))
+    points, owner, sigma, at_vertex = start_kernels.triangle_starts(tri, np.ascontiguousarray(weights))
+    problem = _TriangleProblem(field, tri, owner, at_vertex, n_start, _spanning(weights))
     best, value, _, rounds = _descend(problem, points, iterations, sigma, tol)
     return (best.reshape(n_tri, n_start, 2), value.reshape(n_tri, n_start),
             rounds.reshape(n_tri, n_start))
@@ -522,7 +521,7 @@ def _triangle_minima(field: Field, triangles: np.ndarray, iterations: int,
 _SPANNING: dict[bytes, bool] = {}
 
 
-def spanning_weights(weights: np.ndarray) -> bool:
+def _spanning(weights: np.ndarray) -> bool:
     """The start weights (K, 3) have rank 3 (cached: a few sets are used over and over)."""
     key = weights.tobytes()
     if key not in _SPANNING:
@@ -692,7 +691,7 @@ def merge_minima(point: np.ndarray, radius: float) -> np.ndarray:
     return ~np.any(near & earlier, axis=2)
 
 
-def field_convex(field: Field) -> bool:
+def _field_convex(field: Field) -> bool:
     """``_convex`` of the field's spec, cached on the field object."""
     cached = getattr(field, "_descent_convex", None)
     if cached is None:

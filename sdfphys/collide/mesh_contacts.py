@@ -58,7 +58,6 @@ from ..sdf.compiled import run, scratch
 from ..settings import Settings
 from ..shapes import Shape
 from ..vec2 import unit_or
-from . import _descent_paths as paths
 from . import descent
 from ._compiled_descent import enclosing_circles
 
@@ -690,8 +689,7 @@ def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: 
     toward the mesh), depth (C,), key element (C,) and key start (C,).
 
     When other's field compiles (``sdf.compiled``) the stages run in two compiled
-    kernels around the descent (``_place``, ``_finish``), all in one call
-    (``_triangle_contacts``) with the descent compiled too; otherwise, and with
+    kernels around the descent (``_place``, ``_finish``); otherwise, and with
     ``USE_COMPILED = False``, in numpy (``_mesh_in_field_numpy``). Same results.
     """
     program = compiled.compile_field(other.field) if USE_COMPILED else None
@@ -705,23 +703,9 @@ def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: 
     pose_other = np.ascontiguousarray(pose_other, dtype=np.float64)
     code, consts, depth, nesting = program.code, program.consts, program.depth, program.nesting
     margin = float(margin)
-    n_starts = max(1, min(settings.descent_starts, len(_START_PRIORITY)))
-    if settings.descent_lattice == 0 and descent.USE_COMPILED:
-        from ._triangle_contacts import triangle_contacts   # it imports _place, _finish
-
-        weights = _STARTS[n_starts]
-        *found, cand, cand_i, candidates = triangle_contacts(
-            paths.TRIANGLE, False, 2, mesh.vertices, mesh.triangles, mesh.outline_edges, cos,
-            sin, co, so, pose_mesh, pose_other, code, consts, depth, nesting, margin, weights,
-            _START_PRIORITY[:n_starts], descent.spanning_weights(weights),
-            descent.field_convex(other.field), settings.descent_iterations, 1e-12,
-            descent.SHAPE_TOL, _MERGE_RADIUS, bool(polygon_pair),
-            float(settings.linear_slop), descent.NO_ROTATION, descent.NO_OFFSET,
-            *descent.round_buffers())
-        descent.keep_round_buffers(cand, cand_i, candidates)
-        return tuple(found)
     vertices, _, kept, tri = _place(mesh.vertices, mesh.triangles, cos, sin, co, so, pose_mesh,
                                     pose_other, code, consts, depth, nesting, margin)
+    n_starts = max(1, min(settings.descent_starts, len(_START_PRIORITY)))
     if settings.descent_lattice > 0:
         point, value, start_ids = _sampled_minima(other.field, tri, settings)
     else:
