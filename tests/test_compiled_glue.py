@@ -4,7 +4,7 @@
 compiled kernels when the fields compile and in numpy otherwise (each module's
 ``USE_COMPILED = False``, the reference), as does the tail of
 ``field_pairs.field_field_contacts`` (``_compiled_descent.field_contacts``) and the
-whole of ``field_pairs.placed_field_contacts`` (``_placed_fields``). The bench
+compiled glue of ``field_pairs.placed_field_contacts`` (``_placed_fields``). The bench
 scene's pair kinds (boxes on boxes, walls and a half-plane ground, a ring and a
 smooth union) and concave meshes, at random poses and margins, must give the same
 rows (pair, point, normal, depth, keys) in the same order, with the same bits.
@@ -152,7 +152,7 @@ def test_mesh_in_field_kink_on_a_face_compiled_equals_numpy(monkeypatch):
 
 
 def test_placed_field_contacts_in_one_call_equal_the_numpy_glue(monkeypatch):
-    """``field_pairs.placed_field_contacts`` in one compiled call (``_placed_fields``)
+    """``field_pairs.placed_field_contacts`` through its compiled glue (``_placed_fields``)
     gives the regions of ``narrowphase._overlap_region`` and the contacts of
     ``field_field_contacts`` over them, bit for bit: sdf-sdf placements (a bounded or a
     half-plane), mesh fields placed in sdfs, pairs whose regions are empty among them."""

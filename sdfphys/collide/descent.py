@@ -356,19 +356,14 @@ class _Workspace(threading.local):
 _WORK = _Workspace()
 
 
-def _scratch(n_points: int) -> tuple:
+def scratch(n_points: int) -> tuple:
     """The compiled descents' work arrays for ``n_points`` starts (this thread's, reused
-    between calls): state, flags, running, and the candidate buffers cand, cand_i, points."""
+    between calls): state, flags, running, and the candidate buffers cand, cand_i, points
+    (a descent may grow these: give back what it returns with ``keep_round_buffers``)."""
     return (_WORK.rows("state", n_points, paths.N_STATE),
             _WORK.rows("flags", n_points, paths.N_FLAGS, np.int64),
-            _WORK.rows("running", n_points, 1, np.int64)[:, 0], *round_buffers())
-
-
-def round_buffers() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """This thread's candidate buffers of the compiled descents: cand (C, 5), cand_i
-    (C, 2) int64, points (C, 2), contents undefined (a descent may grow them: give
-    back what it returns with ``keep_round_buffers``)."""
-    return _WORK.whole("cand", 5), _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2)
+            _WORK.rows("running", n_points, 1, np.int64)[:, 0],
+            _WORK.whole("cand", 5), _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2))
 
 
 def keep_round_buffers(cand: np.ndarray, cand_i: np.ndarray, points: np.ndarray) -> None:
@@ -488,7 +483,7 @@ def _descend_compiled(problem: _TriangleProblem | field_pairs._PairProblem,
         not pair and problem.spanning, not pair and problem.convex, points,
         np.ascontiguousarray(sigma, dtype=np.float64), iterations,
         tol, SHAPE_TOL,
-        *_scratch(n_points))
+        *scratch(n_points))
     keep_round_buffers(cand, cand_i, candidates)
     return best, phi, data, rounds
 
@@ -643,7 +638,7 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
         best, value, _, _, cand, cand_i, candidates = descend_sampled(
             program.code, program.consts, program.depth, program.nesting, tri, weights,
             with_slots, edges, 1.0 / degree, k, iterations, float(tol), SHAPE_TOL,
-            *_scratch(n_points))
+            *scratch(n_points))
         keep_round_buffers(cand, cand_i, candidates)
         return best.reshape(n_tri, k, 2), value.reshape(n_tri, k)
     spoints, _, ssigma, sat = start_kernels.triangle_starts(tri, weights)

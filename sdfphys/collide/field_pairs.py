@@ -27,8 +27,8 @@ from ..sdf.compiled import Program, compile_field
 from ..vec2 import TINY
 from . import _descent_paths as paths
 from . import descent
-from ._compiled_descent import field_contacts, patch_ends
-from ._placed_fields import placed_contacts
+from ._compiled_descent import descend, field_contacts, patch_ends
+from ._placed_fields import placed_starts
 
 __all__ = ["field_field_contacts", "field_field_contacts_single", "placed_field_contacts"]
 
@@ -405,22 +405,27 @@ def placed_field_contacts(field_a: Field, field_b: Field, offset: np.ndarray, an
     m, the regions are grown by it and contacts with depth > -margin reported.
     Returns the regions (n, 4) (``narrowphase._overlap_region``) and
     ``field_field_contacts``' five results for those regions. When both fields
-    compile, everything runs in one compiled call (``_placed_fields``), the same
-    operations as the numpy glue, so the same bits.
+    compile, three compiled calls (``_placed_fields.placed_starts``, the descent,
+    the merges) with the operations of the numpy glue, so the same bits.
     """
     cos, sin = np.cos(angle), np.sin(angle)
-    programs = ((compile_field(field_a), compile_field(field_b))
-                if descent.USE_COMPILED and n_starts >= 1 else (None, None))
-    a, b = programs
+    a, b = ((compile_field(field_a), compile_field(field_b))
+            if descent.USE_COMPILED and n_starts >= 1 else (None, None))
     if a is not None and b is not None:
-        region, pair, point, depth, normal, start_id, *work = placed_contacts(
+        region, live, rotation, placed, scale, pair_of, points, sigma, tol = placed_starts(
+            np.asarray(bounds_a, np.float64), np.asarray(bounds_b, np.float64),
+            np.ascontiguousarray(offset, np.float64), cos, sin, float(margin), _starts(n_starts))
+        best, phi, data, _, _, *work = descend(
             paths.PAIR, True, 6, a.code, a.consts, a.depth, a.nesting, b.code, b.consts,
-            b.depth, b.nesting, np.asarray(bounds_a, np.float64),
-            np.asarray(bounds_b, np.float64), np.ascontiguousarray(offset, np.float64), cos, sin,
-            float(margin), _starts(n_starts), iterations, _MERGE, _SLIVER, descent.SHAPE_TOL,
-            _NO_TRIANGLE, _NO_OWNER, descent.NO_CORNERS, *descent.round_buffers())
+            b.depth, b.nesting, rotation, placed, pair_of, _NO_TRIANGLE, _NO_OWNER,
+            descent.NO_CORNERS, 0, False, False, points, sigma, iterations, tol,
+            descent.SHAPE_TOL, *descent.scratch(len(points)))
         descent.keep_round_buffers(*work)
-        return region, pair, point, depth, normal, start_id
+        pair, point, depth, normal, start_id = field_contacts(
+            a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth, b.nesting,
+            rotation, placed, pair_of, best, phi, data, scale, n_starts, float(margin),
+            iterations, _MERGE, _SLIVER)
+        return region, live[pair], point, depth, normal, start_id
     from .narrowphase import _overlap_region
 
     region = _overlap_region(bounds_a, bounds_b, angle, offset, margin)
