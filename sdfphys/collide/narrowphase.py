@@ -55,6 +55,7 @@ case is shallower and within its depth of it (shadowed, see ``reduce``).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 
 import numpy as np
@@ -67,7 +68,7 @@ from ..settings import Settings
 from ..shapes import Shape
 from ..vec2 import rotate
 from .contacts import Contacts
-from .mesh_contacts import mesh_in_field
+from .mesh_contacts import EDGE_START, VERTEX_START, mesh_in_field
 from .polygons import polygon_contacts, polygon_table
 
 __all__ = [
@@ -163,8 +164,8 @@ def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray
                         np.full(int(np.sum(keep)), feature_key(SOURCE_ANALYTIC, 0, 0), np.int64))
     if not concave:
         return contacts
-    row, out, s, element, start = _circle_outside_concave_mesh(shape_b.vertices,
-                                                               centre[outside], r, margin)
+    row, out, s, element, start = _circle_outside_concave_mesh(shape_b, centre[outside], r,
+                                                               margin)
     rows = np.flatnonzero(outside)[row]
     normal = rotate(out, pose_b[rows, 2])
     point = pose_a[rows, :2] - (0.5 * (s + r))[:, None] * normal
@@ -173,11 +174,23 @@ def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray
         feature_key(SOURCE_ANALYTIC, element, start))])
 
 
-def _circle_outside_concave_mesh(vertices: np.ndarray, centre: np.ndarray, radius: float,
+@functools.lru_cache(maxsize=64)
+def _outline(mesh: Shape) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A mesh's counter-clockwise outline (M, 2), its edges (M, 2) from vertex j to
+    j + 1, the edges into each vertex (M, 2) and whether each vertex is convex (M,):
+    the per-mesh part of ``_circle_outside_concave_mesh``, computed once per shape."""
+    vertices = mesh.vertices
+    edge = np.roll(vertices, -1, axis=0) - vertices
+    previous = np.roll(edge, 1, axis=0)
+    convex = previous[:, 0] * edge[:, 1] - previous[:, 1] * edge[:, 0] > 0.0
+    return vertices, edge, previous, convex
+
+
+def _circle_outside_concave_mesh(mesh: Shape, centre: np.ndarray, radius: float,
                                  margin: float) -> tuple[np.ndarray, ...]:
     """The outline features of a concave mesh a circle outside it may touch.
 
-    vertices: (M, 2) the counter-clockwise outline; centre: (K, 2) circle centres
+    mesh: its counter-clockwise outline ``vertices`` (M, 2); centre: (K, 2) circle centres
     outside it, in its frame; radius, margin: m. A circle in a concave mesh's notch
     touches two faces, but the field at the centre gives the nearest one only (the
     L's side face met a circle 1.9 cm deep a step after its bottom face was the
@@ -190,18 +203,14 @@ def _circle_outside_concave_mesh(vertices: np.ndarray, centre: np.ndarray, radiu
     centre (F, 2), distance s (F,), key element (F,): edge or vertex index, key start
     (F,): ``mesh_contacts.EDGE_START`` for an edge, ``VERTEX_START`` for a vertex).
     """
-    from .mesh_contacts import EDGE_START, VERTEX_START
-
+    vertices, edge, previous, convex = _outline(mesh)    # previous: the edge into vertex j
     m = len(vertices)
-    edge = np.roll(vertices, -1, axis=0) - vertices                      # (M, 2)
     rel = centre[:, None, :] - vertices[None, :, :]                      # (K, M, 2)
     along = np.sum(rel * edge[None], axis=2)                              # (K, M)
     t = along / np.sum(edge * edge, axis=1)[None, :]
     outer = rel[:, :, 0] * edge[None, :, 1] - rel[:, :, 1] * edge[None, :, 0]
     foot = rel - t[:, :, None] * edge[None]
     face = (t > 0.0) & (t < 1.0) & (outer > 0.0)
-    previous = np.roll(edge, 1, axis=0)                                   # edge into vertex j
-    convex = previous[:, 0] * edge[:, 1] - previous[:, 1] * edge[:, 0] > 0.0
     corner = (convex[None, :] & (along <= 0.0)
               & (np.sum(rel * previous[None], axis=2) >= 0.0))
     offset = np.where(face[:, :, None], foot, rel)
