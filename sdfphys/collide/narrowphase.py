@@ -104,6 +104,10 @@ def feature_key(source: int, element: np.ndarray | int, start: np.ndarray | int)
             | np.asarray(start, np.int64))
 
 
+#: The key of an analytic contact (source 0, element and start 0).
+_ANALYTIC_KEY = int(feature_key(SOURCE_ANALYTIC, 0, 0))
+
+
 def _to_local(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
     """World points (n, 2) into the body frames of poses (n, 3): R^T (p - x)."""
     return rotate(points - pose[:, :2], -pose[:, 2])
@@ -128,7 +132,7 @@ def collide_circles(circle_a: Shape, circle_b: Shape, body_a: np.ndarray, body_b
     point = pose_a[keep, :2] + offset[:, None] * normal
     n = len(depth)
     return Contacts(body_a[keep], body_b[keep], point, normal, depth,
-                    np.full(n, feature_key(SOURCE_ANALYTIC, 0, 0), np.int64))
+                    np.full(n, _ANALYTIC_KEY, np.int64))
 
 
 def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray,
@@ -161,7 +165,7 @@ def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray
     g_world = rotate(safe_normalize(g[keep]), pose_b[keep, 2])
     point = pose_a[keep, :2] - (0.5 * (d[keep] + r))[:, None] * g_world
     contacts = Contacts(body_a[keep], body_b[keep], point, -g_world, depth[keep],
-                        np.full(int(np.sum(keep)), feature_key(SOURCE_ANALYTIC, 0, 0), np.int64))
+                        np.full(len(point), _ANALYTIC_KEY, np.int64))
     if not concave:
         return contacts
     row, out, s, element, start = _circle_outside_concave_mesh(shape_b, centre[outside], r,

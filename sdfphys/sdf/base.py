@@ -61,6 +61,8 @@ def safe_normalize(v: np.ndarray, fallback: np.ndarray = FALLBACK_DIRECTION) -> 
     """Rows of ``v`` (N, 2) scaled to unit length; zero rows become ``fallback``."""
     n = np.hypot(v[:, 0], v[:, 1])
     ok = n > TINY
+    if ok.all() and v.dtype == np.float64:            # the common case, without masks
+        return v / n[:, None]
     out = np.empty_like(v)
     out[ok] = v[ok] / n[ok, None]
     out[~ok] = fallback
