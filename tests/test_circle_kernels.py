@@ -47,7 +47,7 @@ def random_scene(rng, n, mixed):
     specs = CIRCLES + (OTHERS[:-1] if mixed else [])
     order = rng.permutation(len(specs))
     # The half-plane leads: an sdf-sdf pair needs its unbounded shape first
-    # (narrowphase._overlap_region), so a scene lists its ground first.
+    # (_placed_fields.overlap_regions), so a scene lists its ground first.
     shapes = [shape_from_spec(OTHERS[-1])] * mixed + [shape_from_spec(specs[k]) for k in order]
     shapes.append(shapes[0])                       # the same Shape object twice
     weights = np.array([8.0 if s.kind == "circle" else 1.0 for s in shapes])

@@ -151,11 +151,11 @@ def test_mesh_in_field_kink_on_a_face_compiled_equals_numpy(monkeypatch):
     assert deepest > 0.0179
 
 
-def test_placed_field_contacts_in_one_call_equal_the_numpy_glue(monkeypatch):
+def test_placed_field_contacts_compiled_glue_equals_the_numpy_glue(monkeypatch):
     """``field_pairs.placed_field_contacts`` through its compiled glue (``_placed_fields``)
-    gives the regions of ``narrowphase._overlap_region`` and the contacts of
-    ``field_field_contacts`` over them, bit for bit: sdf-sdf placements (a bounded or a
-    half-plane), mesh fields placed in sdfs, pairs whose regions are empty among them."""
+    gives the contacts of the numpy glue (``field_field_contacts`` over the same
+    regions), bit for bit: sdf-sdf placements (a bounded or a half-plane), mesh fields
+    placed in sdfs, pairs whose regions are empty among them."""
     from sdfphys.collide import descent, field_pairs
 
     rng = np.random.default_rng(2026)
@@ -178,3 +178,28 @@ def test_placed_field_contacts_in_one_call_equal_the_numpy_glue(monkeypatch):
         contacts += len(got[1])
         empty += int(np.sum(np.any(got[0][:, 2:] < got[0][:, :2], axis=1)))
     assert contacts > 150 and empty > 5
+
+
+def test_overlap_regions_are_the_rotated_corners_extremes():
+    """``_placed_fields.overlap_regions``: b's box rotated and moved, its four corners'
+    extremes computed one by one (the same rounded operations, so the same bits),
+    clipped to a's bounds (finite or a half-plane's) and grown by the margin."""
+    from sdfphys.collide._placed_fields import overlap_regions
+
+    rng = np.random.default_rng(7)
+    for bounds_a in ([-1.0, -0.5, 2.0, 1.5], [-np.inf, -np.inf, np.inf, 0.0]):
+        bounds_a = np.array(bounds_a)
+        bounds_b = np.array([-0.4, -0.2, 0.6, 0.3])
+        offset = rng.uniform(-2.0, 2.0, (50, 2))
+        angle = rng.uniform(-4.0, 4.0, 50)
+        cos, sin = np.cos(angle), np.sin(angle)
+        got = overlap_regions(bounds_a, bounds_b, offset, cos, sin, 0.01)
+        for k in range(50):
+            xs = [(cos[k] * x - sin[k] * y) + offset[k, 0]
+                  for x in bounds_b[[0, 2]] for y in bounds_b[[1, 3]]]
+            ys = [(sin[k] * x + cos[k] * y) + offset[k, 1]
+                  for x in bounds_b[[0, 2]] for y in bounds_b[[1, 3]]]
+            expected = [max(min(xs), bounds_a[0]) - 0.01, max(min(ys), bounds_a[1]) - 0.01,
+                        min(max(xs), bounds_a[2]) + 0.01, min(max(ys), bounds_a[3]) + 0.01]
+            assert got[k].tolist() == expected
+        assert np.any(got[:, 2] < got[:, 0]) or np.any(got[:, 3] < got[:, 1])

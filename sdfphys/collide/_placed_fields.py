@@ -7,9 +7,9 @@ patch search after it (``_compiled_descent.field_contacts``). In numpy the glue 
 the descent (a few dozen small operations) cost as much as the kernels in a scene of
 a few bodies per shape pair (the showcase: about 200 us a group, most groups one
 pair). :func:`placed_starts` computes it in one call, with the operations of
-``narrowphase._overlap_region`` and ``field_pairs.field_field_contacts`` in the same
-order (the trigonometry stays with the caller: numpy's cos and sin, which the rest of
-the narrowphase uses), so the contacts are the same bits. The descent and the merges
+``field_pairs.field_field_contacts`` in the same order (the trigonometry stays with the
+caller: numpy's cos and sin, which the rest of the narrowphase uses), so the contacts
+are the same bits. The descent and the merges
 stay separate calls: a kernel calling them would link and compile their code again
 (about 4 s more at a cold start).
 """
@@ -23,15 +23,23 @@ import numpy as np
 from .._jit import njit
 from ..vec2 import TINY
 
-__all__ = ["placed_starts"]
+__all__ = ["overlap_regions", "placed_starts"]
 
 
 @njit(cache=True, error_model="numpy")
-def _regions(bounds_a: np.ndarray, bounds_b: np.ndarray, offset: np.ndarray, cos: np.ndarray,
+def overlap_regions(bounds_a: np.ndarray, bounds_b: np.ndarray, offset: np.ndarray, cos: np.ndarray,
              sin: np.ndarray, margin: float) -> np.ndarray:
-    """``narrowphase._overlap_region`` (n, 4) with the same operations: b's bounds
-    (4,) rotated by (cos, sin) (n,) and moved by offset (n, 2), intersected with a's
-    bounds (4,) (possibly infinite), grown by margin (m)."""
+    """(n, 4) boxes (xmin, ymin, xmax, ymax) in a's frame where a and b may overlap,
+    grown by ``margin`` (m): b's body-frame AABB bounds_b (4,), rotated by (cos, sin)
+    (n,) and moved by offset (n, 2) (b's placement in a's frame), is bounded by
+    interval arithmetic, as in the broadphase, and intersected with a's bounds_a (4,)
+    (possibly infinite: a half-plane; b is bounded, two unbounded shapes are both
+    static and never pair).
+
+    A rotated corner is x = (c x_b - s y_b) + o_x, y = (s x_b + c y_b) + o_y; each
+    rounded operation is monotone in its operands, so the extremes over the four
+    corners are those of the extreme products, taken per axis: the same bits as the
+    corners' extremes."""
     n = cos.shape[0]
     region = np.empty((n, 4))
     for k in range(n):
@@ -55,13 +63,13 @@ def placed_starts(bounds_a: np.ndarray, bounds_b: np.ndarray, offset: np.ndarray
     frame (numpy's); margin: m; unit (S, 2): the Halton starts in the unit square
     (``field_pairs._starts``).
 
-    Returns region (n, 4) (``narrowphase._overlap_region``), live (L,) the rows
+    Returns region (n, 4) (``overlap_regions``), live (L,) the rows
     whose region is not empty, and for them (``field_pairs.field_field_contacts``'
     operations): rotation (L, 2, 2), offset (L, 2), scale (L,) the regions'
     diagonals, and per start (L S): pair (L S,), point (L S, 2), first step scale
     sigma (L S,) and tolerance tol (L S,) (m).
     """
-    region = _regions(bounds_a, bounds_b, offset, cos, sin, margin)
+    region = overlap_regions(bounds_a, bounds_b, offset, cos, sin, margin)
     n, n_starts = cos.shape[0], unit.shape[0]
     live = np.empty(n, dtype=np.int64)
     n_live = 0

@@ -28,7 +28,7 @@ from ..vec2 import TINY
 from . import _descent_paths as paths
 from . import descent
 from ._compiled_descent import descend, field_contacts, patch_ends
-from ._placed_fields import placed_starts
+from ._placed_fields import overlap_regions, placed_starts
 
 __all__ = ["field_field_contacts", "field_field_contacts_single", "placed_field_contacts"]
 
@@ -343,17 +343,14 @@ def field_field_contacts(field_a: Field, field_b: Field, poses_b_in_a: np.ndarra
     unit = _starts(n_starts)
     starts = (lo[:, None, :] + extent[:, None, :] * unit[None, :, :]).reshape(-1, 2)
     scale_of = scale[pair_of]
-    best, phi, data, _ = descent._descend(problem, starts, iterations, 0.25 * scale_of,
-                                  1e-12 * scale_of)
     programs = problem.programs() if descent.USE_COMPILED else None
-    if programs is not None:                          # the rest compiled, same operations
-        a, b = programs
-        pair, point, depth, normal, start_id = field_contacts(
-            a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth, b.nesting,
-            np.ascontiguousarray(problem.rotation), np.ascontiguousarray(problem.offset),
-            pair_of, best, phi, data, scale, n_starts, float(margin), iterations, _MERGE,
-            _SLIVER)
+    if programs is not None:                          # compiled, the same operations
+        pair, point, depth, normal, start_id = _compiled_contacts(
+            programs, problem.rotation, problem.offset, pair_of, starts, 0.25 * scale_of,
+            1e-12 * scale_of, scale, n_starts, margin, iterations)
         return live[pair], point, depth, normal, start_id
+    best, phi, data, _ = descent._descend(problem, starts, iterations, 0.25 * scale_of,
+                                          1e-12 * scale_of)
     fa, fb, ga, gb = data[:, 0], data[:, 1], data[:, 2:4], data[:, 4:6]
     hit = phi < 0.5 * margin
     balanced = np.abs(fa - fb) <= 1e-9 * scale_of
@@ -403,35 +400,55 @@ def placed_field_contacts(field_a: Field, field_b: Field, offset: np.ndarray, an
     offset (n, 2), angle (n,): b's origin and angle in a's frame (m, rad); bounds_a,
     bounds_b (4,): the body-frame AABBs (a's may be infinite, b's finite); margin:
     m, the regions are grown by it and contacts with depth > -margin reported.
-    Returns the regions (n, 4) (``narrowphase._overlap_region``) and
+    Returns the regions (n, 4) (``_placed_fields.overlap_regions``) and
     ``field_field_contacts``' five results for those regions. When both fields
     compile, three compiled calls (``_placed_fields.placed_starts``, the descent,
     the merges) with the operations of the numpy glue, so the same bits.
     """
     cos, sin = np.cos(angle), np.sin(angle)
-    a, b = ((compile_field(field_a), compile_field(field_b))
-            if descent.USE_COMPILED and n_starts >= 1 else (None, None))
-    if a is not None and b is not None:
-        region, live, rotation, placed, scale, pair_of, points, sigma, tol = placed_starts(
-            np.asarray(bounds_a, np.float64), np.asarray(bounds_b, np.float64),
-            np.ascontiguousarray(offset, np.float64), cos, sin, float(margin), _starts(n_starts))
-        best, phi, data, _, _, *work = descend(
-            paths.PAIR, True, 6, a.code, a.consts, a.depth, a.nesting, b.code, b.consts,
-            b.depth, b.nesting, rotation, placed, pair_of, _NO_TRIANGLE, _NO_OWNER,
-            descent.NO_CORNERS, 0, False, False, points, sigma, iterations, tol,
-            descent.SHAPE_TOL, *descent.scratch(len(points)))
-        descent.keep_round_buffers(*work)
-        pair, point, depth, normal, start_id = field_contacts(
-            a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth, b.nesting,
-            rotation, placed, pair_of, best, phi, data, scale, n_starts, float(margin),
-            iterations, _MERGE, _SLIVER)
-        return region, live[pair], point, depth, normal, start_id
-    from .narrowphase import _overlap_region
+    bounds_a, bounds_b = np.asarray(bounds_a, np.float64), np.asarray(bounds_b, np.float64)
+    offset = np.ascontiguousarray(offset, np.float64)
+    programs = ((compile_field(field_a), compile_field(field_b))
+                if descent.USE_COMPILED and n_starts >= 1 else (None, None))
+    if programs[0] is None or programs[1] is None:
+        region = overlap_regions(bounds_a, bounds_b, offset, cos, sin, float(margin))
+        return (region, *field_field_contacts(field_a, field_b,
+                                              np.column_stack([offset, angle]), region,
+                                              n_starts=n_starts, iterations=iterations,
+                                              margin=margin))
+    region, live, rotation, placed, scale, pair_of, points, sigma, tol = placed_starts(
+        bounds_a, bounds_b, offset, cos, sin, float(margin), _starts(n_starts))
+    pair, point, depth, normal, start_id = _compiled_contacts(
+        programs, rotation, placed, pair_of, points, sigma, tol, scale, n_starts, margin,
+        iterations)
+    return region, live[pair], point, depth, normal, start_id
 
-    region = _overlap_region(bounds_a, bounds_b, angle, offset, margin)
-    return (region, *field_field_contacts(field_a, field_b, np.column_stack([offset, angle]),
-                                          region, n_starts=n_starts, iterations=iterations,
-                                          margin=margin))
+
+def _compiled_contacts(programs: tuple[Program, Program], rotation: np.ndarray,
+                       offset: np.ndarray, pair_of: np.ndarray, starts: np.ndarray,
+                       sigma: np.ndarray, tol: np.ndarray, scale: np.ndarray, n_starts: int,
+                       margin: float, iterations: int
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``field_field_contacts`` from its starts on, compiled: the descent
+    (``_compiled_descent.descend``), then the merges and the patch search
+    (``field_contacts``). programs: the two fields'; rotation (L, 2, 2), offset (L, 2):
+    b's placements; pair_of (S,), starts (S, 2), sigma, tol (S,): the starts, their
+    pairs, first step scales and tolerances (m); scale (L,): the regions' diagonals.
+    Returns pair (K,) into the L placements, point (K, 2), depth (K,), normal (K, 2),
+    start id (K,)."""
+    a, b = programs
+    c = np.ascontiguousarray
+    rotation, offset = c(rotation), c(offset)
+    best, phi, data, _, _, *work = descend(
+        paths.PAIR, True, 6, a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
+        b.nesting, rotation, offset, pair_of, _NO_TRIANGLE, _NO_OWNER, descent.NO_CORNERS, 0,
+        False, False, c(starts, dtype=np.float64), c(sigma, dtype=np.float64),
+        iterations, np.array(tol, dtype=np.float64), descent.SHAPE_TOL,
+        *descent.scratch(len(starts)))
+    descent.keep_round_buffers(*work)
+    return field_contacts(a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
+                          b.nesting, rotation, offset, pair_of, best, phi, data, scale,
+                          n_starts, float(margin), iterations, _MERGE, _SLIVER)
 
 
 def _no_contacts() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -365,7 +365,7 @@ def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.nda
     pose_mesh, pose_sdf: (n, 3) centre-of-mass poses (x, y, angle), world (m, rad).
     margin: m, contacts with depth > -margin are returned. The search runs over the
     overlap of the two bounds in the SDF's body frame, grown by the margin
-    (``narrowphase._overlap_region``). Field-field starts and
+    (``_placed_fields.overlap_regions``). Field-field starts and
     iterations: ``settings.field_descent_starts`` / ``field_descent_iterations``.
     Returns pair index (C,), midway point (C, 2) world, normal (C, 2) world (unit,
     outward of the mesh: from the mesh toward the sdf body), depth (C,) m, the mesh

@@ -308,34 +308,6 @@ def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b
     return Contacts.concatenate([forward, reverse])
 
 
-def _overlap_region(bounds_a: np.ndarray, bounds_b: np.ndarray, angle: np.ndarray,
-                    offset: np.ndarray, margin: float) -> np.ndarray:
-    """(n, 4) boxes in a's frame where a and b may overlap, grown by ``margin``.
-
-    bounds_a, bounds_b: (4,) body-frame AABBs (a's may be infinite: a half-plane);
-    b is placed in a's frame by (angle (n,), offset (n, 2)). b's box is rotated by
-    interval arithmetic, as in the broadphase, and intersected with a's. b is
-    bounded: two unbounded shapes are both static and never pair.
-
-    A rotated corner is x = (c x_b - s y_b) + o_x, y = (s x_b + c y_b) + o_y; each
-    rounded operation is monotone in its operands, so the extremes over the four
-    corners are those of the extreme products, taken per axis.
-    """
-    c, s = np.cos(angle), np.sin(angle)
-    cx0, cx1, sx0, sx1 = c * bounds_b[0], c * bounds_b[2], s * bounds_b[0], s * bounds_b[2]
-    cy0, cy1, sy0, sy1 = c * bounds_b[1], c * bounds_b[3], s * bounds_b[1], s * bounds_b[3]
-    region = np.empty((len(angle), 4))
-    region[:, 0] = np.maximum((np.minimum(cx0, cx1) - np.maximum(sy0, sy1)) + offset[:, 0],
-                              bounds_a[0]) - margin
-    region[:, 1] = np.maximum((np.minimum(sx0, sx1) + np.minimum(cy0, cy1)) + offset[:, 1],
-                              bounds_a[1]) - margin
-    region[:, 2] = np.minimum((np.maximum(cx0, cx1) - np.minimum(sy0, sy1)) + offset[:, 0],
-                              bounds_a[2]) + margin
-    region[:, 3] = np.minimum((np.maximum(sx0, sx1) + np.maximum(cy0, cy1)) + offset[:, 1],
-                              bounds_a[3]) + margin
-    return region
-
-
 def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
                  pose_a: np.ndarray, pose_b: np.ndarray, margin: float,
                  settings: Settings) -> Contacts:
