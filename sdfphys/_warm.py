@@ -5,7 +5,7 @@ serial: the collision kernels (stage 1, most of it for fields: the descents) and
 the solver's (stages 2-6, most of it for a scene of boxes). On a machine with two cores
 or more, the first step of the first world of a process whose solver kernels are not yet
 in the on-disk cache forks a child (``start``): it runs the stages after the contact
-rows' preparation on no contacts, last stage first (``World._compile_ahead``), which
+rows' preparation on no contacts, last stage first (``world_stages.compile_ahead``), which
 compiles the same kernels with the same argument types into the same cache, and exits.
 The parent goes on with the collisions and the preparation, then waits for the child
 (``join``, at most JOIN_SECONDS) and loads the rest instead of compiling it (numba
@@ -79,7 +79,9 @@ def start(world: Any) -> int | None:
                 os.dup2(null, fd)
             os.closerange(3, 1 << 16)
             os.environ["SDFPHYS_COMPILE_NOTICE"] = "0"
-            world._compile_ahead()
+            from .world_stages import compile_ahead
+
+            compile_ahead(world)
         finally:
             os._exit(0)
     _done.clear()

@@ -131,12 +131,13 @@ class Scene:
     def build(self):
         """A fresh World with every body added in scene order."""
         from .world import World
+        from .world_bodies import add
 
         world = World(gravity=self.gravity, settings=self.settings)
         for b in self.bodies:
             values = BodyValues(*b[2:11], 0.0, 0.0, *b[11:])
             try:     # an SDF shape integrates its mass properties on first use, here
-                world._add(b.shape, values, b.name)     # values checked by _parse_body
+                add(world, b.shape, values, b.name)     # values checked by _parse_body
             except SpecError as err:
                 raise err.in_file(self.source) from None
         if self.joints:

@@ -47,6 +47,7 @@ from .sdf.build import suggest
 from .sdf.edit import edit_grid, write_window
 from .sdf.grid import GridField
 from .shapes import SdfShape, Shape
+from .world_bodies import shape_number
 
 __all__ = ["MARGIN_CELLS", "Edit", "TerrainShape", "apply_due", "edit", "schedule",
            "user_field"]
@@ -165,7 +166,7 @@ def _terrain(world: Any, i: int, path: str) -> TerrainShape:
         grid = GridField.from_values(baked.values, baked.origin, cell, baked.margin)
     terrain = TerrainShape(grid, shape.origin)
     d = world._data
-    d["shape_id"][i] = world._shape_number(terrain)
+    d["shape_id"][i] = shape_number(world, terrain)
     d["radius"][i] = terrain.radius
     return terrain
 

@@ -62,7 +62,6 @@ from .world_bodies import (
     check_index,
     read_only,
     rotate_one,
-    shape_number,
 )
 from .world_stages import PAIR_STAGES, STAGES
 
@@ -112,14 +111,9 @@ class World(WorldJoints):
         self._blasts: list[Blast] = []  # ``explode_at``, by time
         self._scheduled: list[terrain.Edit] = []    # ``terrain.schedule``: [[carve]]
 
-    # Helpers of the modules beside this one, as methods: other modules and tests call
-    # them on a world (``Scene.build``, ``terrain``, ``joints``, ``_warm``).
-    _add = add
-    _shape_number = shape_number
+    # Waking the bodies resting on one, as a method: ``joints.WorldJoints`` (a base of
+    # this class) and ``terrain`` call it on a world.
     _wake_touching = world_sleep.wake_touching
-    _pair_filter = stage.pair_filter
-    _body_state = stage.body_state
-    _compile_ahead = stage.compile_ahead
 
     # ----------------------------------------------------------------------------------
     # Bodies
@@ -184,7 +178,7 @@ class World(WorldJoints):
             raise SpecError("name", f"must be a non-empty string, got {name!r}")
         if kind == "dynamic" and not math.isfinite(shape.radius):
             raise SpecError("shape", "an unbounded shape can only be static")
-        i = self._add(shape, values, name)      # may grow the arrays: index them after
+        i = add(self, shape, values, name)      # may grow the arrays: index them after
         return Body(self, int(self._data["uid"][i]))
 
     def body(self, name: str) -> Body:

@@ -246,7 +246,7 @@ def shape_row(world: World, shape: Shape) -> tuple:
 
 def shape_number(world: World, shape: Shape) -> int:
     """``shape``'s index in ``world._shapes``, appended at its first use (``World.shapes``;
-    ``terrain`` numbers an edited body's new shape here, as ``World._shape_number``)."""
+    ``terrain`` numbers an edited body's new shape here)."""
     number = world._shape_index.get(id(shape))
     if number is None:
         number = len(world._shapes)

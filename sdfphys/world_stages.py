@@ -220,7 +220,7 @@ def record(world: World, rows: WorldContacts, relative_velocity: np.ndarray) -> 
 
 def compile_ahead(world: World) -> None:
     """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
-    the kernels' sake (``World._compile_ahead``): the stages after the preparation of
+    the kernels' sake (``compile_ahead``): the stages after the preparation of
     the contact rows, which the parent compiles itself after the collisions, once on no
     contacts, last stage first."""
     bodies = body_state(world)

@@ -8,6 +8,7 @@ import pytest
 import sdfphys
 from sdfphys.solver import joint_direct as direct
 from sdfphys.solver.joints import RELAX, SOLVE, Output, stiffened_softness
+from sdfphys.world_stages import body_state
 
 
 def chain_world(links: int = 5, pinned_end: bool = False, chains: int = 1):
@@ -55,7 +56,7 @@ def test_one_direct_pass_is_the_dense_solution_of_the_soft_and_the_rigid_system(
     """(A + G) d_l = -(J v + b C) - G l solved by numpy equals the envelope Cholesky's
     impulses, and the velocities after it satisfy the rows' equations exactly."""
     world = chain_world()
-    bodies = world._body_state()
+    bodies = body_state(world)
     rows = world._joints.rows
     soft, _ = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows, world.settings,
                                  world._gravity, 4.0)
@@ -92,12 +93,12 @@ def test_islands_split_at_the_world_and_redundant_rigid_rows_fall_back():
     pivot fails and the island goes back to Gauss-Seidel (mask cleared), and back to the
     direct solve at the next soft phase."""
     world = chain_world(links=3, chains=2)
-    bodies, rows = world._body_state(), world._joints.rows
+    bodies, rows = body_state(world), world._joints.rows
     p = direct.plan(rows, bodies.inv_mass, bodies.inv_inertia)
     assert np.diff(p.start).tolist() == [6, 6]
 
     world = chain_world(links=1, pinned_end=True)
-    bodies, rows = world._body_state(), world._joints.rows
+    bodies, rows = body_state(world), world._joints.rows
     soft, _ = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows, world.settings,
                                  world._gravity, 4.0)
     p = direct.plan(rows, bodies.inv_mass, bodies.inv_inertia)

@@ -21,6 +21,7 @@ from sdfphys.errors import SpecError
 from sdfphys.limits import MAX_BITS
 from sdfphys.scene import read_scene
 from sdfphys.world import World
+from sdfphys.world_stages import pair_filter
 
 G = 9.81
 BALL = {"type": "circle", "radius": 0.5}
@@ -166,12 +167,12 @@ def test_scene_keys_reach_the_world():
         {"shape": BALL, "category": 6, "mask": 9, "group": -2, "gravity_scale": 0.0},
         {"shape": BALL, "position": [3, 0], "sensor": True, "static": True}]}
     world = read_scene(scene).build()
-    f = world._pair_filter()
+    f = pair_filter(world)
     assert (f.category.tolist(), f.mask.tolist(), f.group.tolist(), f.sensor.tolist()) == (
         [6, 1], [9, MAX_BITS], [-2, 0], [False, True])
     world.step()
     assert world.velocity[0].tolist() == [0.0, 0.0]        # gravity_scale 0
-    assert World()._pair_filter() is None
+    assert pair_filter(World()) is None
 
 
 # --------------------------------------------------------------------------------------
