@@ -389,8 +389,8 @@ def _point_starts(cand_i: np.ndarray, flags: np.ndarray, proposing: np.ndarray, 
     return start
 
 
-def _descend(problem: _TriangleProblem | field_pairs._PairProblem, points: np.ndarray, iterations: int,
-             sigma: np.ndarray, tol: float | np.ndarray
+def _descend(problem: _TriangleProblem | field_pairs._PairProblem, points: np.ndarray,
+             iterations: int, sigma: np.ndarray, tol: float | np.ndarray
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Minimise the problem's objective from each start (P, 2) (see the module docstring).
 
@@ -470,28 +470,47 @@ def _descend_compiled(problem: _TriangleProblem | field_pairs._PairProblem,
     """``_descend`` in one compiled call (``_compiled_descent.descend``): the same
     arguments (tol: (P,) float64, writable, as the kernel is compiled for) and results,
     the problem's fields given by their ``programs`` (a, b)."""
-    n_points = len(points)
+    if problem.kind == paths.PAIR:
+        return descend_pairs(programs, problem.rotation, problem.offset, problem.pair_of,
+                             points, sigma, tol, iterations)
     a, b = programs
-    pair = problem.kind == paths.PAIR
     best, phi, data, rounds, _, cand, cand_i, candidates = descend(
-        problem.kind, problem.barzilai_borwein, 6 if pair else 2,
-        a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth, b.nesting,
-        np.ascontiguousarray(problem.rotation) if pair else _NO_ROTATION,
-        np.ascontiguousarray(problem.offset) if pair else _NO_OFFSET,
-        problem.pair_of if pair else problem.owner, problem.triangles, problem.owner,
-        problem.at_vertex if not pair else NO_CORNERS, problem.n_start if not pair else 0,
-        not pair and problem.spanning, not pair and problem.convex, points,
-        np.ascontiguousarray(sigma, dtype=np.float64), iterations,
-        tol, SHAPE_TOL,
-        *scratch(n_points))
+        problem.kind, problem.barzilai_borwein, 2, a.code, a.consts, a.depth, a.nesting,
+        b.code, b.consts, b.depth, b.nesting, _NO_ROTATION, _NO_OFFSET, problem.owner,
+        problem.triangles, problem.owner, problem.at_vertex, problem.n_start,
+        problem.spanning, problem.convex, points, np.ascontiguousarray(sigma, dtype=np.float64),
+        iterations, tol, SHAPE_TOL, *scratch(len(points)))
+    keep_round_buffers(cand, cand_i, candidates)
+    return best, phi, data, rounds
+
+
+def descend_pairs(programs: tuple[Program, Program], rotation: np.ndarray, offset: np.ndarray,
+                  pair_of: np.ndarray, points: np.ndarray, sigma: np.ndarray, tol: np.ndarray,
+                  iterations: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The compiled descent of a pair problem (``field_pairs._PairProblem``: fields a and b
+    given by their ``programs``, b placed by rotation (L, 2, 2) and offset (L, 2), start i
+    of pair pair_of[i]) from points (P, 2), first step scales sigma (P,), tolerances tol
+    (P,) float64 (m, writable); ``_descend``'s results: best (P, 2), phi (P,), data (P, 6),
+    rounds (P,)."""
+    a, b = programs
+    best, phi, data, rounds, _, cand, cand_i, candidates = descend(
+        paths.PAIR, True, 6, a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
+        b.nesting, np.ascontiguousarray(rotation), np.ascontiguousarray(offset), pair_of,
+        NO_TRIANGLE, NO_OWNER, NO_CORNERS, 0, False, False,
+        np.ascontiguousarray(points, dtype=np.float64),
+        np.ascontiguousarray(sigma, dtype=np.float64), iterations, tol, SHAPE_TOL,
+        *scratch(len(points)))
     keep_round_buffers(cand, cand_i, candidates)
     return best, phi, data, rounds
 
 
 # Placeholders of the arguments a triangle problem does not use (placements of b,
-# (1, 2, 2) and (1, 2)) and of a pair problem's vertex starts (1, 3).
+# (1, 2, 2) and (1, 2)) and of those a pair problem does not use (its triangle
+# (1, 3, 2), owners (0,) and vertex starts (1, 3)); read only.
 _NO_ROTATION = np.zeros((1, 2, 2))
 _NO_OFFSET = np.zeros((1, 2))
+NO_TRIANGLE = np.zeros((1, 3, 2))
+NO_OWNER = np.zeros(0, dtype=np.int64)
 NO_CORNERS = np.zeros((1, 3), dtype=np.int64)
 
 
@@ -506,7 +525,8 @@ def _triangle_minima(field: Field, triangles: np.ndarray, iterations: int,
     if n_tri == 0:
         return np.zeros((0, n_start, 2)), np.zeros((0, n_start)), np.zeros((0, n_start), int)
     tri = np.ascontiguousarray(tri)
-    points, owner, sigma, at_vertex = start_kernels.triangle_starts(tri, np.ascontiguousarray(weights))
+    points, owner, sigma, at_vertex = start_kernels.triangle_starts(
+        tri, np.ascontiguousarray(weights))
     problem = _TriangleProblem(field, tri, owner, at_vertex, n_start, _spanning(weights))
     best, value, _, rounds = _descend(problem, points, iterations, sigma, tol)
     return (best.reshape(n_tri, n_start, 2), value.reshape(n_tri, n_start),

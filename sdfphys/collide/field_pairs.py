@@ -27,7 +27,7 @@ from ..sdf.compiled import Program, compile_field
 from ..vec2 import TINY
 from . import _descent_paths as paths
 from . import descent
-from ._compiled_descent import descend, field_contacts, patch_ends
+from ._compiled_descent import field_contacts, patch_ends
 from ._placed_fields import overlap_regions, placed_starts
 
 __all__ = ["field_field_contacts", "field_field_contacts_single", "placed_field_contacts"]
@@ -81,8 +81,8 @@ class _PairProblem:
         self.field_a, self.field_b = field_a, field_b
         self.rotation, self.offset = rotation, offset
         self.pair_of = pair_of
-        self.triangles = _NO_TRIANGLE                  # no triangle: paths are not projected
-        self.owner = _NO_OWNER
+        self.triangles = descent.NO_TRIANGLE           # no triangle: paths are not projected
+        self.owner = descent.NO_OWNER
 
     @cached_property
     def inverse(self) -> np.ndarray:
@@ -119,10 +119,6 @@ class _PairProblem:
         """(N,) >= 0 at data (N, 6): zero at a balanced minimum (see the kernels)."""
         return paths.stationarity(paths.PAIR, data)
 
-
-#: A pair problem's triangle and owner arguments (read only: no triangle, no owner).
-_NO_TRIANGLE = np.zeros((1, 3, 2))
-_NO_OWNER = np.zeros(0, dtype=np.int64)
 
 _STARTS: dict[int, np.ndarray] = {}
 
@@ -430,22 +426,17 @@ def _compiled_contacts(programs: tuple[Program, Program], rotation: np.ndarray,
                        margin: float, iterations: int
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``field_field_contacts`` from its starts on, compiled: the descent
-    (``_compiled_descent.descend``), then the merges and the patch search
+    (``descent.descend_pairs``), then the merges and the patch search
     (``field_contacts``). programs: the two fields'; rotation (L, 2, 2), offset (L, 2):
     b's placements; pair_of (S,), starts (S, 2), sigma, tol (S,): the starts, their
     pairs, first step scales and tolerances (m); scale (L,): the regions' diagonals.
     Returns pair (K,) into the L placements, point (K, 2), depth (K,), normal (K, 2),
     start id (K,)."""
+    best, phi, data, _ = descent.descend_pairs(programs, rotation, offset, pair_of, starts,
+                                               sigma, np.array(tol, dtype=np.float64),
+                                               iterations)
     a, b = programs
-    c = np.ascontiguousarray
-    rotation, offset = c(rotation), c(offset)
-    best, phi, data, _, _, *work = descend(
-        paths.PAIR, True, 6, a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
-        b.nesting, rotation, offset, pair_of, _NO_TRIANGLE, _NO_OWNER, descent.NO_CORNERS, 0,
-        False, False, c(starts, dtype=np.float64), c(sigma, dtype=np.float64),
-        iterations, np.array(tol, dtype=np.float64), descent.SHAPE_TOL,
-        *descent.scratch(len(starts)))
-    descent.keep_round_buffers(*work)
+    rotation, offset = np.ascontiguousarray(rotation), np.ascontiguousarray(offset)
     return field_contacts(a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
                           b.nesting, rotation, offset, pair_of, best, phi, data, scale,
                           n_starts, float(margin), iterations, _MERGE, _SLIVER)
