@@ -216,9 +216,29 @@ def _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb):
 
 
 @njit(cache=True)
-def _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby):
-    """(dvx, dvy) = v_b + w_b x rb - v_a - w_a x ra: b's point against a's, m/s."""
-    return vbx - wb * rby - vax + wa * ray, vby + wb * rbx - vay - wa * rax
+def _cross(rx, ry, nx, ny):
+    """r x n = rx ny - ry nx (2D cross product, scalar)."""
+    return rx * ny - ry * nx
+
+
+@njit(cache=True)
+def _along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb):
+    """n.(v_b + w_b x r_b - v_a - w_a x r_a), m/s: b's point against a's along n, with
+    rna = r_a x n and rnb = r_b x n (``_cross``; n.(w x r) = w (r x n)).
+
+    Written as a sum of independent products: a Gauss-Seidel sweep is one chain of
+    dependent row updates, and this form is about half as long a chain as the point
+    velocities' components dotted with n (the sweep ran 2x faster, 210-box pyramid)."""
+    return ((vbx - vax) * nx + (vby - vay) * ny) + (wb * rnb - wa * rna)
+
+
+@njit(cache=True)
+def _apply(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib, nx, ny, rna, rnb, impulse):
+    """The pair's velocities after ``impulse`` (N s) along n on b and its opposite on a
+    (ma, mb inverse masses; ia, ib inverse inertias; rna, rnb as in ``_along``:
+    r x (impulse n) = impulse (r x n))."""
+    return (vax - (ma * nx) * impulse, vay - (ma * ny) * impulse, wa - (ia * rna) * impulse,
+            vbx + (mb * nx) * impulse, vby + (mb * ny) * impulse, wb + (ib * rnb) * impulse)
 
 
 @njit(cache=True)
@@ -312,24 +332,23 @@ def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_
 
 @njit(cache=True)
 def _pseudo_push(pseudo_velocity, pseudo_angular, pseudo_impulse, k, a, b, ma, ia, mb, ib,
-                 nx, ny, rax, ray, rbx, rby, normal_mass, bias):
+                 nx, ny, rna, rnb, normal_mass, bias):
     """Split row k: the impulse that makes the pair's pseudo-velocities separate at -bias
     (m/s, bias <= 0) along n, accumulated >= 0 in pseudo_impulse[k], applied to the
     pseudo-velocities (rigid: the pseudo-velocities start from 0 every substep)."""
     qax, qay, qa, qbx, qby, qb = _load(pseudo_velocity, pseudo_angular, a, b)
-    dvx, dvy = _point_velocity(qax, qay, qa, qbx, qby, qb, rax, ray, rbx, rby)
-    impulse = -normal_mass * (dvx * nx + dvy * ny + bias)
-    accumulated = max(pseudo_impulse[k] + impulse, 0.0)
+    vn = _along(qax, qay, qa, qbx, qby, qb, nx, ny, rna, rnb)
+    accumulated = max(pseudo_impulse[k] - normal_mass * (vn + bias), 0.0)
     impulse = accumulated - pseudo_impulse[k]
     pseudo_impulse[k] = accumulated
-    qax, qay, qa, qbx, qby, qb = _push(qax, qay, qa, qbx, qby, qb, ma, ia, mb, ib, rax, ray,
-                                       rbx, rby, impulse * nx, impulse * ny)
+    qax, qay, qa, qbx, qby, qb = _apply(qax, qay, qa, qbx, qby, qb, ma, ia, mb, ib, nx, ny,
+                                        rna, rnb, impulse)
     _store(pseudo_velocity, pseudo_angular, a, b, qax, qay, qa, qbx, qby, qb)
 
 
 @njit(cache=True)
-def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, split_rate,
-           use_bias, use_friction):
+def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_depth,
+           split_rate, use_bias, use_friction):
     """One Gauss-Seidel pass over the pairs ``pairs`` (indices into pair_start, in order):
     normal rows of the pair, then its friction rows.
 
@@ -349,8 +368,9 @@ def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, split_r
     bias_rate s, split_rate (s + soft_depth) / h), -(max_push_out - max(vn, 0))), vn the
     row's relative normal velocity after its rigid impulse ("Split push-out").
 
-    Returns (largest |d_l_n|, largest accumulated l_n) over the pass, N s: how far the
-    pass was from converged (``_sweeps``' extra passes stop on their ratio).
+    Returns (largest |d_l_n|, largest accumulated l_n) over the pass's pairs p with
+    ``measured[p]`` (the loaded islands' pairs), N s: how far the pass was from converged
+    (``_sweeps``' extra passes stop on their ratio).
     """
     velocity, angular_velocity, inv_mass, inv_inertia = bodies
     (body_a, body_b, pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
@@ -376,10 +396,8 @@ def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, split_r
             bias = 0.0
             m_scale = 1.0
             i_scale = 0.0
-            rax = anchor_a[k, 0]
-            ray = anchor_a[k, 1]
-            rbx = anchor_b[k, 0]
-            rby = anchor_b[k, 1]
+            rna = _cross(anchor_a[k, 0], anchor_a[k, 1], nx, ny)
+            rnb = _cross(anchor_b[k, 0], anchor_b[k, 1], nx, ny)
             split = False
             if s > 0.0:
                 bias = s * inv_h
@@ -389,29 +407,29 @@ def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, split_r
                 bias = max(mass_scale[k] * bias_rate[k] * s, -max_push_out)
                 m_scale = mass_scale[k]
                 i_scale = impulse_scale[k]
-            dvx, dvy = _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby)
-            vn = dvx * nx + dvy * ny
-            impulse = -normal_mass[k] * (m_scale * vn + bias) - i_scale * normal_impulse[k]
-            accumulated = max(normal_impulse[k] + impulse, 0.0)
-            impulse = accumulated - normal_impulse[k]
+            # d_l = -m_n (m_scale vn + bias) - i_scale l, grouped so that only the product
+            # with vn waits on the sweep's velocities (``_along``).
+            m_n = normal_mass[k]
+            old = normal_impulse[k]
+            vn = _along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb)
+            accumulated = max((old - m_n * bias - i_scale * old) - (m_n * m_scale) * vn, 0.0)
+            impulse = accumulated - old
             normal_impulse[k] = accumulated
             total_normal_impulse[k] += impulse
-            largest_change = max(largest_change, abs(impulse))
-            largest_impulse = max(largest_impulse, accumulated)
-            px = impulse * nx
-            py = impulse * ny
-            vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
-                                               rax, ray, rbx, rby, px, py)
+            if measured[p]:
+                largest_change = max(largest_change, abs(impulse))
+                largest_impulse = max(largest_impulse, accumulated)
+            vax, vay, wa, vbx, vby, wb = _apply(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
+                                                nx, ny, rna, rnb, impulse)
             if split:
                 # The push-out's cap counts the pair's own separating speed (vn >= 0 after
                 # the rigid row): together they stay within max_push_out.
-                dvx, dvy = _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby)
-                cap = max(max_push_out - max(dvx * nx + dvy * ny, 0.0), 0.0)
+                vn = _along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb)
+                cap = max(max_push_out - max(vn, 0.0), 0.0)
                 push = min(mass_scale[k] * bias_rate[k] * s,
                            split_rate * inv_h * (s + soft_depth))
                 _pseudo_push(pseudo_velocity, pseudo_angular, pseudo_impulse, k, a, b, ma, ia,
-                             mb, ib, nx, ny, rax, ray, rbx, rby, normal_mass[k],
-                             max(push, -cap))
+                             mb, ib, nx, ny, rna, rnb, normal_mass[k], max(push, -cap))
         if use_friction:
             for k in range(first, last):
                 mu = friction[k]
@@ -419,20 +437,16 @@ def _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out, soft_depth, split_r
                     continue
                 tx = normal[k, 1]
                 ty = -normal[k, 0]
-                rax = anchor_a[k, 0]
-                ray = anchor_a[k, 1]
-                rbx = anchor_b[k, 0]
-                rby = anchor_b[k, 1]
-                dvx, dvy = _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby)
-                vt = dvx * tx + dvy * ty
+                rta = _cross(anchor_a[k, 0], anchor_a[k, 1], tx, ty)
+                rtb = _cross(anchor_b[k, 0], anchor_b[k, 1], tx, ty)
+                old = tangent_impulse[k]
                 limit = mu * normal_impulse[k]
-                accumulated = min(max(tangent_impulse[k] - tangent_mass[k] * vt, -limit), limit)
-                impulse = accumulated - tangent_impulse[k]
+                vt = _along(vax, vay, wa, vbx, vby, wb, tx, ty, rta, rtb)
+                accumulated = min(max(old - tangent_mass[k] * vt, -limit), limit)
+                impulse = accumulated - old
                 tangent_impulse[k] = accumulated
-                px = impulse * tx
-                py = impulse * ty
-                vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
-                                                   rax, ray, rbx, rby, px, py)
+                vax, vay, wa, vbx, vby, wb = _apply(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
+                                                    tx, ty, rta, rtb, impulse)
         _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
     return largest_change, largest_impulse
 
@@ -443,9 +457,11 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_d
     """One phase of a substep: ``passes`` ``_solve`` passes over every pair, then, if any
     ran, up to ``extra_passes`` more over the loaded islands' pairs, stopping after a
     pass whose largest normal impulse change is at most CONVERGED times the largest
-    accumulated normal impulse. loaded: (every loaded pair, the small islands' ones);
-    islands at rest over the small limit take part in the first ``rest_passes`` extra
-    passes only. Returns the number of extra passes run.
+    accumulated normal impulse, measured over the loaded pairs; none when the last of
+    the ``passes`` already meets it (without joints: their passes converge apart).
+    loaded: (every loaded pair, the small islands' ones, (P,) bool: whether pair p is
+    loaded); islands at rest over the small limit take part in the first
+    ``rest_passes`` extra passes only. Returns the number of extra passes run.
 
     joints: None, or (joint bodies, joint rows, Output) (``_substeps_kernel``): with
     joints, each extra pass is followed by one pass over the joints, and convergence
@@ -453,17 +469,21 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_d
     bridge of planks 25 times lighter opened its joints by 19 cm). None is a type, not
     a value, to numba: a scene without joints compiles no joint code.
     """
-    loaded_pairs, small_pairs = loaded
+    loaded_pairs, small_pairs, measured = loaded
+    change = 0.0
+    impulse = 0.0
     for _ in range(passes):
-        _solve(bodies, rows, pseudo, all_pairs, inv_h, max_push_out, soft_depth, split_rate,
-               use_bias, use_friction)
+        change, impulse = _solve(bodies, rows, pseudo, all_pairs, measured, inv_h,
+                                 max_push_out, soft_depth, split_rate, use_bias, use_friction)
     if passes == 0 or loaded_pairs.shape[0] == 0:
+        return 0
+    if joints is None and change <= CONVERGED * impulse:
         return 0
     for n in range(extra_passes):
         pairs = loaded_pairs if n < rest_passes else small_pairs
         if pairs.shape[0] == 0:
             return n
-        change, impulse = _solve(bodies, rows, pseudo, pairs, inv_h, max_push_out,
+        change, impulse = _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out,
                                  soft_depth, split_rate, use_bias, use_friction)
         joints_converged = True
         if joints is not None:
@@ -611,11 +631,13 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     moving = v[:, 0] ** 2 + v[:, 1] ** 2 + spin * spin > REST_SPEED ** 2
     bias_rate, mass_scale, impulse_scale, loaded_pairs, small = row_softness(
         bodies.inv_mass, c, gravity, settings, moving)
+    measured = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
+    measured[loaded_pairs] = True
     start_tangent = c.tangent_impulse.copy()
     passes, push_outs = _substeps_kernel(
         bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
         bodies.inv_inertia, bodies.linear_damping, bodies.angular_damping, bodies.round_body,
-        gravity, c.body_a, c.body_b, c.pair_start, (loaded_pairs, loaded_pairs[small]),
+        gravity, c.body_a, c.body_b, c.pair_start, (loaded_pairs, loaded_pairs[small], measured),
         c.normal,
         c.anchor_a0, c.anchor_b0, c.anchor_a, c.anchor_b, c.base_separation, c.separation,
         c.normal_mass, c.tangent_mass, c.friction, bias_rate, mass_scale, impulse_scale,
@@ -666,21 +688,16 @@ def _restitution_kernel(velocity, angular_velocity, inv_mass, inv_inertia, body_
                     continue
                 nx = normal[k, 0]
                 ny = normal[k, 1]
-                rax = anchor_a[k, 0]
-                ray = anchor_a[k, 1]
-                rbx = anchor_b[k, 0]
-                rby = anchor_b[k, 1]
-                dvx, dvy = _point_velocity(vax, vay, wa, vbx, vby, wb, rax, ray, rbx, rby)
-                vn = dvx * nx + dvy * ny
-                impulse = -normal_mass[k] * (vn + e * relative_velocity[k])
-                accumulated = max(normal_impulse[k] + impulse, 0.0)
-                impulse = accumulated - normal_impulse[k]
+                rna = _cross(anchor_a[k, 0], anchor_a[k, 1], nx, ny)
+                rnb = _cross(anchor_b[k, 0], anchor_b[k, 1], nx, ny)
+                old = normal_impulse[k]
+                vn = _along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb)
+                accumulated = max(old - normal_mass[k] * (vn + e * relative_velocity[k]), 0.0)
+                impulse = accumulated - old
                 normal_impulse[k] = accumulated
                 total_normal_impulse[k] += impulse
-                px = impulse * nx
-                py = impulse * ny
-                vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
-                                                   rax, ray, rbx, rby, px, py)
+                vax, vay, wa, vbx, vby, wb = _apply(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
+                                                    nx, ny, rna, rnb, impulse)
             _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
 
 
