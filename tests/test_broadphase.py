@@ -115,3 +115,16 @@ def test_dense_cluster_overflows_the_first_guess(rng):
     pairs = candidate_pairs(bounds, movable)
     assert len(pairs) > 4 * 120 + 16
     np.testing.assert_array_equal(pairs, brute_force(bounds, movable))
+
+
+def test_grid_with_crowded_cells_and_nan_boxes_equals_brute_force(rng):
+    """Over SWEEP_BODIES bodies (the grid): a crowded corner where many boxes share
+    cells (most candidates of a bucket rejected), mixed sizes, and NaN boxes, which
+    overlap nothing."""
+    bounds = np.concatenate([random_boxes(rng, 600, world=40.0),
+                             random_boxes(rng, 300, world=3.0, size=0.3),
+                             random_boxes(rng, 100, world=40.0, size=6.0)])
+    bounds[rng.random(len(bounds)) < 0.02] = np.nan
+    movable = rng.random(len(bounds)) < 0.8
+    np.testing.assert_array_equal(candidate_pairs(bounds, movable),
+                                  brute_force(bounds, movable))

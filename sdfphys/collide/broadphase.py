@@ -1,8 +1,9 @@
 """Broadphase: world bounding boxes of every body and candidate pairs on a hashed grid.
 
 World AABB of one body (``body_box``; ``world_bounds`` runs it over all bodies in one
-compiled pass, as the circle fast path's ``reach_and_boxes`` does): the shape's body-frame AABB ``[x0, y0, x1, y1]`` rotated by the
-body angle ``a`` and moved to its centre of mass ``c``, by interval arithmetic,
+compiled pass, as the circle fast path's ``reach_and_boxes`` does): the shape's
+body-frame AABB ``[x0, y0, x1, y1]`` rotated by the body angle ``a`` and moved to its
+centre of mass ``c``, by interval arithmetic,
 
     x-extent = c_x + cos(a) [x0, x1] - sin(a) [y0, y1]
     y-extent = c_y + sin(a) [x0, x1] + cos(a) [y0, y1]
@@ -147,9 +148,10 @@ def _hash(cx: int, cy: int, mask: int) -> int:
 
 @njit(cache=True)
 def _overlap(box: np.ndarray, i: int, j: int) -> bool:
-    """Closed boxes i and j of ``box`` (B, 4) overlap (NaN overlaps nothing)."""
-    return (box[j, 0] <= box[i, 2] and box[i, 0] <= box[j, 2]
-            and box[j, 1] <= box[i, 3] and box[i, 1] <= box[j, 3])
+    """Closed boxes i and j of ``box`` (B, 4) overlap (NaN overlaps nothing); ``&``, not
+    ``and``: no branch per comparison (``_grid_pairs``)."""
+    return ((box[j, 0] <= box[i, 2]) & (box[i, 0] <= box[j, 2])
+            & (box[j, 1] <= box[i, 3]) & (box[i, 1] <= box[j, 3]))
 
 
 @njit(cache=True)
@@ -260,8 +262,14 @@ def _grid_pairs(box: np.ndarray, movable: np.ndarray) -> np.ndarray:
                     entry_box[p] = i
                     entry_cell[p] = ((cx + _CELL_OFFSET) << 32) | (cy + _CELL_OFFSET)
                     entry_home[p] = (cx == cx0[i]) | ((cy == cy0[i]) << 1)
-    first = np.empty(4 * n + 16, np.int64)
-    second = np.empty(4 * n + 16, np.int64)
+    # Every candidate of a bucket takes a row, kept or not: the buckets' candidate
+    # counts (which the loop below visits anyway) bound the rows.
+    rows = 4 * n + 16
+    for b in range(table):
+        size = start[b + 1] - start[b]
+        rows += size * (size - 1) // 2
+    first = np.empty(rows, np.int64)
+    second = np.empty(rows, np.int64)
     count = 0
     for b in range(table):
         for p in range(start[b], start[b + 1]):
@@ -271,13 +279,14 @@ def _grid_pairs(box: np.ndarray, movable: np.ndarray) -> np.ndarray:
             for q in range(p + 1, start[b + 1]):
                 # Same cell (not a hash collision), and the cell is the one holding the
                 # low corner of the two boxes' intersection, max(lower x), max(lower y):
-                # both boxes cover it, so each pair is reported once.
-                if entry_cell[q] != cell or (home | entry_home[q]) != 3:
-                    continue
+                # both boxes cover it, so each pair is reported once. Without branches:
+                # which candidates pass is unpredictable (the 2,000-circle pile's grid
+                # took 445 us with them, 340 without).
                 j = entry_box[q]
-                if not (movable[i] or movable[j]) or not _overlap(box, i, j):
-                    continue
-                first, second, count = _append(first, second, count, i, j)
+                first[count] = i
+                second[count] = j
+                count += ((entry_cell[q] == cell) & ((home | entry_home[q]) == 3)
+                          & (movable[i] | movable[j]) & _overlap(box, i, j))
     for g in range(n):
         if not big[g]:
             continue
