@@ -33,9 +33,12 @@ Modules: ``softness`` (soft constraint coefficients, loaded islands: ``row_softn
 ``rows`` (the body state and the prepared contact rows: ``prepare_contacts``,
 ``store_impulses``), ``warm_start`` (``ImpulseCache``: last step's impulses matched by
 feature key or place), ``substeps`` (integration, warm start, the solve and relax
-sweeps, the split push-out, restitution: ``solve_substeps``, ``apply_restitution``).
+sweeps, the split push-out: ``solve_substeps``), ``restitution``
+(``apply_restitution``), ``pair_rows`` (a pair's velocities and one row's algebra,
+shared by those sweeps).
 """
 
+from .restitution import apply_restitution
 from .rows import BodyState, ContactConstraints, prepare_contacts, store_impulses
 from .softness import (
     CONVERGED,
@@ -47,7 +50,7 @@ from .softness import (
     row_softness,
     soft_coefficients,
 )
-from .substeps import MAX_ROTATION, apply_restitution, solve_substeps
+from .substeps import MAX_ROTATION, solve_substeps
 from .warm_start import ImpulseCache
 
 __all__ = [

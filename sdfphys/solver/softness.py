@@ -118,9 +118,9 @@ def contact_softness(settings: Settings) -> tuple[Softness, Softness]:
 # An island is the set of dynamic bodies connected by contacts between dynamic bodies
 # (``islands``: static, kinematic and sleeping bodies do not join). It is loaded if it
 # has at most ``Settings.stiff_island_limit`` dynamic bodies, or at most
-# ``Settings.rest_island_limit``
-# if none of its rows is deeper than ``Settings.soft_depth`` at the start of the step
-# (it is not pushing out overlap: ``substeps``, "Split push-out"), and two touching bodies whose masses
+# ``Settings.rest_island_limit`` if none of its rows is deeper than
+# ``Settings.soft_depth`` at the start of the step (it is not pushing out overlap:
+# ``substeps``, "Split push-out"), and two touching bodies whose masses
 # differ by MASS_RATIO or more, or (with load stiffening) a body carrying more than
 # LOADED times its weight. Larger islands (piles of thousands of circles) and large
 # islands pushing out overlap keep one pass per substep, so their cost does not grow,

@@ -1,9 +1,10 @@
-"""Substeps: integration, warm start, the solve and relax sweeps, restitution.
+"""Substeps: integration, warm start, the solve and relax sweeps, the split push-out.
 
 ``solve_substeps`` runs every substep of a step in one compiled call
 (``_substeps_kernel``): integrate velocities, warm start, solve with soft bias (the
 loaded islands' converged passes, the split push-out), integrate positions, re-measure
-the separations, relax. ``apply_restitution`` runs the restitution passes after them.
+the separations, relax. The restitution passes after them: ``restitution``; a pair's
+velocities and one row's algebra: ``pair_rows``.
 
 Anchors. Box2D v3 keeps each contact's anchors ra, rb (the contact point relative to
 each centre of mass, in world orientation) fixed over the step, which is right for the
@@ -53,10 +54,11 @@ from .joints import (
     spring_softness,
     stiffened_softness,
 )
+from .pair_rows import along, apply_impulse, apply_vector, cross, load_pair, store_pair
 from .rows import BodyState, ContactConstraints
 from .softness import CONVERGED, REST_SPEED, row_softness
 
-__all__ = ["MAX_ROTATION", "apply_restitution", "solve_substeps"]
+__all__ = ["MAX_ROTATION", "solve_substeps"]
 
 
 # --------------------------------------------------------------------------------------
@@ -198,58 +200,6 @@ def _update_anchors(com, com0, angle, angle0, round_body, cos_d, sin_d, inv_mass
 
 
 @njit(cache=True)
-def _load(velocity, angular_velocity, a, b):
-    """(vax, vay, wa, vbx, vby, wb): the velocities of a pair's two bodies."""
-    return (velocity[a, 0], velocity[a, 1], angular_velocity[a],
-            velocity[b, 0], velocity[b, 1], angular_velocity[b])
-
-
-@njit(cache=True)
-def _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb):
-    """Write a pair's velocities back (``_load``'s inverse)."""
-    velocity[a, 0] = vax
-    velocity[a, 1] = vay
-    angular_velocity[a] = wa
-    velocity[b, 0] = vbx
-    velocity[b, 1] = vby
-    angular_velocity[b] = wb
-
-
-@njit(cache=True)
-def _cross(rx, ry, nx, ny):
-    """r x n = rx ny - ry nx (2D cross product, scalar)."""
-    return rx * ny - ry * nx
-
-
-@njit(cache=True)
-def _along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb):
-    """n.(v_b + w_b x r_b - v_a - w_a x r_a), m/s: b's point against a's along n, with
-    rna = r_a x n and rnb = r_b x n (``_cross``; n.(w x r) = w (r x n)).
-
-    Written as a sum of independent products: a Gauss-Seidel sweep is one chain of
-    dependent row updates, and this form is about half as long a chain as the point
-    velocities' components dotted with n (the sweep ran 2x faster, 210-box pyramid)."""
-    return ((vbx - vax) * nx + (vby - vay) * ny) + (wb * rnb - wa * rna)
-
-
-@njit(cache=True)
-def _apply(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib, nx, ny, rna, rnb, impulse):
-    """The pair's velocities after ``impulse`` (N s) along n on b and its opposite on a
-    (ma, mb inverse masses; ia, ib inverse inertias; rna, rnb as in ``_along``:
-    r x (impulse n) = impulse (r x n))."""
-    return (vax - (ma * nx) * impulse, vay - (ma * ny) * impulse, wa - (ia * rna) * impulse,
-            vbx + (mb * nx) * impulse, vby + (mb * ny) * impulse, wb + (ib * rnb) * impulse)
-
-
-@njit(cache=True)
-def _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib, rax, ray, rbx, rby, px, py):
-    """The two bodies' velocities after the impulse P = (px, py) (N s) on b at arm rb and
-    -P on a at arm ra (ma, mb inverse masses; ia, ib inverse inertias)."""
-    return (vax - ma * px, vay - ma * py, wa - ia * (rax * py - ray * px),
-            vbx + mb * px, vby + mb * py, wb + ib * (rbx * py - rby * px))
-
-
-@njit(cache=True)
 def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b, pair_start,
                 normal, anchor_a, anchor_b, normal_impulse, tangent_impulse, total_normal_impulse,
                 total_tangent_impulse):
@@ -263,7 +213,7 @@ def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_
         mb = inv_mass[b]
         ia = inv_inertia[a]
         ib = inv_inertia[b]
-        vax, vay, wa, vbx, vby, wb = _load(velocity, angular_velocity, a, b)
+        vax, vay, wa, vbx, vby, wb = load_pair(velocity, angular_velocity, a, b)
         for k in range(first, pair_start[p + 1]):
             nx = normal[k, 0]
             ny = normal[k, 1]
@@ -271,10 +221,10 @@ def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_
             py = normal_impulse[k] * ny - tangent_impulse[k] * nx
             total_normal_impulse[k] += normal_impulse[k]
             total_tangent_impulse[k] += tangent_impulse[k]
-            vax, vay, wa, vbx, vby, wb = _push(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
-                                               anchor_a[k, 0], anchor_a[k, 1],
-                                               anchor_b[k, 0], anchor_b[k, 1], px, py)
-        _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
+            vax, vay, wa, vbx, vby, wb = apply_vector(
+                vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib, anchor_a[k, 0], anchor_a[k, 1],
+                anchor_b[k, 0], anchor_b[k, 1], px, py)
+        store_pair(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
 
 
 # --------------------------------------------------------------------------------------
@@ -336,14 +286,14 @@ def _pseudo_push(pseudo_velocity, pseudo_angular, pseudo_impulse, k, a, b, ma, i
     """Split row k: the impulse that makes the pair's pseudo-velocities separate at -bias
     (m/s, bias <= 0) along n, accumulated >= 0 in pseudo_impulse[k], applied to the
     pseudo-velocities (rigid: the pseudo-velocities start from 0 every substep)."""
-    qax, qay, qa, qbx, qby, qb = _load(pseudo_velocity, pseudo_angular, a, b)
-    vn = _along(qax, qay, qa, qbx, qby, qb, nx, ny, rna, rnb)
+    qax, qay, qa, qbx, qby, qb = load_pair(pseudo_velocity, pseudo_angular, a, b)
+    vn = along(qax, qay, qa, qbx, qby, qb, nx, ny, rna, rnb)
     accumulated = max(pseudo_impulse[k] - normal_mass * (vn + bias), 0.0)
     impulse = accumulated - pseudo_impulse[k]
     pseudo_impulse[k] = accumulated
-    qax, qay, qa, qbx, qby, qb = _apply(qax, qay, qa, qbx, qby, qb, ma, ia, mb, ib, nx, ny,
-                                        rna, rnb, impulse)
-    _store(pseudo_velocity, pseudo_angular, a, b, qax, qay, qa, qbx, qby, qb)
+    qax, qay, qa, qbx, qby, qb = apply_impulse(
+        qax, qay, qa, qbx, qby, qb, ma, ia, mb, ib, nx, ny, rna, rnb, impulse)
+    store_pair(pseudo_velocity, pseudo_angular, a, b, qax, qay, qa, qbx, qby, qb)
 
 
 @njit(cache=True)
@@ -388,7 +338,7 @@ def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_dept
         mb = inv_mass[b]
         ia = inv_inertia[a]
         ib = inv_inertia[b]
-        vax, vay, wa, vbx, vby, wb = _load(velocity, angular_velocity, a, b)
+        vax, vay, wa, vbx, vby, wb = load_pair(velocity, angular_velocity, a, b)
         for k in range(first, last):
             nx = normal[k, 0]
             ny = normal[k, 1]
@@ -396,8 +346,8 @@ def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_dept
             bias = 0.0
             m_scale = 1.0
             i_scale = 0.0
-            rna = _cross(anchor_a[k, 0], anchor_a[k, 1], nx, ny)
-            rnb = _cross(anchor_b[k, 0], anchor_b[k, 1], nx, ny)
+            rna = cross(anchor_a[k, 0], anchor_a[k, 1], nx, ny)
+            rnb = cross(anchor_b[k, 0], anchor_b[k, 1], nx, ny)
             split = False
             if s > 0.0:
                 bias = s * inv_h
@@ -408,10 +358,10 @@ def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_dept
                 m_scale = mass_scale[k]
                 i_scale = impulse_scale[k]
             # d_l = -m_n (m_scale vn + bias) - i_scale l, grouped so that only the product
-            # with vn waits on the sweep's velocities (``_along``).
+            # with vn waits on the sweep's velocities (``along``).
             m_n = normal_mass[k]
             old = normal_impulse[k]
-            vn = _along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb)
+            vn = along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb)
             accumulated = max((old - m_n * bias - i_scale * old) - (m_n * m_scale) * vn, 0.0)
             impulse = accumulated - old
             normal_impulse[k] = accumulated
@@ -419,12 +369,12 @@ def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_dept
             if measured[p]:
                 largest_change = max(largest_change, abs(impulse))
                 largest_impulse = max(largest_impulse, accumulated)
-            vax, vay, wa, vbx, vby, wb = _apply(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
-                                                nx, ny, rna, rnb, impulse)
+            vax, vay, wa, vbx, vby, wb = apply_impulse(
+                vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib, nx, ny, rna, rnb, impulse)
             if split:
                 # The push-out's cap counts the pair's own separating speed (vn >= 0 after
                 # the rigid row): together they stay within max_push_out.
-                vn = _along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb)
+                vn = along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb)
                 cap = max(max_push_out - max(vn, 0.0), 0.0)
                 push = min(mass_scale[k] * bias_rate[k] * s,
                            split_rate * inv_h * (s + soft_depth))
@@ -437,17 +387,17 @@ def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_dept
                     continue
                 tx = normal[k, 1]
                 ty = -normal[k, 0]
-                rta = _cross(anchor_a[k, 0], anchor_a[k, 1], tx, ty)
-                rtb = _cross(anchor_b[k, 0], anchor_b[k, 1], tx, ty)
+                rta = cross(anchor_a[k, 0], anchor_a[k, 1], tx, ty)
+                rtb = cross(anchor_b[k, 0], anchor_b[k, 1], tx, ty)
                 old = tangent_impulse[k]
                 limit = mu * normal_impulse[k]
-                vt = _along(vax, vay, wa, vbx, vby, wb, tx, ty, rta, rtb)
+                vt = along(vax, vay, wa, vbx, vby, wb, tx, ty, rta, rtb)
                 accumulated = min(max(old - tangent_mass[k] * vt, -limit), limit)
                 impulse = accumulated - old
                 tangent_impulse[k] = accumulated
-                vax, vay, wa, vbx, vby, wb = _apply(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
-                                                    tx, ty, rta, rtb, impulse)
-        _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
+                vax, vay, wa, vbx, vby, wb = apply_impulse(
+                    vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib, tx, ty, rta, rtb, impulse)
+        store_pair(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
     return largest_change, largest_impulse
 
 
@@ -653,60 +603,3 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     # (no extra work in the friction rows' passes).
     c.total_tangent_impulse += c.tangent_impulse - start_tangent
     return int(passes), int(push_outs)
-
-
-# --------------------------------------------------------------------------------------
-# Restitution (after the substeps) and storage.
-# --------------------------------------------------------------------------------------
-
-
-@njit(cache=True)
-def _restitution_kernel(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
-                        pair_start, normal, anchor_a, anchor_b, normal_mass, restitution,
-                        relative_velocity, normal_impulse, total_normal_impulse, threshold,
-                        passes):
-    """Velocity passes toward vn' = -e vn0 for points that approached and carried impulse.
-
-    A point takes part if it approached faster than ``threshold`` at the start of the
-    step (vn0 < -threshold) and received normal impulse during the step (a speculative
-    point that never touched did not collide). d_l = -m_n (vn + e vn0), l_n >= 0.
-    """
-    for _ in range(passes):
-        for p in range(pair_start.shape[0] - 1):
-            first = pair_start[p]
-            last = pair_start[p + 1]
-            a = body_a[first]
-            b = body_b[first]
-            ma = inv_mass[a]
-            mb = inv_mass[b]
-            ia = inv_inertia[a]
-            ib = inv_inertia[b]
-            vax, vay, wa, vbx, vby, wb = _load(velocity, angular_velocity, a, b)
-            for k in range(first, last):
-                e = restitution[k]
-                if e == 0.0 or relative_velocity[k] > -threshold or total_normal_impulse[k] == 0.0:
-                    continue
-                nx = normal[k, 0]
-                ny = normal[k, 1]
-                rna = _cross(anchor_a[k, 0], anchor_a[k, 1], nx, ny)
-                rnb = _cross(anchor_b[k, 0], anchor_b[k, 1], nx, ny)
-                old = normal_impulse[k]
-                vn = _along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb)
-                accumulated = max(old - normal_mass[k] * (vn + e * relative_velocity[k]), 0.0)
-                impulse = accumulated - old
-                normal_impulse[k] = accumulated
-                total_normal_impulse[k] += impulse
-                vax, vay, wa, vbx, vby, wb = _apply(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib,
-                                                    nx, ny, rna, rnb, impulse)
-            _store(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb)
-
-
-def apply_restitution(bodies: BodyState, constraints: ContactConstraints,
-                      settings: Settings) -> None:
-    """``settings.restitution_passes`` restitution passes in place (one compiled call)."""
-    c = constraints
-    _restitution_kernel(
-        bodies.velocity, bodies.angular_velocity, bodies.inv_mass, bodies.inv_inertia,
-        c.body_a, c.body_b, c.pair_start, c.normal, c.anchor_a, c.anchor_b, c.normal_mass,
-        c.restitution, c.relative_velocity, c.normal_impulse, c.total_normal_impulse,
-        settings.restitution_threshold, settings.restitution_passes)

@@ -1,0 +1,67 @@
+"""One contact pair's velocities and the algebra of one row, for the compiled sweeps.
+
+A pair's six velocities are loaded once (``load_pair``), updated row by row in
+registers and stored back (``store_pair``). A row along a unit direction n (the normal,
+or the tangent t = (n_y, -n_x)) with lever arms r_a, r_b: ``cross`` gives r x n,
+``along`` the relative speed of b's point against a's along n, ``apply_impulse`` the
+velocities after an impulse along n; ``apply_vector`` applies a general impulse
+vector (the warm start's l_n n + l_t t). Conventions: ``sdfphys.solver``'s docstring.
+"""
+
+from __future__ import annotations
+
+from .._jit import njit
+
+__all__ = ["along", "apply_impulse", "apply_vector", "cross", "load_pair", "store_pair"]
+
+
+@njit(cache=True)
+def load_pair(velocity, angular_velocity, a, b):
+    """(vax, vay, wa, vbx, vby, wb): the velocities of a pair's two bodies."""
+    return (velocity[a, 0], velocity[a, 1], angular_velocity[a],
+            velocity[b, 0], velocity[b, 1], angular_velocity[b])
+
+
+@njit(cache=True)
+def store_pair(velocity, angular_velocity, a, b, vax, vay, wa, vbx, vby, wb):
+    """Write a pair's velocities back (``load_pair``'s inverse)."""
+    velocity[a, 0] = vax
+    velocity[a, 1] = vay
+    angular_velocity[a] = wa
+    velocity[b, 0] = vbx
+    velocity[b, 1] = vby
+    angular_velocity[b] = wb
+
+
+@njit(cache=True)
+def cross(rx, ry, nx, ny):
+    """r x n = rx ny - ry nx (2D cross product, scalar)."""
+    return rx * ny - ry * nx
+
+
+@njit(cache=True)
+def along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb):
+    """n.(v_b + w_b x r_b - v_a - w_a x r_a), m/s: b's point against a's along n, with
+    rna = r_a x n and rnb = r_b x n (``cross``; n.(w x r) = w (r x n)).
+
+    Written as a sum of independent products: a Gauss-Seidel sweep is one chain of
+    dependent row updates, and this form is about half as long a chain as the point
+    velocities' components dotted with n (the sweep ran 2x faster, 210-box pyramid)."""
+    return ((vbx - vax) * nx + (vby - vay) * ny) + (wb * rnb - wa * rna)
+
+
+@njit(cache=True)
+def apply_impulse(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib, nx, ny, rna, rnb, impulse):
+    """The pair's velocities after ``impulse`` (N s) along n on b and its opposite on a
+    (ma, mb inverse masses; ia, ib inverse inertias; rna, rnb as in ``along``:
+    r x (impulse n) = impulse (r x n))."""
+    return (vax - (ma * nx) * impulse, vay - (ma * ny) * impulse, wa - (ia * rna) * impulse,
+            vbx + (mb * nx) * impulse, vby + (mb * ny) * impulse, wb + (ib * rnb) * impulse)
+
+
+@njit(cache=True)
+def apply_vector(vax, vay, wa, vbx, vby, wb, ma, ia, mb, ib, rax, ray, rbx, rby, px, py):
+    """The two bodies' velocities after the impulse P = (px, py) (N s) on b at arm rb and
+    -P on a at arm ra (ma, mb inverse masses; ia, ib inverse inertias)."""
+    return (vax - ma * px, vay - ma * py, wa - ia * (rax * py - ray * px),
+            vbx + mb * px, vby + mb * py, wb + ib * (rbx * py - rby * px))
