@@ -71,6 +71,7 @@ from .._jit import njit
 from ..vec2 import TINY
 from . import conics, curved, folded, grid, operators, polygonal
 from .base import Field, safe_normalize
+from .blend_kernels import _smooth_min
 from .opcodes import (
     ARC,
     BLEND_INDEX,
@@ -111,14 +112,7 @@ from .opcodes import (
     VESICA,
     XOR,
 )
-from .primitive_kernels import (
-    _box,
-    _ellipse,
-    _polygon,
-    _segment,
-    _shape,
-    _smooth_min,
-)
+from .primitive_kernels import _box, _ellipse, _polygon, _segment, _shape
 
 __all__ = ["Program", "compile_field", "distance", "evaluate", "run", "scratch"]
 
