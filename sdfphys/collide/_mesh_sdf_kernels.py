@@ -16,7 +16,7 @@ import numpy as np
 
 from .._jit import njit
 from ..vec2 import unit_or
-from .mesh_contacts import _evaluate
+from ._mesh_contacts_kernels import _evaluate
 
 #: Rounds of the support search (``_deepest_on_sdf``), one evaluation of each field
 #: per round for all contacts: 4 rungs x 4 growth per round span 4^8 in step size.

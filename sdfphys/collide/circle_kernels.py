@@ -54,7 +54,8 @@ from ..vec2 import TINY
 from .broadphase import body_box
 from .polygons import clip_pair
 
-__all__ = ["BOX", "CIRCLE", "OTHER", "POLYGON", "analytic_contacts", "merge_order", "reach_and_boxes"]
+__all__ = ["BOX", "CIRCLE", "OTHER", "POLYGON", "analytic_contacts", "merge_order",
+           "reach_and_boxes"]
 
 
 @njit(cache=True)

@@ -676,8 +676,8 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
         np.ascontiguousarray(dip_grad, dtype=np.float64))
     chosen = start_kernels.pick_starts(sphi, spoints, ssigma, n_sample + HIDDEN_DIPS, with_slots,
                                  1.0 / degree, k, n_sample)
-    points, _, _, sigma, owner = start_kernels.gather_starts(n_sample + HIDDEN_DIPS, chosen, spoints,
-                                                       sphi, sgrad, ssigma)
+    points, _, _, sigma, owner = start_kernels.gather_starts(
+        n_sample + HIDDEN_DIPS, chosen, spoints, sphi, sgrad, ssigma)
     problem = _TriangleProblem(field, tri, owner, _no_vertex_starts(n_tri), k, False)
     problem.known = lambda *_: known                          # read from the samples
     problem.programs = lambda: None                           # the Python loop

@@ -206,8 +206,9 @@ def _far_ends(sdf: Field, z: np.ndarray, n: np.ndarray, diagonal: np.ndarray
     sdf's surface give the normals g of the faces leaving z either way; the incident
     face is the one whose g is most anti-parallel to n, used when (-n).g >=
     ``_FACING``; where the two normals agree (``_SMOOTH``: z is no corner), the side
-    toward the body's centre (the sdf frame's origin). Along its direction u (perp(g), away from z), the ladder z + L_k u
-    (``_RUNGS`` rungs up to the diagonal) is projected onto the surface in one
+    toward the body's centre (the sdf frame's origin). Along its direction u (perp(g),
+    away from z), the ladder z + L_k u (``_RUNGS`` rungs up to the diagonal) is
+    projected onto the surface in one
     evaluation: rungs on the face stay where they are; the first rung past the
     face's end projects, for an exact field and a convex corner, exactly onto that
     corner, which is accepted when it lies on the face's line beyond the last rung

@@ -1,18 +1,32 @@
 """One contact pair's velocities and the algebra of one row, for the compiled sweeps.
 
-A pair's six velocities are loaded once (``load_pair``), updated row by row in
-registers and stored back (``store_pair``). A row along a unit direction n (the normal,
-or the tangent t = (n_y, -n_x)) with lever arms r_a, r_b: ``cross`` gives r x n,
-``along`` the relative speed of b's point against a's along n, ``apply_impulse`` the
-velocities after an impulse along n; ``apply_vector`` applies a general impulse
-vector (the warm start's l_n n + l_t t). Conventions: ``sdfphys.solver``'s docstring.
+A pair's rows and bodies (``pair_bodies``); its six velocities are loaded once
+(``load_pair``), updated row by row in registers and stored back (``store_pair``). A row
+along a unit direction n (the normal, or the tangent t = (n_y, -n_x)) with lever arms
+r_a, r_b: ``cross`` gives r x n, ``along`` the relative speed of b's point against a's
+along n, ``apply_impulse`` the velocities after an impulse along n; ``apply_vector``
+applies a general impulse vector (the warm start's l_n n + l_t t). Conventions:
+``sdfphys.solver``'s docstring.
 """
 
 from __future__ import annotations
 
 from .._jit import njit
 
-__all__ = ["along", "apply_impulse", "apply_vector", "cross", "load_pair", "store_pair"]
+__all__ = ["along", "apply_impulse", "apply_vector", "cross", "load_pair", "pair_bodies",
+           "store_pair"]
+
+
+@njit(cache=True)
+def pair_bodies(p, pair_start, body_a, body_b, inv_mass, inv_inertia):
+    """(first, last, a, b, ma, ia, mb, ib) of pair p: its rows first..last - 1 (one
+    body pair, ``pair_start`` (P + 1,)), its bodies, their inverse masses and
+    inertias."""
+    first = pair_start[p]
+    a = body_a[first]
+    b = body_b[first]
+    return (first, pair_start[p + 1], a, b, inv_mass[a], inv_inertia[a], inv_mass[b],
+            inv_inertia[b])
 
 
 @njit(cache=True)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from .._jit import njit
 from ..settings import Settings
-from .pair_rows import along, apply_impulse, cross, load_pair, store_pair
+from .pair_rows import along, apply_impulse, cross, load_pair, pair_bodies, store_pair
 from .rows import BodyState, ContactConstraints
 
 __all__ = ["apply_restitution"]
@@ -28,14 +28,8 @@ def _restitution_kernel(velocity, angular_velocity, inv_mass, inv_inertia, body_
     """
     for _ in range(passes):
         for p in range(pair_start.shape[0] - 1):
-            first = pair_start[p]
-            last = pair_start[p + 1]
-            a = body_a[first]
-            b = body_b[first]
-            ma = inv_mass[a]
-            mb = inv_mass[b]
-            ia = inv_inertia[a]
-            ib = inv_inertia[b]
+            first, last, a, b, ma, ia, mb, ib = pair_bodies(p, pair_start, body_a, body_b,
+                                                            inv_mass, inv_inertia)
             vax, vay, wa, vbx, vby, wb = load_pair(velocity, angular_velocity, a, b)
             for k in range(first, last):
                 e = restitution[k]

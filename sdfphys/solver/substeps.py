@@ -54,7 +54,15 @@ from .joints import (
     spring_softness,
     stiffened_softness,
 )
-from .pair_rows import along, apply_impulse, apply_vector, cross, load_pair, store_pair
+from .pair_rows import (
+    along,
+    apply_impulse,
+    apply_vector,
+    cross,
+    load_pair,
+    pair_bodies,
+    store_pair,
+)
 from .rows import BodyState, ContactConstraints
 from .softness import CONVERGED, REST_SPEED, row_softness
 
@@ -206,15 +214,10 @@ def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_
     """Apply the accumulated impulses P = l_n n + l_t t at the current anchors; add them to
     the step's totals (the tangent total is completed by ``solve_substeps``)."""
     for p in range(pair_start.shape[0] - 1):
-        first = pair_start[p]
-        a = body_a[first]
-        b = body_b[first]
-        ma = inv_mass[a]
-        mb = inv_mass[b]
-        ia = inv_inertia[a]
-        ib = inv_inertia[b]
+        first, last, a, b, ma, ia, mb, ib = pair_bodies(p, pair_start, body_a, body_b,
+                                                        inv_mass, inv_inertia)
         vax, vay, wa, vbx, vby, wb = load_pair(velocity, angular_velocity, a, b)
-        for k in range(first, pair_start[p + 1]):
+        for k in range(first, last):
             nx = normal[k, 0]
             ny = normal[k, 1]
             px = normal_impulse[k] * nx + tangent_impulse[k] * ny
@@ -330,14 +333,8 @@ def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_dept
     largest_change = 0.0
     largest_impulse = 0.0
     for p in pairs:
-        first = pair_start[p]
-        last = pair_start[p + 1]
-        a = body_a[first]
-        b = body_b[first]
-        ma = inv_mass[a]
-        mb = inv_mass[b]
-        ia = inv_inertia[a]
-        ib = inv_inertia[b]
+        first, last, a, b, ma, ia, mb, ib = pair_bodies(p, pair_start, body_a, body_b,
+                                                        inv_mass, inv_inertia)
         vax, vay, wa, vbx, vby, wb = load_pair(velocity, angular_velocity, a, b)
         for k in range(first, last):
             nx = normal[k, 0]
