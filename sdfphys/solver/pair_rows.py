@@ -60,7 +60,7 @@ def along(vax, vay, wa, vbx, vby, wb, nx, ny, rna, rnb):
 
     Written as a sum of independent products: a Gauss-Seidel sweep is one chain of
     dependent row updates, and this form is about half as long a chain as the point
-    velocities' components dotted with n (the sweep ran 2x faster, 210-box pyramid)."""
+    velocities' components dotted with n (a pass over the 210-box pyramid: 57 to 38 us)."""
     return ((vbx - vax) * nx + (vby - vay) * ny) + (wb * rnb - wa * rna)
 
 
