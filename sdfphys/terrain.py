@@ -203,6 +203,7 @@ def edit(world: Any, body: Any, spec: Any, position: Any, angle: float = 0.0,
     world._impulses = kept.take((kept.body_a != i) & (kept.body_b != i))
     contacts = world._contacts
     world._contacts = contacts.take((contacts.body_a != i) & (contacts.body_b != i))
+    world._contact_cache.forget(i)
 
 
 def user_field(world: Any, body: Any) -> Field:

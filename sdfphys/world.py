@@ -33,7 +33,7 @@ import numpy as np
 from . import _warm, queries, rays, scheduled, terrain, world_bodies, world_forces, world_sleep
 from . import world_stages as stage
 from .blasts import Blast, check_blast, fire_due
-from .collide import Contacts
+from .collide import ContactCache, Contacts
 from .collide.filter import PairFilter
 from .errors import SpecError
 from .events import Events, StepReport, WorldContacts
@@ -100,6 +100,7 @@ class World(WorldJoints):
         # Sleeping islands' contacts and impulses, kept for their warm start (``world_sleep``).
         self._sleep_contacts = WorldContacts.empty()
         self._sleep_impulses = ImpulseCache.empty()
+        self._contact_cache = ContactCache()   # descent pairs' kept contacts (``collide``)
         self._islands_made = 0
         self._joints = JointTable()     # ``joints.WorldJoints``
         self._filter: PairFilter | None = None   # ``world_stages.pair_filter``

@@ -282,6 +282,7 @@ def remove(world: World, i: int) -> None:
     world._sleep_impulses = world._sleep_impulses.without_body(i)
     world._contacts = world._contacts.without_body(i)
     world._sleep_contacts = world._sleep_contacts.without_body(i)
+    world._contact_cache.clear()
     world._joints.without_body(i)
     world._report = world._report.without_body(i)
     world._filter_stale = True

@@ -114,7 +114,7 @@ def collide(world: World, bodies: BodyState, active: np.ndarray | None) -> Conta
                              bodies.com, bodies.angle, movable, world.settings,
                              bodies.velocity, bodies.angular_velocity, ran,
                              exclude=world._joints.excluded_pairs(world._n),
-                             pair_filter=filter_)
+                             pair_filter=filter_, cache=world._contact_cache)
     if filter_ is not None and filter_.has_sensors:
         sensor = filter_.sensor
         touches = sensor[contacts.body_a] | sensor[contacts.body_b]

@@ -179,9 +179,9 @@ def test_stage_counts_skip_friction_restitution_and_time_of_impact_when_not_need
 
 
 def _pair_stages_run(bodies: list[tuple[dict, tuple, str]], friction: float,
-                     steps: int = 30) -> dict[str, int]:
+                     steps: int = 30, settings: Settings | None = None) -> dict[str, int]:
     """stage_counts after ``steps`` of bodies (shape, position, kind), all of ``friction``."""
-    world = World()
+    world = World(settings=settings)
     for shape, position, kind in bodies:
         world.add_body(shape, position=position, kind=kind, friction=friction)
     for _ in range(steps):
@@ -192,7 +192,8 @@ def _pair_stages_run(bodies: list[tuple[dict, tuple, str]], friction: float,
 def test_only_the_pair_kinds_and_features_a_scene_needs_run():
     """Circles on a static circle, frictionless: only circle_circle, no friction rows;
     boxes on a box: only mesh_mesh; sdf bodies on an sdf ground: sdf_sdf (and mesh_sdf
-    once a box joins), no circle or mesh-mesh machinery."""
+    once a box joins), no circle or mesh-mesh machinery; the descent pairs every step
+    without contact reuse, once while they rest with it (``reuse_distance``)."""
     assert PAIR_STAGES == ("circle_circle", "circle_mesh", "circle_sdf", "mesh_mesh",
                            "mesh_sdf", "sdf_sdf")
     hill = {"type": "circle", "radius": 50.0}
@@ -210,12 +211,17 @@ def test_only_the_pair_kinds_and_features_a_scene_needs_run():
 
     sdf_ground = {"type": "sdf", "field": {"type": "box", "size": [20.0, 1.0]}}
     sdf_disc = {"type": "sdf", "field": {"type": "circle", "radius": 0.5}}
-    fields = _pair_stages_run([(sdf_ground, (0.0, -0.5), "static"),
-                               (sdf_disc, (0.0, 0.5), "dynamic"),
-                               (UNIT_BOX, (3.0, 0.5), "dynamic")], friction=0.5, steps=5)
+    resting = [(sdf_ground, (0.0, -0.5), "static"), (sdf_disc, (0.0, 0.5), "dynamic"),
+               (UNIT_BOX, (3.0, 0.5), "dynamic")]
+    fields = _pair_stages_run(resting, friction=0.5, steps=5,
+                              settings=Settings(reuse_distance=0.0))
     assert fields["sdf_sdf"] == 5 and fields["mesh_sdf"] == 5
     assert all(fields[k] == 0 for k in ("circle_circle", "circle_mesh", "circle_sdf",
                                         "mesh_mesh"))
+    kept = _pair_stages_run(resting, friction=0.5, steps=5)
+    assert kept["sdf_sdf"] == 1 and kept["mesh_sdf"] == 1
+    assert all(kept[k] == 0 for k in ("circle_circle", "circle_mesh", "circle_sdf",
+                                      "mesh_mesh"))
 
 
 def test_kinematic_body_moves_with_its_velocity_and_lifts_a_ball():

@@ -13,7 +13,11 @@ One step of ``find_contacts`` (no Python loop over bodies, pairs or contacts):
 2. candidate pairs by sort-and-sweep (numba), keeping pairs with a movable body;
 3. pairs oriented lower kind first (circle < mesh < sdf; for equal kinds, lower
    shape id first) and grouped by their two Shape objects: one pair-function call
-   per group, each evaluating a field once per batch of points (``narrowphase``);
+   per group, each evaluating a field once per batch of points (``narrowphase``).
+   With the world's ``ContactCache`` (``contact_cache``), a pair that moved less
+   than ``Settings.reuse_distance`` relative to itself since its contacts were
+   found keeps them, carried with the bodies, and is not searched (the
+   closed-form pairs of the fast path below never are);
 4. contacts with depth > -margin of their pair kept, reduced to at most
    ``contacts_per_pair`` per pair (``reduce``), sorted by (body_a, body_b, feature).
 
@@ -65,17 +69,19 @@ from .circle_kernels import (
     OTHER,
     POLYGON,
     analytic_contacts,
+    analytic_pair,
     merge_order,
     reach_and_boxes,
 )
+from .contact_cache import ContactCache
 from .contacts import Contacts
 from .filter import PairFilter
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .polygons import SOURCE_CLIP, polygon_table
 from .reduce import reduce_contacts
 
-__all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "Contacts", "collide", "find_contacts",
-           "speculative_reach"]
+__all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "ContactCache", "Contacts", "collide",
+           "find_contacts", "speculative_reach"]
 
 #: A body's reach (extra speculative margin) is capped at this many bounding radii.
 REACH_CAP_RADII = 2.0
@@ -153,7 +159,9 @@ def speculative_reach(radius: np.ndarray, velocity: np.ndarray,
 
 def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
                  pose: np.ndarray, margin: float, reach: np.ndarray,
-                 settings: Settings, ran: set[tuple[str, str]] | None = None) -> Contacts:
+                 settings: Settings, ran: set[tuple[str, str]] | None = None,
+                 cache: ContactCache | None = None, radius: np.ndarray | None = None,
+                 round_: np.ndarray | None = None) -> Contacts:
     """Contacts of the candidate ``pairs`` (P, 2), reduced and sorted (see module doc).
 
     shapes: distinct Shape objects; body_shape: (B,) index into them per body;
@@ -161,8 +169,19 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
     distance; reach: (B,) m per body, a pair keeping contacts with depth >
     -(margin + reach_a + reach_b). Each pair-function call gets its group's largest
     pair margin; contacts beyond their own pair's margin are then dropped. ``ran``,
-    if given, receives the (kind_a, kind_b) of every pair function called.
+    if given, receives the (kind_a, kind_b) of every pair function called. cache:
+    the world's ``ContactCache`` (with radius (B,), the bodies' bounding radii, and
+    round_ (B,) bool, the circles):
+    pairs that barely moved keep their contacts, the others are searched with their
+    margin grown by ``settings.reuse_distance`` and kept; None: all searched.
     """
+    pair_margin = margin + reach[pairs[:, 0]] + reach[pairs[:, 1]]
+    tau, kept = 0.0, None
+    if cache is not None and settings.reuse_distance > 0.0:
+        tau = settings.reuse_distance
+        reused, kept = cache.reuse(pairs, pose, radius, round_, body_shape, pair_margin,
+                                   tau, settings)
+        pairs, pair_margin = pairs[~reused], pair_margin[~reused]
     kind_rank = np.array([KIND_ORDER.index(s.kind) for s in shapes], np.int64)
     sa, sb = body_shape[pairs[:, 0]], body_shape[pairs[:, 1]]
     ka, kb = kind_rank[sa], kind_rank[sb]
@@ -172,6 +191,7 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
     group = body_shape[first] * len(shapes) + body_shape[second]
     order = np.argsort(group, kind="stable")
     first, second, group = first[order], second[order], group[order]
+    found_margin = np.empty(len(group))
     bounds = np.flatnonzero(np.diff(group)) + 1
     parts = []
     for lo, hi in zip(np.r_[0, bounds], np.r_[bounds, len(group)]):
@@ -183,13 +203,18 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
         if ran is not None:
             ran.add((shape_a.kind, shape_b.kind))
         a, b = first[lo:hi], second[lo:hi]
-        group_margin = margin + float(np.max(reach[a] + reach[b]))
+        group_margin = margin + float(np.max(reach[a] + reach[b])) + tau
+        found_margin[lo:hi] = group_margin
         parts.append(fn(shape_a, shape_b, a, b, pose[a], pose[b], group_margin, settings))
     c = Contacts.concatenate(parts)
-    c = c.take(c.depth > -(margin + reach[c.body_a] + reach[c.body_b]))
     flip = c.body_a > c.body_b
     c.body_a, c.body_b = np.where(flip, c.body_b, c.body_a), np.where(flip, c.body_a, c.body_b)
     c.normal = np.where(flip[:, None], -c.normal, c.normal)
+    if kept is not None:
+        cache.store(np.column_stack([first, second]), found_margin, c, pose, radius, round_,
+                    body_shape)
+        c = Contacts.concatenate([kept, c])
+    c = c.take(c.depth > -(margin + reach[c.body_a] + reach[c.body_b]))
 
     pair_key = c.body_a * np.int64(len(pose)) + c.body_b
     order = np.argsort(pair_key, kind="stable")
@@ -228,7 +253,8 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                   angular_velocity: np.ndarray | None = None,
                   ran: set[tuple[str, str]] | None = None,
                   fast_circles: bool = True, exclude: np.ndarray | None = None,
-                  pair_filter: PairFilter | None = None) -> Contacts:
+                  pair_filter: PairFilter | None = None,
+                  cache: ContactCache | None = None) -> Contacts:
     """All contacts of B bodies this step, sorted by (body_a, body_b, feature).
 
     shapes: Shape objects; shape_id: (B,) int index into ``shapes`` per body;
@@ -245,6 +271,9 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     pair_filter: the bodies' collision filter (``filter.PairFilter``: category, mask,
     group, sensors), applied to the candidate pairs before any narrowphase; None: every
     pair may collide.
+    cache: a ``ContactCache`` kept from step to step: the descent pairs that barely
+    moved keep their contacts (``contact_cache``, ``Settings.reuse_distance``); None:
+    every pair searched.
     Returns contacts with body_a < body_b, depth > -(settings.speculative_distance +
     reach_a + reach_b), at most settings.contacts_per_pair per pair.
     """
@@ -268,7 +297,15 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                              0.5 * margin + reach)
         pairs = _candidates(boxes, movable, exclude, n, pair_filter)
         pose = np.column_stack([position, angle])
-        return _narrowphase(distinct, body_shape, pairs, pose, margin, reach, settings, ran)
+        shape_class = tables.shape_class[body_shape]
+        closed = analytic_pair(shape_class[pairs[:, 0]], shape_class[pairs[:, 1]])
+        plain = _narrowphase(distinct, body_shape, pairs[closed], pose, margin, reach,
+                             settings, ran)
+        other = _narrowphase(distinct, body_shape, pairs[~closed], pose, margin, reach,
+                             settings, ran, cache, radius[body_shape], shape_class == CIRCLE)
+        order = merge_order(plain.body_a * np.int64(n) + plain.body_b,
+                            other.body_a * np.int64(n) + other.body_b)
+        return Contacts.concatenate([plain, other]).take(order)
 
     reach, boxes = np.empty(n), np.empty((n, 4))
     reach_and_boxes(local_bounds, radius, body_shape, position, angle, velocity,
@@ -298,7 +335,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         return analytic
     pose = np.column_stack([position, angle])
     other = _narrowphase(distinct, body_shape, pairs[rest], pose, margin, reach, settings,
-                         ran)
+                         ran, cache, radius[body_shape], shape_class[body_shape] == CIRCLE)
     order = merge_order(a * np.int64(n) + b, other.body_a * np.int64(n) + other.body_b)
     return Contacts.concatenate([analytic, other]).take(order)
 

@@ -89,6 +89,15 @@ def reach_and_boxes(shape_bounds: np.ndarray, shape_radius: np.ndarray,
 OTHER, CIRCLE, BOX, POLYGON = 0, 1, 2, 3
 
 
+def analytic_pair(class_i: np.ndarray, class_j: np.ndarray) -> np.ndarray:
+    """(P,) bool: the pairs of these shape classes that ``analytic_contacts`` finds
+    (circle-circle, circle-box, box or convex polygon pairs; its branches), the others
+    being left to the general path."""
+    circle_i, circle_j = class_i == CIRCLE, class_j == CIRCLE
+    return ((circle_i & circle_j) | (circle_i & (class_j == BOX))
+            | ((class_i == BOX) & circle_j) | ((class_i >= BOX) & (class_j >= BOX)))
+
+
 @njit(cache=True)
 def _box_field(px: float, py: float, hx: float, hy: float) -> tuple[float, float, float]:
     """(value, gradient x, gradient y) of the box of half-extents (hx, hy) at (px, py):
