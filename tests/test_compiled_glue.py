@@ -3,7 +3,7 @@
 ``mesh_contacts.mesh_in_field`` and ``mesh_sdf.sdf_in_mesh`` run their stages in
 compiled kernels when the fields compile and in numpy otherwise (each module's
 ``USE_COMPILED = False``, the reference), as does the tail of
-``field_pairs.field_field_contacts`` (``_compiled_descent.field_contacts``) and the
+``field_pairs.field_field_contacts`` (``_compiled_field_contacts.field_contacts``) and the
 compiled glue of ``field_pairs.placed_field_contacts`` (``_placed_fields``). The bench
 scene's pair kinds (boxes on boxes, walls and a half-plane ground, a ring and a
 smooth union) and concave meshes, at random poses and margins, must give the same

@@ -1,4 +1,4 @@
-"""Starts chosen by sampling (``descent.triangle_deepest_sampled``, settings.descent_lattice).
+"""Starts chosen by sampling (``lattice.triangle_deepest_sampled``, settings.descent_lattice).
 
 Exact answers against brute force (``test_descent.brute_minimum``, a dense
 barycentric grid refined by a pattern search) on the hard cases of issue #3 and
@@ -13,7 +13,7 @@ import pytest
 from test_descent import CIRCLE, FIELDS, UNION, brute_minimum, in_triangle, random_triangles
 
 from sdfphys.collide import _descent_starts as start_kernels
-from sdfphys.collide import descent, mesh_contacts
+from sdfphys.collide import descent, lattice, mesh_contacts
 from sdfphys.errors import SpecError
 from sdfphys.sdf import field
 from sdfphys.settings import Settings
@@ -31,8 +31,8 @@ def _both(monkeypatch, fn, *args, **kwargs):
 
 def test_lattice_weights_and_neighbours():
     for degree in (1, 2, 3, 4, 5, 8):
-        weights, neighbours = descent._lattice(degree)
-        assert len(weights) == descent.lattice_size(degree) == (degree + 1) * (degree + 2) // 2
+        weights, neighbours = lattice._lattice(degree)
+        assert len(weights) == lattice.lattice_size(degree) == (degree + 1) * (degree + 2) // 2
         assert np.all(weights.sum(axis=1) > 1 - 1e-15) and np.all(weights >= 0.0)
         for v in range(3):                                       # vertices exactly
             assert np.sum(weights[:, v] == 1.0) == 1
@@ -51,7 +51,7 @@ def test_circle_pierced_by_an_edge(degree):
     tri = np.array([[[-2.0, 0.9], [2.0, 0.9], [0.0, 3.0]]])
     assert brute_minimum(f, tri[0]) == pytest.approx(-0.1, abs=1e-9)
     for k in (1, 2, 3):
-        point, value = descent.triangle_deepest_sampled(f, tri, degree, k)
+        point, value = lattice.triangle_deepest_sampled(f, tri, degree, k)
         assert point.shape == (1, k, 2) and value.shape == (1, k)
         assert value[0, 0] == pytest.approx(-0.1, abs=1e-12)
         assert np.allclose(point[0, 0], [0.0, 0.9], atol=1e-9)
@@ -67,7 +67,7 @@ def test_union_both_dips_of_one_edge(degree, apex):
     f = field(UNION)
     tri = np.array([[[-3.0, 0.9], [3.0, 0.9], apex]])
     assert brute_minimum(f, tri[0]) == pytest.approx(-0.6, abs=1e-9)
-    point, value = descent.triangle_deepest_sampled(f, tri, degree, 2)
+    point, value = lattice.triangle_deepest_sampled(f, tri, degree, 2)
     exact = 1e-12 if apex[1] > 1.0 else 1e-9       # the sliver: to the descent's 1e-9
     assert value[0] == pytest.approx([-0.6, -0.1], abs=exact)
     assert np.allclose(point[0], [[2.0, 0.9], [-2.0, 0.9]], atol=1e-9)
@@ -79,7 +79,7 @@ def test_random_triangles_of_the_smooth_union_against_brute_force():
     """Degree 8 (45 samples), 2 starts: the deepest point of every triangle."""
     f = field(FIELDS["smooth_union"])
     tri = random_triangles(f, 150, np.random.default_rng(33))
-    point, value = descent.triangle_deepest_sampled(f, tri, 8, 2)
+    point, value = lattice.triangle_deepest_sampled(f, tri, 8, 2)
     for t in range(len(tri)):
         assert value[t].min() <= brute_minimum(f, tri[t], n=120, seeds=4) + 1e-9, t
         for k in range(2):
@@ -103,7 +103,7 @@ def test_a_dip_beside_a_vertex_that_is_a_local_minimum(monkeypatch):
     exact = brute_minimum(f, tri[0])
     assert exact == pytest.approx(-0.0887264, abs=1e-7)
     for degree in (4, 5):
-        for point, value in _both(monkeypatch, descent.triangle_deepest_sampled, f, tri,
+        for point, value in _both(monkeypatch, lattice.triangle_deepest_sampled, f, tri,
                                   degree, 2):
             assert value[0].min() == pytest.approx(exact, abs=1e-9)
             assert f.distance(point[0, 0][None])[0] == value[0, 0]
@@ -176,7 +176,7 @@ def test_compiled_equals_the_python_loop(monkeypatch, name):
     f = field(FIELDS[name])
     tri = random_triangles(f, 300, np.random.default_rng(7))
     for degree, k in ((3, 3), (4, 2), (8, 1)):
-        reference, got = _both(monkeypatch, descent.triangle_deepest_sampled, f, tri, degree, k)
+        reference, got = _both(monkeypatch, lattice.triangle_deepest_sampled, f, tri, degree, k)
         for a, b in zip(reference, got):
             assert a.shape == b.shape and a.tobytes() == b.tobytes(), (degree, k)
 
@@ -184,7 +184,7 @@ def test_compiled_equals_the_python_loop(monkeypatch, name):
 def test_ranks_follow_the_samples():
     """pick_starts: discrete local minima first, lowest first, none within a spacing
     of another; then the other samples; then the rest."""
-    weights, neighbours = descent._lattice(2)       # v0, m01, m02, v1, m12, v2
+    weights, neighbours = lattice._lattice(2)       # v0, m01, m02, v1, m12, v2
     tri = np.array([[[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]]])
     points, _, sigma, _ = start_kernels.triangle_starts(tri, weights)
 

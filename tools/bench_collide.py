@@ -11,7 +11,7 @@ centroid; 3: the vertices; 4: vertices and centroid; 7: vertices, edge midpoints
 and centroid, the default) and each iteration budget (4, 8, 16, 32), the table
 gives the following (samples 0). Rows with samples N > 0 (``--lattice`` degrees
 d, N = (d + 1)(d + 2) / 2: 3 -> 10, 4 -> 15, 5 -> 21, 6 -> 28, 8 -> 45) choose
-their starts by sampling (``descent.triangle_deepest_sampled``,
+their starts by sampling (``lattice.triangle_deepest_sampled``,
 settings.descent_lattice): f at the N lattice points of each triangle, then a
 descent from ``--sampled-starts`` of them (the lowest discrete local minima
 first, none within one lattice spacing of another), ``--sampled-iterations``.
@@ -53,7 +53,7 @@ from functools import partial
 
 import numpy as np
 
-from sdfphys.collide import descent
+from sdfphys.collide import descent, lattice
 from sdfphys.sdf import compiled, field
 
 FIELDS = {
@@ -219,9 +219,9 @@ def main() -> None:
                 query_of = partial(descent.triangle_deepest, iterations=iterations,
                                    starts=descent.START_BARYCENTRIC[STARTS[n_starts]])
             else:
-                query_of = partial(descent.triangle_deepest_sampled, degree=degree,
+                query_of = partial(lattice.triangle_deepest_sampled, degree=degree,
                                    n_starts=n_starts, iterations=iterations)
-            row = [name, str(descent.lattice_size(degree) if degree else 0), str(n_starts),
+            row = [name, str(lattice.lattice_size(degree) if degree else 0), str(n_starts),
                    str(iterations)]
             for batch in args.batches:
                 part = tri[:batch]

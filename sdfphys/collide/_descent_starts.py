@@ -10,7 +10,7 @@ and the state the descent rounds (``_descent_kernels``) begin from and end in.
   ``_descent_kernels``) before the first round, and the best points after the last.
 - ``hidden_dips``, ``present_dips``, ``with_dips``, ``pick_starts`` and
   ``gather_starts``: starts chosen by sampling a lattice of the triangle
-  (``settings.descent_lattice``; ``descent.triangle_deepest_sampled``).
+  (``settings.descent_lattice``; ``lattice.triangle_deepest_sampled``).
 """
 
 from __future__ import annotations
@@ -277,7 +277,7 @@ def results(state: np.ndarray, flags: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 # --------------------------------------------------------------------------------------
-# Starts chosen by sampling (``descent.triangle_deepest_sampled``)
+# Starts chosen by sampling (``lattice.triangle_deepest_sampled``)
 # --------------------------------------------------------------------------------------
 
 @njit(cache=True, error_model="numpy")

@@ -2,16 +2,15 @@
 
 ``field_pairs.placed_field_contacts`` (sdf-sdf pairs and the sdf-in-mesh direction of
 mesh-sdf pairs) needs, per group: the overlap regions of the two bounds, the Halton
-starts over them, then the descent (``_compiled_descent.descend``) and the merges and
-patch search after it (``_compiled_descent.field_contacts``). In numpy the glue before
-the descent (a few dozen small operations) cost as much as the kernels in a scene of
-a few bodies per shape pair (the showcase: about 200 us a group, most groups one
-pair). :func:`placed_starts` computes it in one call, with the operations of
-``field_pairs.field_field_contacts`` in the same order (the trigonometry stays with the
-caller: numpy's cos and sin, which the rest of the narrowphase uses), so the contacts
-are the same bits. The descent and the merges
-stay separate calls: a kernel calling them would link and compile their code again
-(about 4 s more at a cold start).
+starts over them, then the descent (``_compiled_descent.descend``) and the merges
+and patch search after it (``_compiled_field_contacts.field_contacts``). In numpy the
+glue before the descent (a few dozen small operations) cost as much as the kernels in
+a scene of a few bodies per shape pair (the showcase: about 200 us a group, most
+groups one pair). :func:`placed_starts` computes it in one call, with the operations
+of ``field_pairs.field_field_contacts`` in the same order (the trigonometry stays with
+the caller: numpy's cos and sin, which the rest of the narrowphase uses), so the
+contacts are the same bits. The descent and the merges stay separate calls: a kernel
+calling them would link and compile their code again (about 4 s more at a cold start).
 """
 
 from __future__ import annotations

@@ -27,7 +27,7 @@ from ..sdf.compiled import Program, compile_field
 from ..vec2 import TINY
 from . import _descent_paths as paths
 from . import descent
-from ._compiled_descent import field_contacts, patch_ends
+from ._compiled_field_contacts import field_contacts, patch_ends
 from ._placed_fields import overlap_regions, placed_starts
 
 __all__ = ["field_field_contacts", "field_field_contacts_single", "placed_field_contacts"]

@@ -54,7 +54,7 @@ import numpy as np
 from ..sdf import Field, compiled, safe_normalize
 from ..settings import Settings
 from ..shapes import Shape
-from . import descent
+from . import descent, lattice
 from ._mesh_contacts_kernels import (
     _AXES,
     _KINK,
@@ -102,9 +102,9 @@ class _Candidates:
 
 def _sampled_minima(field: Field, tri: np.ndarray, settings: Settings
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``descent.triangle_deepest_sampled`` with the settings' lattice, starts and
+    """``lattice.triangle_deepest_sampled`` with the settings' lattice, starts and
     iterations: point (T, K, 2), value (T, K) and the start ids (K,) of the ranks."""
-    point, value = descent.triangle_deepest_sampled(
+    point, value = lattice.triangle_deepest_sampled(
         field, tri, settings.descent_lattice, settings.descent_starts,
         iterations=settings.descent_iterations)
     return point, value, SAMPLED_START + np.arange(point.shape[1], dtype=np.int64)
