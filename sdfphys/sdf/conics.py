@@ -256,8 +256,19 @@ class Ellipse(Field):
     # at the evolute cusp): the distance reaches round-off after 4 Newton steps;
     # _NEWTON = 6 leaves a margin. On the major axis (B = 0) the closed form:
     # q = (a^2 x / e, b sqrt(1 - (a x / e)^2)) if A < e, else the vertex (a, 0).
+    # Most points need no bisection: _FAST_NEWTON Newton steps straight from lo (the
+    # same monotone rise) whose last step is under _SETTLED u have reached the root to
+    # round-off (quadratic convergence: the next step would be ~1e-20 u). Measured on
+    # 1.2e6 points (aspects 1 to 1000; around, on rays through and far from the
+    # ellipse, y down to 1e-300): 99.3 % settle so, their distances within 6.7e-16
+    # (relative) of the bracketed solver's; the others (near the major axis inside,
+    # near the largest doubles) run the bracketed solver. 2.5x faster over a batch
+    # (258 -> 104 ns a point compiled), which the showcase's terrain pays at every
+    # query point.
     _BISECTIONS = 12
     _NEWTON = 6
+    _FAST_NEWTON = 8
+    _SETTLED = 1e-10
 
     def __init__(self, size: ArrayLike):
         w, h = _vec(size)
@@ -282,16 +293,24 @@ class Ellipse(Field):
         lo = np.where(general, np.maximum(big_b, big_a - e), 1.0)
         hi = np.where(general, np.hypot(big_a, big_b), 1.0)
         big_b = np.where(general, big_b, 1.0)
-        for _ in range(self._BISECTIONS):
-            mid = np.sqrt(lo) * np.sqrt(hi)
-            f = (big_a / (mid + e)) ** 2 + (big_b / mid) ** 2 - 1.0
-            lo, hi = np.where(f >= 0.0, mid, lo), np.where(f >= 0.0, hi, mid)
-        u = lo
-        for _ in range(self._NEWTON):
-            fx, fy = big_a / (u + e), big_b / u
-            n = np.hypot(fx, fy)
-            slope = fx * fx / (u + e) + fy * fy / u
-            u = u + n * n * (n - 1.0) / slope
+        u = previous = lo
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            for _ in range(self._FAST_NEWTON):         # NaN where it overflows: slow
+                previous, u = u, self._newton(big_a, big_b, e, u)
+        slow = ~(np.abs(u - previous) <= self._SETTLED * u)
+        if np.any(slow):
+            lo, hi, fa, fb = lo[slow], hi[slow], big_a[slow], big_b[slow]
+            for _ in range(self._BISECTIONS):
+                mid = np.sqrt(lo) * np.sqrt(hi)
+                f = (fa / (mid + e)) ** 2 + (fb / mid) ** 2 - 1.0
+                lo, hi = np.where(f >= 0.0, mid, lo), np.where(f >= 0.0, hi, mid)
+            for _ in range(self._NEWTON):
+                fx, fy = fa / (lo + e), fb / lo
+                n = np.hypot(fx, fy)
+                slope = fx * fx / (lo + e) + fy * fy / lo
+                lo = lo + n * n * (n - 1.0) / slope
+            u = u.copy()
+            u[slow] = lo
         xc = np.where(general, a * big_a / (u + e), 0.0)
         yc = np.where(general, b * big_b / u, 0.0)
         interior = big_a < e
@@ -305,6 +324,19 @@ class Ellipse(Field):
         if self.swap:
             g = g[:, ::-1]
         return np.where(inside, -dist, dist), g
+
+    @staticmethod
+    def _newton(big_a: np.ndarray, big_b: np.ndarray, e: float, u: np.ndarray) -> np.ndarray:
+        """One Newton step on psi(u) = 1 / |(A / (u + e), B / u)| - 1 (above): with
+        F = (f_x, f_y) = (A / (u + e), B / u), u + |F|^2 (|F| - 1) / (f_x^2 / (u + e)
+        + f_y^2 / u), in two divisions and a square root. The bracketed solver's steps
+        divide and take hypot instead: near the largest doubles 1 / (u + e) is
+        subnormal (a NaN here, so such a point does not settle and goes there)."""
+        inner, outer = 1.0 / (u + e), 1.0 / u
+        fx, fy = big_a * inner, big_b * outer
+        square = fx * fx + fy * fy
+        slope = fx * fx * inner + fy * fy * outer
+        return u + square * (np.sqrt(square) - 1.0) / slope
 
     def bounds(self) -> np.ndarray:
         hx, hy = self.half
