@@ -43,10 +43,12 @@ or copied world steps on bit for bit as the original.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from .._jit import njit
 from ..settings import Settings
-from ..vec2 import rotate, rows_dot
 from .contacts import Contacts
 
 __all__ = ["ContactCache"]
@@ -59,26 +61,12 @@ def _keys(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return (lo.astype(np.int64) << _SHIFT) | hi.astype(np.int64)
 
 
-def _relative(pose: np.ndarray, ref: np.ndarray, other: np.ndarray) -> np.ndarray:
-    """(P, 3): the other body's centre of mass in the reference body's frame, and the
-    angle of the other minus the reference's (pose (B, 3) x, y, angle)."""
-    centre = rotate(pose[other, :2] - pose[ref, :2], -pose[ref, 2])
-    return np.column_stack([centre, pose[other, 2] - pose[ref, 2]])
-
-
 def _offsets(count: np.ndarray) -> np.ndarray:
     """(N + 1,) int64: where each of N consecutive runs of ``count`` rows starts, and
     the total."""
     first = np.zeros(len(count) + 1, np.int64)
     np.cumsum(count, out=first[1:])
     return first
-
-
-def _reference_is_lo(lo: np.ndarray, hi: np.ndarray, radius: np.ndarray,
-                     round_: np.ndarray) -> np.ndarray:
-    """(P,) bool: the pair's reference body is lo (module docstring): the one that is
-    not round, else the one of larger bounding radius (lo on a tie)."""
-    return np.where(round_[lo] != round_[hi], round_[hi], radius[lo] >= radius[hi])
 
 
 def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
@@ -96,12 +84,13 @@ class ContactCache:
 
     Per kept pair (N, sorted by key): key (N,) int64 (lo << 32 | hi, lo < hi body
     indices), shape (N, 2) the two bodies' shape numbers, ref_is_lo (N,) bool,
-    relative (N, 3) the other body's pose in the reference's frame when found
-    (``_relative``), margin (N,) m the margin they were found with, first (N + 1,)
-    the pair's rows in the contact arrays; per kept contact (K,): on_ref, on_other
-    (K, 2) the surface points of the reference body and of the other in their body
-    frames (m), normal (K, 2) unit in the reference's frame from lo toward hi, feature
-    (K,) int64.
+    relative (N, 3) the other body's centre of mass in the reference's frame and the
+    angle of the other minus the reference's, when found, margin (N,) m the margin
+    they were found with, first (N + 1,) the pair's rows in the contact arrays; per
+    kept contact (K,): on_ref, on_other (K, 2) the surface points of the reference
+    body and of the other in their body frames (m), normal (K, 2) unit in the
+    reference's frame from lo toward hi, feature (K,) int64. The loops over pairs and
+    contacts are compiled (``_carry``, ``_merged``).
     """
 
     def __init__(self) -> None:
@@ -152,41 +141,13 @@ class ContactCache:
         if self.settings is None or self.settings != settings:
             self.clear()
             self.settings = settings
-        lo, hi = np.minimum(pairs[:, 0], pairs[:, 1]), np.maximum(pairs[:, 0], pairs[:, 1])
-        key = _keys(lo, hi)
-        at = np.minimum(np.searchsorted(self.key, key), max(len(self.key) - 1, 0))
-        reused = np.zeros(len(pairs), bool)
-        if len(self.key):
-            known = ((self.key[at] == key) & (self.shape[at, 0] == body_shape[lo])
-                     & (self.shape[at, 1] == body_shape[hi]))
-            ref_lo = self.ref_is_lo[at]
-            ref, other = np.where(ref_lo, lo, hi), np.where(ref_lo, hi, lo)
-            change = _relative(pose, ref, other) - self.relative[at]
-            turn = np.abs(change[:, 2])
-            swing = np.where((turn > 0.0) & ~round_[other], turn * radius[other], 0.0)
-            e = np.hypot(change[:, 0], change[:, 1]) + swing
-            reused = known & (e <= tau) & (margin + e <= self.margin[at])
-        keep = np.zeros(len(self.key), bool)
-        keep[at[reused]] = True
-        self._keep(keep)
-        return reused, self._contacts(pose, round_)
-
-    def _contacts(self, pose: np.ndarray, round_: np.ndarray) -> Contacts:
-        """The kept contacts carried to the bodies' poses (module docstring)."""
-        count = np.diff(self.first)
-        key = np.repeat(self.key, count)
-        lo, hi = key >> _SHIFT, key & 0xFFFFFFFF
-        ref_lo = np.repeat(self.ref_is_lo, count)
-        ref, other = np.where(ref_lo, lo, hi), np.where(ref_lo, hi, lo)
-        on_ref = pose[ref, :2] + rotate(self.on_ref, pose[ref, 2])
-        turn = np.where(round_[other], pose[ref, 2], pose[other, 2])
-        on_other = pose[other, :2] + rotate(self.on_other, turn)
-        normal = rotate(self.normal, pose[ref, 2])
-        # n points from lo to hi: d = n . (p_lo - p_hi) = sign n . (p_ref - p_other).
-        sign = np.where(ref_lo, 1.0, -1.0)
-        depth = sign * rows_dot(normal, on_ref - on_other)
-        point = on_other + (0.5 * sign * depth)[:, None] * normal
-        return Contacts(lo, hi, point, normal, depth, self.feature.copy())
+        turns = _turns(pose)
+        reused, kept, lo, hi, point, normal, depth = _carry(
+            self.key, self.shape, self.ref_is_lo, self.relative, self.margin, self.first,
+            self.on_ref, self.on_other, self.normal, np.ascontiguousarray(pairs, np.int64),
+            pose, *turns, radius, round_, body_shape, margin, float(tau))
+        self._keep(kept)
+        return reused, Contacts(lo, hi, point, normal, depth, self.feature.copy())
 
     def store(self, pairs: np.ndarray, found_margin: np.ndarray, contacts: Contacts,
               pose: np.ndarray, radius: np.ndarray, round_: np.ndarray,
@@ -198,35 +159,165 @@ class ContactCache:
         lo, hi = np.minimum(pairs[:, 0], pairs[:, 1]), np.maximum(pairs[:, 0], pairs[:, 1])
         key = _keys(lo, hi)
         by_key = np.argsort(key, kind="stable")
-        key, lo, hi, found_margin = key[by_key], lo[by_key], hi[by_key], found_margin[by_key]
-        ref_is_lo = _reference_is_lo(lo, hi, radius, round_)
-        ref, other = np.where(ref_is_lo, lo, hi), np.where(ref_is_lo, hi, lo)
-        relative = _relative(pose, ref, other)
         row_key = _keys(contacts.body_a, contacts.body_b)
         rows = np.argsort(row_key, kind="stable")
-        row_key = row_key[rows]
         c = contacts.take(rows)
-        first = np.append(np.searchsorted(row_key, key), len(row_key))
-        half = 0.5 * c.depth[:, None] * c.normal
-        a, b = c.body_a, c.body_b
-        ref_a = _reference_is_lo(a, b, radius, round_)
-        ref, other = np.where(ref_a, a, b), np.where(ref_a, b, a)
-        side = np.where(ref_a, 1.0, -1.0)[:, None] * half     # p_a = p + half, p_b = p - half
-        on_ref = rotate(c.point + side - pose[ref, :2], -pose[ref, 2])
-        turn = np.where(round_[other], pose[ref, 2], pose[other, 2])
-        on_other = rotate(c.point - side - pose[other, :2], -turn)
-        normal = rotate(c.normal, -pose[ref, 2])
-        shape = np.column_stack([body_shape[lo], body_shape[hi]])
-        # Merge with the reused pairs (disjoint keys), sorted by key.
-        join = np.concatenate
-        all_key = join([self.key, key])
-        order = np.argsort(all_key, kind="stable")
-        count = join([np.diff(self.first), np.diff(first)])[order]
-        start = join([self.first[:-1], first[:-1] + len(self.feature)])[order]
-        rows = _ranges(start, start + count)
-        self._set(all_key[order], join([self.shape, shape])[order],
-                  join([self.ref_is_lo, ref_is_lo])[order],
-                  join([self.relative, relative])[order],
-                  join([self.margin, found_margin])[order], _offsets(count),
-                  join([self.on_ref, on_ref])[rows], join([self.on_other, on_other])[rows],
-                  join([self.normal, normal])[rows], join([self.feature, c.feature])[rows])
+        self._set(*_merged(
+            self.key, self.shape, self.ref_is_lo, self.relative, self.margin, self.first,
+            self.on_ref, self.on_other, self.normal, self.feature, key[by_key], lo[by_key],
+            hi[by_key], found_margin[by_key], row_key[rows], c.point, c.normal, c.depth,
+            c.feature, pose, *_turns(pose), radius, round_, body_shape))
+
+
+def _turns(pose: np.ndarray) -> tuple[np.ndarray, ...]:
+    """cos and sin (B,) of the bodies' angles and of their negatives (numpy's, as the
+    rest of the narrowphase: ``vec2.rotate``)."""
+    angle = np.ascontiguousarray(pose[:, 2])
+    return np.cos(angle), np.sin(angle), np.cos(-angle), np.sin(-angle)
+
+
+@njit(cache=True, error_model="numpy")
+def _reference(lo: int, hi: int, radius: np.ndarray, round_: np.ndarray) -> bool:
+    """Whether the pair's reference body is lo (module docstring): the one that is
+    not round, else the one of larger bounding radius (lo on a tie)."""
+    if round_[lo] != round_[hi]:
+        return bool(round_[hi])
+    return radius[lo] >= radius[hi]
+
+
+@njit(cache=True, error_model="numpy")
+def _carry(key, shape, ref_is_lo, relative, margin, first, on_ref, on_other, normal, pairs,
+           pose, cos, sin, cos_neg, sin_neg, radius, round_, body_shape, pair_margin, tau):
+    """``ContactCache.reuse`` over the kept arrays (the class docstring's names).
+
+    pairs (P, 2), pose (B, 3), cos, sin, cos_neg, sin_neg (B,) (``_turns``), radius,
+    round_, body_shape (B,), pair_margin (P,), tau: as ``reuse``. Returns reused (P,),
+    kept (N,) bool (the kept pairs reused), and per contact of those, in the kept
+    order: lo, hi (K,), point, normal (K, 2), depth (K,).
+    """
+    n_kept = key.shape[0]
+    reused = np.zeros(pairs.shape[0], dtype=np.bool_)
+    kept = np.zeros(n_kept, dtype=np.bool_)
+    for p in range(pairs.shape[0]):
+        lo, hi = min(pairs[p, 0], pairs[p, 1]), max(pairs[p, 0], pairs[p, 1])
+        k = (lo << 32) | hi
+        left, right = 0, n_kept                          # the first key >= k
+        while left < right:
+            mid = (left + right) // 2
+            if key[mid] < k:
+                left = mid + 1
+            else:
+                right = mid
+        at = left
+        if at == n_kept or key[at] != k or shape[at, 0] != body_shape[lo] \
+                or shape[at, 1] != body_shape[hi]:
+            continue
+        ref, other = (lo, hi) if ref_is_lo[at] else (hi, lo)
+        dx, dy = pose[other, 0] - pose[ref, 0], pose[other, 1] - pose[ref, 1]
+        c, s = cos_neg[ref], sin_neg[ref]
+        change_x = (c * dx - s * dy) - relative[at, 0]
+        change_y = (s * dx + c * dy) - relative[at, 1]
+        turn = abs((pose[other, 2] - pose[ref, 2]) - relative[at, 2])
+        swing = turn * radius[other] if turn > 0.0 and not round_[other] else 0.0
+        e = math.hypot(change_x, change_y) + swing
+        if e <= tau and pair_margin[p] + e <= margin[at]:
+            reused[p] = True
+            kept[at] = True
+    n = 0
+    for at in range(n_kept):
+        if kept[at]:
+            n += first[at + 1] - first[at]
+    lo_out, hi_out = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    point, normal_out, depth = np.empty((n, 2)), np.empty((n, 2)), np.empty(n)
+    r = 0
+    for at in range(n_kept):
+        if not kept[at]:
+            continue
+        lo, hi = key[at] >> 32, key[at] & 0xFFFFFFFF
+        ref, other = (lo, hi) if ref_is_lo[at] else (hi, lo)
+        sign = 1.0 if ref_is_lo[at] else -1.0
+        c, s = cos[ref], sin[ref]
+        # A circle's point turns with the reference (module docstring).
+        co, so = (cos[ref], sin[ref]) if round_[other] else (cos[other], sin[other])
+        for i in range(first[at], first[at + 1]):
+            fx = pose[ref, 0] + (c * on_ref[i, 0] - s * on_ref[i, 1])
+            fy = pose[ref, 1] + (s * on_ref[i, 0] + c * on_ref[i, 1])
+            ox = pose[other, 0] + (co * on_other[i, 0] - so * on_other[i, 1])
+            oy = pose[other, 1] + (so * on_other[i, 0] + co * on_other[i, 1])
+            nx = c * normal[i, 0] - s * normal[i, 1]
+            ny = s * normal[i, 0] + c * normal[i, 1]
+            # n points from lo to hi: d = n . (p_lo - p_hi) = sign n . (p_ref - p_other).
+            d = sign * (nx * (fx - ox) + ny * (fy - oy))
+            half = 0.5 * sign * d
+            lo_out[r], hi_out[r] = lo, hi
+            point[r, 0], point[r, 1] = ox + half * nx, oy + half * ny
+            normal_out[r, 0], normal_out[r, 1] = nx, ny
+            depth[r] = d
+            r += 1
+    return reused, kept, lo_out, hi_out, point, normal_out, depth
+
+
+@njit(cache=True, error_model="numpy")
+def _merged(key, shape, ref_is_lo, relative, margin, first, on_ref, on_other, normal,
+            feature, new_key, new_lo, new_hi, new_margin, row_key, point, row_normal, depth,
+            row_feature, pose, cos, sin, cos_neg, sin_neg, radius, round_, body_shape):
+    """``ContactCache.store``: the kept arrays (the class docstring's names) merged with
+    the pairs just searched, new_key, new_lo, new_hi, new_margin (P,) sorted by key,
+    and their contacts sorted by pair key: row_key (K,), point, row_normal (K, 2), depth,
+    row_feature (K,) (body_a < body_b). Returns the arrays of ``ContactCache._set``."""
+    n_old, n_new, n_rows = key.shape[0], new_key.shape[0], row_key.shape[0]
+    n_all = n_old + n_new
+    k_all = on_ref.shape[0] + n_rows
+    out_key, out_shape = np.empty(n_all, dtype=np.int64), np.empty((n_all, 2), dtype=np.int64)
+    out_ref, out_relative = np.empty(n_all, dtype=np.bool_), np.empty((n_all, 3))
+    out_margin, out_first = np.empty(n_all), np.empty(n_all + 1, dtype=np.int64)
+    out_on_ref, out_on_other = np.empty((k_all, 2)), np.empty((k_all, 2))
+    out_normal, out_feature = np.empty((k_all, 2)), np.empty(k_all, dtype=np.int64)
+    i = j = row = r = 0
+    out_first[0] = 0
+    for m in range(n_all):
+        if j == n_new or (i < n_old and key[i] < new_key[j]):      # a kept pair
+            out_key[m], out_ref[m], out_margin[m] = key[i], ref_is_lo[i], margin[i]
+            out_shape[m, 0], out_shape[m, 1] = shape[i, 0], shape[i, 1]
+            for c in range(3):
+                out_relative[m, c] = relative[i, c]
+            for q in range(first[i], first[i + 1]):
+                out_on_ref[r, 0], out_on_ref[r, 1] = on_ref[q, 0], on_ref[q, 1]
+                out_on_other[r, 0], out_on_other[r, 1] = on_other[q, 0], on_other[q, 1]
+                out_normal[r, 0], out_normal[r, 1] = normal[q, 0], normal[q, 1]
+                out_feature[r] = feature[q]
+                r += 1
+            i += 1
+        else:                                                       # a pair just searched
+            lo, hi = new_lo[j], new_hi[j]
+            is_lo = _reference(lo, hi, radius, round_)
+            ref, other = (lo, hi) if is_lo else (hi, lo)
+            out_key[m], out_ref[m], out_margin[m] = new_key[j], is_lo, new_margin[j]
+            out_shape[m, 0], out_shape[m, 1] = body_shape[lo], body_shape[hi]
+            dx, dy = pose[other, 0] - pose[ref, 0], pose[other, 1] - pose[ref, 1]
+            c, s = cos_neg[ref], sin_neg[ref]
+            out_relative[m, 0], out_relative[m, 1] = c * dx - s * dy, s * dx + c * dy
+            out_relative[m, 2] = pose[other, 2] - pose[ref, 2]
+            # This pair's rows: the run of row_key equal to its key.
+            while row < n_rows and row_key[row] < new_key[j]:
+                row += 1
+            # p_lo = p + n d / 2, p_hi = p - n d / 2: the reference's side is +-.
+            side = 0.5 if is_lo else -0.5
+            co, so = (cos_neg[ref], sin_neg[ref]) if round_[other] \
+                else (cos_neg[other], sin_neg[other])
+            while row < n_rows and row_key[row] == new_key[j]:
+                hx = side * depth[row] * row_normal[row, 0]
+                hy = side * depth[row] * row_normal[row, 1]
+                px, py = point[row, 0] + hx - pose[ref, 0], point[row, 1] + hy - pose[ref, 1]
+                out_on_ref[r, 0], out_on_ref[r, 1] = c * px - s * py, s * px + c * py
+                px, py = point[row, 0] - hx - pose[other, 0], point[row, 1] - hy - pose[other, 1]
+                out_on_other[r, 0], out_on_other[r, 1] = co * px - so * py, so * px + co * py
+                nx, ny = row_normal[row, 0], row_normal[row, 1]
+                out_normal[r, 0], out_normal[r, 1] = c * nx - s * ny, s * nx + c * ny
+                out_feature[r] = row_feature[row]
+                r += 1
+                row += 1
+            j += 1
+        out_first[m + 1] = r
+    return (out_key, out_shape, out_ref, out_relative, out_margin, out_first, out_on_ref,
+            out_on_other, out_normal, out_feature)
