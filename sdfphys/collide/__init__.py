@@ -171,9 +171,9 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
     pair margin; contacts beyond their own pair's margin are then dropped. ``ran``,
     if given, receives the (kind_a, kind_b) of every pair function called. cache:
     the world's ``ContactCache`` (with radius (B,), the bodies' bounding radii, and
-    round_ (B,) bool, the circles):
-    pairs that barely moved keep their contacts, the others are searched with their
-    margin grown by ``settings.reuse_distance`` and kept; None: all searched.
+    round_ (B,) bool, the circles): pairs that barely moved keep their contacts, the
+    others are searched with their margin grown by ``settings.reuse_distance`` and
+    kept; None: all searched.
     """
     pair_margin = margin + reach[pairs[:, 0]] + reach[pairs[:, 1]]
     tau, kept = 0.0, None
