@@ -120,6 +120,7 @@ SWEEPS: dict[str, tuple[Any, ...]] = {
     "large_island_load_cap": (1.0, 2.0, 4.0),
     "soft_depth": (0.0, 0.005, 0.02, 1.0),
     "split_push_out": (0.0, 0.2, 0.5, 1.0),
+    "reuse_distance": (0.0, 1e-4, 1e-3),
 }
 
 #: Reduced sweeps of the quick bench.
@@ -225,6 +226,7 @@ def relevant_knobs(counts: dict[str, int], knobs: Sequence[str]) -> list[str]:
         "descent_iterations": mesh, "descent_starts": mesh, "descent_lattice": mesh,
         "field_descent_iterations": fields, "field_descent_starts": fields,
         "gradient": bool(ran & set(_SDF_PAIRS)), "grid_cell": bool(ran & set(_SDF_PAIRS)),
+        "reuse_distance": bool(ran & set(_SDF_PAIRS)),     # kept contacts: descent pairs
         "restitution_passes": "restitution" in ran,
         "time_of_impact": "time_of_impact" in ran,
     }
