@@ -53,8 +53,8 @@ def _query(shapes, position, angle, settings, cache=None, velocity=None, ran=Non
                          velocity=velocity, ran=ran, cache=cache)
 
 
-def _deepest(c, n: int) -> np.ndarray:
-    """Per body pair key a * n + b: the deepest contact (dict)."""
+def _deepest(c, n: int) -> dict[int, float]:
+    """Per body pair key a * n + b, its deepest contact (m)."""
     out: dict[int, float] = {}
     for a, b, d in zip(c.body_a, c.body_b, c.depth):
         k = int(a) * n + int(b)

@@ -73,7 +73,7 @@ from .circle_kernels import (
     merge_order,
     reach_and_boxes,
 )
-from .contact_cache import ContactCache
+from .contact_cache import ContactCache, body_turns
 from .contacts import Contacts
 from .filter import PairFilter
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
@@ -175,13 +175,14 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
     others are searched with their margin grown by ``settings.reuse_distance`` and
     kept; None: all searched.
     """
-    pair_margin = margin + reach[pairs[:, 0]] + reach[pairs[:, 1]]
     tau, kept = 0.0, None
     if cache is not None and settings.reuse_distance > 0.0:
         tau = settings.reuse_distance
-        reused, kept = cache.reuse(pairs, pose, radius, round_, body_shape, pair_margin,
-                                   tau, settings)
-        pairs, pair_margin = pairs[~reused], pair_margin[~reused]
+        turns = body_turns(pose)
+        pair_margin = margin + reach[pairs[:, 0]] + reach[pairs[:, 1]]
+        reused, kept = cache.reuse(pairs, pose, turns, radius, round_, body_shape,
+                                   pair_margin, tau, settings)
+        pairs = pairs[~reused]
     kind_rank = np.array([KIND_ORDER.index(s.kind) for s in shapes], np.int64)
     sa, sb = body_shape[pairs[:, 0]], body_shape[pairs[:, 1]]
     ka, kb = kind_rank[sa], kind_rank[sb]
@@ -211,8 +212,8 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
     c.body_a, c.body_b = np.where(flip, c.body_b, c.body_a), np.where(flip, c.body_a, c.body_b)
     c.normal = np.where(flip[:, None], -c.normal, c.normal)
     if kept is not None:
-        cache.store(np.column_stack([first, second]), found_margin, c, pose, radius, round_,
-                    body_shape)
+        cache.store(np.column_stack([first, second]), found_margin, c, pose, turns, radius,
+                    round_, body_shape)
         c = Contacts.concatenate([kept, c])
     c = c.take(c.depth > -(margin + reach[c.body_a] + reach[c.body_b]))
 

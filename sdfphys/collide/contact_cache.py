@@ -51,7 +51,7 @@ from .._jit import njit
 from ..settings import Settings
 from .contacts import Contacts
 
-__all__ = ["ContactCache"]
+__all__ = ["ContactCache", "body_turns"]
 
 _SHIFT = np.int64(32)
 
@@ -126,12 +126,14 @@ class ContactCache:
                   self.relative[keep], self.margin[keep], _offsets(count),
                   self.on_ref[rows], self.on_other[rows], self.normal[rows], self.feature[rows])
 
-    def reuse(self, pairs: np.ndarray, pose: np.ndarray, radius: np.ndarray,
-              round_: np.ndarray, body_shape: np.ndarray, margin: np.ndarray, tau: float,
-              settings: Settings) -> tuple[np.ndarray, Contacts]:
+    def reuse(self, pairs: np.ndarray, pose: np.ndarray, turns: tuple[np.ndarray, ...],
+              radius: np.ndarray, round_: np.ndarray, body_shape: np.ndarray,
+              margin: np.ndarray, tau: float, settings: Settings
+              ) -> tuple[np.ndarray, Contacts]:
         """Which of ``pairs`` keep their contacts this step, and those contacts.
 
         pairs (P, 2) body indices; pose (B, 3) centre-of-mass poses (x, y, angle);
+        turns: ``body_turns(pose)``, computed once for the step's reuse and store;
         radius (B,) bounding radii (m, inf if unbounded); round_ (B,) bool, circles;
         body_shape (B,) shape numbers; margin (P,) m, each pair's margin now; tau m.
         Returns reused (P,) bool and their contacts (body_a < body_b, ``Contacts``
@@ -141,7 +143,6 @@ class ContactCache:
         if self.settings is None or self.settings != settings:
             self.clear()
             self.settings = settings
-        turns = _turns(pose)
         reused, kept, lo, hi, point, normal, depth = _carry(
             self.key, self.shape, self.ref_is_lo, self.relative, self.margin, self.first,
             self.on_ref, self.on_other, self.normal, np.ascontiguousarray(pairs, np.int64),
@@ -150,12 +151,12 @@ class ContactCache:
         return reused, Contacts(lo, hi, point, normal, depth, self.feature.copy())
 
     def store(self, pairs: np.ndarray, found_margin: np.ndarray, contacts: Contacts,
-              pose: np.ndarray, radius: np.ndarray, round_: np.ndarray,
-              body_shape: np.ndarray) -> None:
+              pose: np.ndarray, turns: tuple[np.ndarray, ...], radius: np.ndarray,
+              round_: np.ndarray, body_shape: np.ndarray) -> None:
         """Keep the contacts just found for ``pairs`` (P, 2), found with margins
         ``found_margin`` (P,) m; contacts: theirs, body_a < body_b, every row's pair
         among ``pairs`` (pairs without contacts are kept too: nothing within
-        their margin). pose, radius, round_, body_shape: as ``reuse``."""
+        their margin). pose, turns, radius, round_, body_shape: as ``reuse``."""
         lo, hi = np.minimum(pairs[:, 0], pairs[:, 1]), np.maximum(pairs[:, 0], pairs[:, 1])
         key = _keys(lo, hi)
         by_key = np.argsort(key, kind="stable")
@@ -166,10 +167,10 @@ class ContactCache:
             self.key, self.shape, self.ref_is_lo, self.relative, self.margin, self.first,
             self.on_ref, self.on_other, self.normal, self.feature, key[by_key], lo[by_key],
             hi[by_key], found_margin[by_key], row_key[rows], c.point, c.normal, c.depth,
-            c.feature, pose, *_turns(pose), radius, round_, body_shape))
+            c.feature, pose, *turns, radius, round_, body_shape))
 
 
-def _turns(pose: np.ndarray) -> tuple[np.ndarray, ...]:
+def body_turns(pose: np.ndarray) -> tuple[np.ndarray, ...]:
     """cos and sin (B,) of the bodies' angles and of their negatives (numpy's, as the
     rest of the narrowphase: ``vec2.rotate``)."""
     angle = np.ascontiguousarray(pose[:, 2])
@@ -190,7 +191,7 @@ def _carry(key, shape, ref_is_lo, relative, margin, first, on_ref, on_other, nor
            pose, cos, sin, cos_neg, sin_neg, radius, round_, body_shape, pair_margin, tau):
     """``ContactCache.reuse`` over the kept arrays (the class docstring's names).
 
-    pairs (P, 2), pose (B, 3), cos, sin, cos_neg, sin_neg (B,) (``_turns``), radius,
+    pairs (P, 2), pose (B, 3), cos, sin, cos_neg, sin_neg (B,) (``body_turns``), radius,
     round_, body_shape (B,), pair_margin (P,), tau: as ``reuse``. Returns reused (P,),
     kept (N,) bool (the kept pairs reused), and per contact of those, in the kept
     order: lo, hi (K,), point, normal (K, 2), depth (K,).

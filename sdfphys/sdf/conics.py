@@ -262,9 +262,7 @@ class Ellipse(Field):
     # 1.2e6 points (aspects 1 to 1000; around, on rays through and far from the
     # ellipse, y down to 1e-300): 99.3 % settle so, their distances within 6.7e-16
     # (relative) of the bracketed solver's; the others (near the major axis inside,
-    # near the largest doubles) run the bracketed solver. 2.5x faster over a batch
-    # (258 -> 104 ns a point compiled), which the showcase's terrain pays at every
-    # query point.
+    # near the largest doubles) run the bracketed solver.
     _BISECTIONS = 12
     _NEWTON = 6
     _FAST_NEWTON = 8
