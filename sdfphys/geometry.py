@@ -30,6 +30,7 @@ import numpy as np
 from ._jit import njit
 from .errors import SpecError, check_number, check_points
 from .sdf.base import Field
+from .sorting import stable_argsort
 
 __all__ = [
     "circle_mass_properties",
@@ -215,7 +216,7 @@ def _first_intersection(p: np.ndarray) -> tuple[int, int, int]:
         x1[i] = max(p[i, 0], p[j, 0])
         y0[i] = min(p[i, 1], p[j, 1])
         y1[i] = max(p[i, 1], p[j, 1])
-    order = np.argsort(x0)
+    order = stable_argsort(x0)
     best_i, best_j, best_kind = m, m, 0
     for s in range(m):
         e = order[s]

@@ -17,6 +17,7 @@ import numpy as np
 
 from .._jit import njit
 from ..sdf.compiled import run, scratch
+from ..sorting import stable_argsort
 from ._descent_paths import EPS, PAIR, _stationarity
 
 __all__ = ["field_contacts", "patch_ends"]
@@ -292,7 +293,7 @@ def field_contacts(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesti
             if flat[c]:
                 o_pair[j], source[j] = pair[c], (side + 1) * n_c + c
                 j += 1
-    order = np.argsort(o_pair, kind="mergesort")
+    order = stable_argsort(o_pair)
     e_pair = np.empty(total, dtype=np.int64)
     e_point = np.empty((total, 2))
     e_depth = np.empty(total)

@@ -15,6 +15,7 @@ import numpy as np
 
 from .._jit import njit
 from ..sdf.compiled import run, scratch
+from ..sorting import stable_argsort
 from ..vec2 import unit_or
 from ._compiled_descent import enclosing_circles
 
@@ -93,7 +94,8 @@ def _place(mesh_vertices: np.ndarray, triangles: np.ndarray, cos: np.ndarray, si
     kept = kept[:count]
     tri = np.empty((count, 3, 2))
     for h in range(count):
-        tri[h] = local[kept[h]]
+        for j in range(3):
+            tri[h, j, 0], tri[h, j, 1] = local[kept[h], j, 0], local[kept[h], j, 1]
     return vertices, local, kept, tri
 
 
@@ -102,8 +104,8 @@ def _first_rows(pair: np.ndarray, element: np.ndarray, start: np.ndarray, n: int
                 ) -> np.ndarray:
     """``_first_per_key`` of the first n rows (element * 256 + start: start < 256)."""
     key = element[:n] * 256 + start[:n]
-    order = np.argsort(key, kind="mergesort")
-    order = order[np.argsort(pair[:n][order], kind="mergesort")]
+    order = stable_argsort(key)
+    order = order[stable_argsort(pair[:n][order])]
     first = np.zeros(n, dtype=np.bool_)
     for i in range(n):
         j = order[i]
@@ -303,8 +305,8 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
     of = np.empty(n_use, dtype=np.int64)
     for u in range(n_use):
         minus[u], of[u] = -depth[r_idx[use[u]]], pair[r_idx[use[u]]]
-    order = np.argsort(minus, kind="mergesort")
-    order = use[order[np.argsort(of[order], kind="mergesort")]]
+    order = stable_argsort(minus)
+    order = use[order[stable_argsort(of[order])]]
     # Measured vertices, then the accepted candidates; the first row of each key.
     rows = n_use
     for r in range(c):

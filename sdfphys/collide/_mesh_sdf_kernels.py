@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from .._jit import njit
+from ..sorting import stable_argsort
 from ..vec2 import unit_or
 from ._mesh_contacts_kernels import _evaluate
 
@@ -389,7 +390,7 @@ def _support(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting_s: 
         if far[h]:
             rows_of[j], of_pair[j] = n_k + h, pair[keep[h]]
             j += 1
-    order = np.argsort(of_pair, kind="mergesort")
+    order = stable_argsort(of_pair)
     total = n_k + n_far
     out_pair = np.empty(total, dtype=np.int64)
     out_mid = np.empty((total, 2))
