@@ -6,7 +6,7 @@ window live in ``sdfphys.render``, ``sdfphys.video`` and ``sdfphys.play``.
 
 from importlib import metadata as _metadata
 
-from . import _numba_cache, _numba_literals
+from . import _compile_lock, _numba_cache, _numba_literals
 
 try:
     __version__ = _metadata.version("sdfphys")      # pyproject.toml's, once installed
@@ -15,6 +15,7 @@ except _metadata.PackageNotFoundError:              # a source tree that was nev
 
 _numba_cache.install()      # before any kernel is defined: caches follow the whole package
 _numba_literals.install()   # one compilation per kernel and types, constants or not
+_compile_lock.install()     # processes on one cache compile each kernel once
 
 from . import sdf  # noqa: E402
 from . import collide  # noqa: E402  (the subpackage, callable: collide.collide)

@@ -1,25 +1,25 @@
-"""A second process compiles the solver's kernels while the first compiles the collisions'.
+"""A second process compiles half of a cold first step's kernels while the first compiles the rest.
 
-Numba compiles one kernel at a time under a process-wide lock, so a cold first step is
-serial: the collision kernels (stage 1, most of it for fields: the descents) and then
-the solver's (stages 2-6, most of it for a scene of boxes). On a machine with two cores
-or more, the first step of the first world of a process whose solver kernels are not yet
-in the on-disk cache forks a child (``start``): it runs the stages after the contact
-rows' preparation on no contacts, last stage first (``world_stages.compile_ahead``), which
-compiles the same kernels with the same argument types into the same cache, and exits.
-The parent goes on with the collisions and the preparation, then waits for the child
-(``join``, at most JOIN_SECONDS) and loads the rest instead of compiling it (numba
-checks the cache before compiling, and writes a cache file under a temporary name and
-renames it, so a reader never sees half of one). The trajectory is the same either
-way, only the wait shorter. Racing the child instead of waiting for it compiled much of
-the substep kernels twice, in both processes at once; running the collision stage's
-pair groups in reverse in the child gained nothing on the showcase: the groups share
-the descent's kernels.
+Numba compiles one kernel at a time under a process-wide lock, so a cold start is
+serial: the field evaluator for the first frame, the collision kernels (most of them
+for fields: the descents), then the solver's. On a machine with two cores or more, the
+first world a process steps or simulates forks a child (``start``) when the solver's
+kernels are not yet in the on-disk cache. The child works through the first step's
+kernels from the other end (``world_stages.compile_ahead``: the stages after the
+contact rows' preparation, last stage first, then the collisions' pair groups in the
+reverse of their order in a step), calling them on its copy of the world with the same
+argument types, which compiles them into the same cache, and exits. The parent goes on
+as without it. Each kernel is compiled once: a process that reaches a kernel the other
+is compiling waits for it and loads it (``sdfphys._compile_lock``), so the two meet
+somewhere in the middle. At the end of its first step the parent has everything it
+needs and stops the child (``stop``). The trajectory is the same either way, only the
+wait shorter.
 
 The child writes nothing but cache files: its standard streams go to the null device,
 it closes every other inherited descriptor (a video encoder's pipe must see its end of
-file when the parent closes it), takes the default action on SIGINT and SIGTERM, ends
-itself after CHILD_SECONDS, keeps the compile notice quiet, and leaves with
+file when the parent closes it), takes the default action on SIGINT, leaves on SIGTERM
+by unwinding (a kernel it was compiling releases its lock and leaves no temporary file
+behind), ends itself after CHILD_SECONDS, keeps the compile notice quiet, and exits with
 ``os._exit`` (no atexit handler, no flush of the parent's buffers). ``SDFPHYS_WARM=0``
 in the environment turns it off.
 """
@@ -32,18 +32,19 @@ import signal
 import threading
 from typing import Any
 
-__all__ = ["CHILD_SECONDS", "JOIN_SECONDS", "join", "start"]
+__all__ = ["CHILD_SECONDS", "STOP_SECONDS", "start", "stop"]
 
 _started = False
-#: Set while no child runs (``join``).
+#: The child's pid while it may run (``stop``).
+_child: int | None = None
+#: Set while no child runs.
 _done = threading.Event()
 _done.set()
 #: The child ends itself after this long whatever it is doing (SIGALRM's default
 #: action): a lock another thread of the parent held at the fork cannot keep it alive.
 CHILD_SECONDS = 900
-#: The parent waits at most this long for the child, then compiles what is left itself
-#: (a child several times slower than the joint scenes' 45 s on this machine).
-JOIN_SECONDS = 240
+#: How long ``stop`` waits for the child to unwind after SIGTERM.
+STOP_SECONDS = 30.0
 
 
 def _cold() -> bool:
@@ -61,7 +62,7 @@ def start(world: Any) -> int | None:
     """Fork the compiling child for ``world`` if this process has not yet, the machine has
     two cores or more, the platform forks, it is not turned off and the cache is cold.
     Returns the child's pid (None: no child)."""
-    global _started
+    global _started, _child
     if _started:
         return None
     _started = True
@@ -72,7 +73,7 @@ def start(world: Any) -> int | None:
     if pid == 0:                                    # the child
         try:
             signal.signal(signal.SIGINT, signal.SIG_DFL)
-            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            signal.signal(signal.SIGTERM, _leave)
             signal.alarm(CHILD_SECONDS)
             null = os.open(os.devnull, os.O_RDWR)
             for fd in (0, 1, 2):
@@ -84,21 +85,36 @@ def start(world: Any) -> int | None:
             compile_ahead(world)
         finally:
             os._exit(0)
+    _child = pid
     _done.clear()
     threading.Thread(target=_reap, args=(pid,), daemon=True).start()
     return pid
 
 
+def _leave(signum: int, frame: Any) -> None:
+    """The child's SIGTERM handler: unwind from wherever it is (``start``'s ``finally``
+    then exits)."""
+    raise SystemExit(0)
+
+
 def _reap(pid: int) -> None:
-    """Wait for the child (no zombie is left), then let ``join`` return."""
+    """Wait for the child (no zombie is left), then mark it done."""
     try:
         os.waitpid(pid, 0)
     finally:
         _done.set()
 
 
-def join(timeout: float = JOIN_SECONDS) -> None:
-    """Wait until the child (if any) has exited, at most ``timeout`` s: the parent calls
-    it where it would start compiling what the child compiles (``World.step``, before
-    the substeps)."""
-    _done.wait(timeout)
+def stop() -> None:
+    """The parent, at the end of its first step: ask the child (if it still runs) to
+    leave and wait until it has, at most STOP_SECONDS. Whatever the child has not
+    compiled by then the parent did not need this step; a kernel the child was
+    compiling is left for whoever needs it next."""
+    global _child
+    if _child is not None and not _done.is_set():
+        try:
+            os.kill(_child, signal.SIGTERM)
+        except OSError:
+            pass
+        _done.wait(STOP_SECONDS)
+    _child = None

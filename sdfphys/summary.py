@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import interrupt
+from . import _warm, interrupt
 
 __all__ = ["RunSummary", "simulate", "state_hash", "steps_for"]
 
@@ -64,6 +64,7 @@ def simulate(world, steps: int, before_step: Callable[[int], None] | None = None
     """Step ``world`` ``steps`` times. ``before_step(k)`` runs before step k and once
     more after the last (k = steps), inside the timed loop (``run`` draws its frames
     there); ``progress(k)`` after step k (1-based)."""
+    _warm.start(world)      # before the first frame: its field evaluator compiles too
     energy_start = _energy(world)
     max_depth = 0.0
     first = 0.0

@@ -291,8 +291,6 @@ class World(WorldJoints):
                 if not np.all(keep):
                     self._contacts = contacts = contacts.take(keep)
             constraints = stage.prepare(self, contacts, bodies)
-            if self.step_count == 0:
-                _warm.join()
             stage.substeps(self, constraints, bodies)
             stage.restitution(self, constraints, bodies)
             stage.time_of_impact(self, bodies, start_com, start_angle)
@@ -310,6 +308,8 @@ class World(WorldJoints):
             self._data["torque"][:self._n] = 0.0
             self._forces = False
         self.time += self.settings.dt
+        if self.step_count == 0:
+            _warm.stop()
         self.step_count += 1
 
     @property

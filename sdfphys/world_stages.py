@@ -16,6 +16,7 @@ import numpy as np
 
 from . import world_sleep
 from .collide import Contacts, find_contacts
+from .collide import compile_ahead as collide_ahead
 from .collide.filter import PairFilter
 from .collide.narrowphase import PAIR_FUNCTIONS
 from .events import StepReport, WorldContacts, sensor_overlaps
@@ -220,9 +221,10 @@ def record(world: World, rows: WorldContacts, relative_velocity: np.ndarray) -> 
 
 def compile_ahead(world: World) -> None:
     """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
-    the kernels' sake (``compile_ahead``): the stages after the preparation of
-    the contact rows, which the parent compiles itself after the collisions, once on no
-    contacts, last stage first."""
+    the kernels' sake: the stages after the preparation of the contact rows, once on no
+    contacts, last stage first; then the collisions' pair functions from the last
+    group to the first (``collide.compile_ahead``). The parent starts from the other
+    end."""
     bodies = body_state(world)
     constraints = ContactConstraints.empty()
     if world.settings.sleeping:
@@ -231,3 +233,6 @@ def compile_ahead(world: World) -> None:
                                 world_sleep.active(world))
     apply_restitution(bodies, constraints, world.settings)
     substeps(world, constraints, bodies)
+    movable = world._view("kind") == DYNAMIC
+    collide_ahead(collision_shapes(world), world._view("shape_id"), bodies.com, bodies.angle,
+                  movable, world.settings)

@@ -157,6 +157,25 @@ def speculative_reach(radius: np.ndarray, velocity: np.ndarray,
     return np.minimum(dt * speed, REACH_CAP_RADII * r)
 
 
+def _groups(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
+    """The pairs (P, 2) as (first, second) bodies, the lower kind first (KIND_ORDER, then
+    the lower shape index), sorted stably by their two shapes, and the [lo, hi) rows of
+    each group of pairs sharing two shapes (one pair-function call each)."""
+    kind_rank = np.array([KIND_ORDER.index(s.kind) for s in shapes], np.int64)
+    sa, sb = body_shape[pairs[:, 0]], body_shape[pairs[:, 1]]
+    ka, kb = kind_rank[sa], kind_rank[sb]
+    swap = (ka > kb) | ((ka == kb) & (sa > sb))
+    first = np.where(swap, pairs[:, 1], pairs[:, 0])
+    second = np.where(swap, pairs[:, 0], pairs[:, 1])
+    group = body_shape[first] * len(shapes) + body_shape[second]
+    order = np.argsort(group, kind="stable")
+    first, second, group = first[order], second[order], group[order]
+    bounds = np.flatnonzero(np.diff(group)) + 1
+    return first, second, [(int(lo), int(hi)) for lo, hi
+                           in zip(np.r_[0, bounds], np.r_[bounds, len(group)]) if lo < hi]
+
+
 def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
                  pose: np.ndarray, margin: float, reach: np.ndarray,
                  settings: Settings, ran: set[tuple[str, str]] | None = None,
@@ -183,21 +202,10 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
         reused, kept = cache.reuse(pairs, pose, turns, radius, round_, body_shape,
                                    pair_margin, tau, settings)
         pairs = pairs[~reused]
-    kind_rank = np.array([KIND_ORDER.index(s.kind) for s in shapes], np.int64)
-    sa, sb = body_shape[pairs[:, 0]], body_shape[pairs[:, 1]]
-    ka, kb = kind_rank[sa], kind_rank[sb]
-    swap = (ka > kb) | ((ka == kb) & (sa > sb))
-    first = np.where(swap, pairs[:, 1], pairs[:, 0])
-    second = np.where(swap, pairs[:, 0], pairs[:, 1])
-    group = body_shape[first] * len(shapes) + body_shape[second]
-    order = np.argsort(group, kind="stable")
-    first, second, group = first[order], second[order], group[order]
-    found_margin = np.empty(len(group))
-    bounds = np.flatnonzero(np.diff(group)) + 1
+    first, second, groups = _groups(shapes, body_shape, pairs)
+    found_margin = np.empty(len(first))
     parts = []
-    for lo, hi in zip(np.r_[0, bounds], np.r_[bounds, len(group)]):
-        if lo == hi:
-            continue
+    for lo, hi in groups:
         shape_a = shapes[body_shape[first[lo]]]
         shape_b = shapes[body_shape[second[lo]]]
         fn = PAIR_FUNCTIONS[(shape_a.kind, shape_b.kind)]
@@ -339,6 +347,40 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                          ran, cache, radius[body_shape], shape_class[body_shape] == CIRCLE)
     order = merge_order(a * np.int64(n) + b, other.body_a * np.int64(n) + other.body_b)
     return Contacts.concatenate([analytic, other]).take(order)
+
+
+def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.ndarray,
+                  angle: np.ndarray, movable: np.ndarray, settings: Settings) -> None:
+    """The collisions' part of a cold start's compiling child (``sdfphys._warm``): the
+    pair functions of the pairs whose boxes meet at these poses (arguments as
+    ``find_contacts``; margin the speculative distance), group by group in the reverse
+    of ``find_contacts``'s order, and a mesh-sdf group's second direction
+    (``mesh_sdf.sdf_in_mesh``) before the whole pair function, whose first direction
+    is the other end's start. What it finds is dropped: it runs for the kernels it
+    compiles."""
+    from .mesh_sdf import sdf_in_mesh
+    from .narrowphase import _flat
+
+    distinct, canonical = _distinct(shapes)
+    body_shape = canonical[np.asarray(shape_id, np.int64)]
+    tables = _tables(distinct)
+    position = np.ascontiguousarray(position, np.float64).reshape(-1, 2)
+    angle = np.ascontiguousarray(angle, np.float64).reshape(-1)
+    margin = settings.speculative_distance
+    boxes = world_bounds(tables.bounds[body_shape], tables.radius[body_shape], position,
+                         angle, 0.5 * margin)
+    pairs = candidate_pairs(boxes, np.asarray(movable, bool))
+    shape_class = tables.shape_class[body_shape]
+    rest = pairs[~analytic_pair(shape_class[pairs[:, 0]], shape_class[pairs[:, 1]])]
+    pose = np.column_stack([position, angle])
+    first, second, groups = _groups(distinct, body_shape, rest)
+    for lo, hi in reversed(groups):
+        a, b = first[lo:hi], second[lo:hi]
+        shape_a, shape_b = distinct[body_shape[a[0]]], distinct[body_shape[b[0]]]
+        kinds = (shape_a.kind, shape_b.kind)
+        if kinds == ("mesh", "sdf") and not _flat(shape_b.field):
+            sdf_in_mesh(shape_a, shape_b, pose[a], pose[b], margin, settings)
+        PAIR_FUNCTIONS[kinds](shape_a, shape_b, a, b, pose[a], pose[b], margin, settings)
 
 
 def collide(shape_a: Any, pose_a: Sequence[float], shape_b: Any, pose_b: Sequence[float],

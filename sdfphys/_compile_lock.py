@@ -1,0 +1,141 @@
+"""Processes sharing a numba cache compile each kernel once: one compiles, the others wait.
+
+Numba's on-disk cache is safe to read while another process writes it only for one
+function at a time: ``IndexDataCacheFile.save`` names a new data file after the count of
+entries in the index it has just read, so two processes saving two signatures of one
+function at once can write the same ``.nbc`` file, and the index then points a signature
+at the other's machine code; and a process that compiles what another is compiling at the
+same moment only doubles the work. Both happen on a cold start, where ``sdfphys._warm``'s
+child compiles beside the parent, and in any set of processes started together on an
+empty cache (sweep workers, parallel test runs).
+
+``install`` routes numba's ``Dispatcher.compile`` for this package's kernels through a
+lock file per kernel (its cache index's name plus ``.lock``, beside it in the cache
+directory; created with ``O_EXCL``, holding the owner's pid). A process takes the lock,
+then lets numba look up its cache and, on a miss, compile and save, and then removes
+the lock. A process that finds the lock taken waits (polling every ``POLL_SECONDS``)
+and then looks the kernel up itself, so it loads what the other saved instead of
+compiling it again. Every read and write of a kernel's cache files happens under its
+lock. The lock is re-entrant within a process (compiling a kernel may compile another
+signature of it). A lock whose owner has died (no such pid) or that is older than
+``STALE_SECONDS`` is taken over. Where no lock file can be made (a read-only cache),
+numba compiles unlocked, as without this module.
+
+No deadlock: a process waits for a kernel only while compiling a caller of it (numba
+compiles a callee while typing its caller), so two processes waiting for each other
+would need a cycle of calls between kernels, which an njit call graph without recursion
+between kernels does not have.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+from numba.core import dispatcher, sigutils
+
+__all__ = ["POLL_SECONDS", "STALE_SECONDS", "install", "lock_path"]
+
+#: Seconds between two looks at a lock another process holds.
+POLL_SECONDS = 0.02
+#: A lock older than this is an abandoned one (the longest kernel compiles in ~20 s on a
+#: 2-core machine; its pid may have been reused).
+STALE_SECONDS = 600.0
+
+#: Numba's ``Dispatcher.compile``, wrapped by ``_locked_compile``.
+_NUMBA_COMPILE = dispatcher.Dispatcher.compile
+
+#: The package whose kernels compile under a lock.
+_PACKAGE = __name__.split(".")[0]
+
+#: Lock files this process holds -> how many nested compilations hold each.
+_held: dict[str, int] = {}
+
+
+def lock_path(kernel) -> str | None:
+    """The lock file of a dispatcher's cache (None: not cached, or not this package's)."""
+    module = getattr(kernel.py_func, "__module__", "") or ""
+    cache = getattr(kernel, "_cache", None)
+    index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
+    if module.split(".")[0] != _PACKAGE or index is None:
+        return None
+    return index + ".lock"
+
+
+def _stale(path: str) -> bool:
+    """Whether the lock at ``path`` is abandoned: its owner is gone or it is too old."""
+    try:
+        age = time.time() - os.stat(path).st_mtime
+        text = Path(path).read_text()
+    except OSError:
+        return False                                # gone meanwhile: take it next time
+    if age > STALE_SECONDS:
+        return True
+    if not text.strip().isdigit():
+        return age > 5.0                            # being written, or garbage
+    try:
+        os.kill(int(text), 0)
+    except ProcessLookupError:
+        return True
+    except OSError:
+        pass                                        # alive, someone else's
+    return False
+
+
+def _acquire(path: str) -> bool:
+    """Take the lock at ``path``, waiting while another live process holds it. False if
+    no lock file can be made there (then compile without one)."""
+    if path in _held:
+        _held[path] += 1
+        return True
+    while True:
+        try:
+            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            if _stale(path):
+                try:
+                    os.unlink(path)
+                except OSError:
+                    pass
+            else:
+                time.sleep(POLL_SECONDS)
+            continue
+        except OSError:
+            return False
+        with os.fdopen(fd, "w") as f:
+            f.write(str(os.getpid()))
+        _held[path] = 1
+        return True
+
+
+def _release(path: str) -> None:
+    _held[path] -= 1
+    if _held[path] == 0:
+        del _held[path]
+        try:
+            os.unlink(path)
+        except OSError:
+            pass
+
+
+def _locked_compile(self, sig):
+    """``Dispatcher.compile`` under the kernel's lock file (see the module doc)."""
+    path = lock_path(self)
+    if path is None or tuple(sigutils.normalize_signature(sig)[0]) in self.overloads:
+        return _NUMBA_COMPILE(self, sig)
+    try:
+        self._cache._impl.locator.ensure_cache_path()
+    except OSError:
+        return _NUMBA_COMPILE(self, sig)
+    if not _acquire(path):
+        return _NUMBA_COMPILE(self, sig)
+    try:
+        return _NUMBA_COMPILE(self, sig)
+    finally:
+        _release(path)
+
+
+def install() -> None:
+    """Route numba's ``Dispatcher.compile`` through ``_locked_compile`` (idempotent)."""
+    dispatcher.Dispatcher.compile = _locked_compile
