@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from oracles import Opaque, enclosing_circles, merge_minima
 from test_descent import CIRCLE, FIELDS, UNION, random_triangles
 
 from sdfphys.collide import descent, field_pairs
-from sdfphys.sdf import Field, compiled, field
+from sdfphys.sdf import compiled, field
 
 CASES = dict(FIELDS, plain_circle=CIRCLE, union_again=UNION,
              rounded={"op": "round", "r": 0.1, "of": {"type": "box", "size": [1.0, 0.5]}},
@@ -22,23 +23,21 @@ STARTS = {"default": None, "centroid": descent.START_BARYCENTRIC[[6]],
           "mesh_order": descent.START_BARYCENTRIC[[6, 3, 4, 5, 0, 1, 2]]}
 
 
-def both_paths(f, tri, iterations, starts, monkeypatch):
-    monkeypatch.setattr(descent, "USE_COMPILED", True)
+def both_paths(f, tri, iterations, starts):
     fast = descent._triangle_minima(f, tri, iterations, starts, 1e-12)
-    monkeypatch.setattr(descent, "USE_COMPILED", False)
-    slow = descent._triangle_minima(f, tri, iterations, starts, 1e-12)
+    slow = descent._triangle_minima(Opaque(f), tri, iterations, starts, 1e-12)
     return fast, slow
 
 
 @pytest.mark.parametrize("starts", sorted(STARTS))
 @pytest.mark.parametrize("name", sorted(CASES))
-def test_compiled_descent_equals_the_python_loop(name, starts, monkeypatch):
+def test_compiled_descent_equals_the_python_loop(name, starts):
     f = field(CASES[name])
     assert compiled.compile_field(f) is not None
     tri = random_triangles(f, 300, np.random.default_rng(sorted(CASES).index(name)))
     tri[:5, 2] = 0.5 * (tri[:5, 0] + tri[:5, 1])                    # degenerate
     for iterations in (1, 4, 16, 32):
-        (p1, v1, r1), (p2, v2, r2) = both_paths(f, tri, iterations, STARTS[starts], monkeypatch)
+        (p1, v1, r1), (p2, v2, r2) = both_paths(f, tri, iterations, STARTS[starts])
         np.testing.assert_allclose(p1, p2, rtol=0.0, atol=1e-12)
         np.testing.assert_allclose(v1, v2, rtol=0.0, atol=1e-12)
         np.testing.assert_array_equal(r1, r2)
@@ -46,33 +45,20 @@ def test_compiled_descent_equals_the_python_loop(name, starts, monkeypatch):
         np.testing.assert_array_equal(keep1, keep2)
 
 
-def test_compiled_descent_handles_batches_of_every_size(monkeypatch):
+def test_compiled_descent_handles_batches_of_every_size():
     f = field(FIELDS["smooth_union"])
     rng = np.random.default_rng(5)
     for count in (0, 1, 2, 50, 3000, 7):                            # buffers grow, then shrink
         tri = random_triangles(f, count, rng)
-        (p1, v1, r1), (p2, v2, r2) = both_paths(f, tri, 16, None, monkeypatch)
+        (p1, v1, r1), (p2, v2, r2) = both_paths(f, tri, 16, None)
         assert p1.shape == (count, 7, 2)
         np.testing.assert_allclose(p1, p2, atol=1e-12)
         np.testing.assert_allclose(v1, v2, atol=1e-12)
         np.testing.assert_array_equal(r1, r2)
 
 
-class _Uncompiled(Field):
-    """An ellipse behind a user class: ``compile_field`` knows no user classes."""
-
-    def __init__(self, of: Field):
-        self.of, self.exact = of, of.exact
-
-    def evaluate(self, points):
-        return self.of.evaluate(points)
-
-    def bounds(self):
-        return self.of.bounds()
-
-
 def test_fields_that_do_not_compile_take_the_python_loop():
-    f = _Uncompiled(field({"type": "ellipse", "size": [2.0, 1.0]}))
+    f = Opaque(field({"type": "ellipse", "size": [2.0, 1.0]}))
     assert compiled.compile_field(f) is None
     tri = random_triangles(f, 20, np.random.default_rng(0))
     point, value = descent.triangle_deepest(f, tri)
@@ -90,7 +76,7 @@ PAIRS = {
 
 
 @pytest.mark.parametrize("name", sorted(PAIRS))
-def test_compiled_field_field_descent_equals_the_python_loop(name, monkeypatch):
+def test_compiled_field_field_descent_equals_the_python_loop(name):
     a, b = (field(spec) for spec in PAIRS[name])
     rng = np.random.default_rng(sorted(PAIRS).index(name))
     count = 60
@@ -100,28 +86,28 @@ def test_compiled_field_field_descent_equals_the_python_loop(name, monkeypatch):
                                poses[:, :2] + rng.uniform(0.3, 1.0, (count, 2))])
     regions[::7, 2] = regions[::7, 0] - 1.0                          # empty
     pair_of = np.repeat(np.arange(count), 5)
-    problem = field_pairs._PairProblem(a, b, field_pairs._rotations(poses[:, 2]), poses[:, :2], pair_of)
+    rotation = field_pairs._rotations(poses[:, 2])
+    problem = field_pairs._PairProblem(a, b, rotation, poses[:, :2], pair_of)
+    numpy_problem = field_pairs._PairProblem(Opaque(a), Opaque(b), rotation, poses[:, :2],
+                                             pair_of)
     starts = np.repeat(poses[:, :2], 5, axis=0) + rng.uniform(-0.8, 0.8, (5 * count, 2))
     sigma = rng.uniform(0.1, 1.0, 5 * count)
     tol = 1e-12 * np.repeat(rng.uniform(0.5, 3.0, count), 5)
     for iterations in (0, 1, 3, 24):
-        monkeypatch.setattr(descent, "USE_COMPILED", True)
         fast = descent._descend(problem, starts, iterations, sigma, tol)
-        monkeypatch.setattr(descent, "USE_COMPILED", False)
-        slow = descent._descend(problem, starts, iterations, sigma, tol)
+        slow = descent._descend(numpy_problem, starts, iterations, sigma, tol)
         for x, y in zip(fast, slow):
             np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-12)
     for margin in (0.0, 0.05):
-        monkeypatch.setattr(descent, "USE_COMPILED", True)
         fast = field_pairs.field_field_contacts(a, b, poses, regions, margin=margin)
-        monkeypatch.setattr(descent, "USE_COMPILED", False)
-        slow = field_pairs.field_field_contacts(a, b, poses, regions, margin=margin)
+        slow = field_pairs.field_field_contacts(Opaque(a), Opaque(b), poses, regions,
+                                                margin=margin)
         for x, y in zip(fast, slow):
             assert x.shape == y.shape
             np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-12)
 
 
-def test_compiled_field_field_descent_in_blocks_equals_the_python_loop(monkeypatch):
+def test_compiled_field_field_descent_in_blocks_equals_the_python_loop():
     """More starts than one block of ``_compiled_descent.descend`` (``_BLOCK``), with
     per-start tolerances: the blocks give the one batch's results."""
     from sdfphys.collide import _compiled_descent
@@ -131,20 +117,21 @@ def test_compiled_field_field_descent_in_blocks_equals_the_python_loop(monkeypat
     count = _compiled_descent._BLOCK // 5 + 300
     poses = np.column_stack([rng.uniform(-1.5, 1.5, (count, 2)), rng.uniform(0.0, 6.0, count)])
     pair_of = np.repeat(np.arange(count), 5)
-    problem = field_pairs._PairProblem(a, b, field_pairs._rotations(poses[:, 2]), poses[:, :2], pair_of)
+    rotation = field_pairs._rotations(poses[:, 2])
+    problem = field_pairs._PairProblem(a, b, rotation, poses[:, :2], pair_of)
+    numpy_problem = field_pairs._PairProblem(Opaque(a), Opaque(b), rotation, poses[:, :2],
+                                             pair_of)
     starts = np.repeat(poses[:, :2], 5, axis=0) + rng.uniform(-0.8, 0.8, (5 * count, 2))
     sigma = rng.uniform(0.1, 1.0, 5 * count)
     tol = 1e-12 * np.repeat(rng.uniform(0.5, 3.0, count), 5)
     tol[-5:] = 1e-13                                      # the smallest in the last block
-    monkeypatch.setattr(descent, "USE_COMPILED", True)
     fast = descent._descend(problem, starts, 16, sigma, tol)
-    monkeypatch.setattr(descent, "USE_COMPILED", False)
-    slow = descent._descend(problem, starts, 16, sigma, tol)
+    slow = descent._descend(numpy_problem, starts, 16, sigma, tol)
     for x, y in zip(fast, slow):
         np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-12)
 
 
-def test_compiled_triangle_helpers_equal_the_numpy_ones(monkeypatch):
+def test_compiled_triangle_helpers_equal_the_numpy_ones():
     rng = np.random.default_rng(9)
     tri = rng.uniform(-1.0, 1.0, (3000, 3, 2))
     tri[:10, 2] = 0.5 * (tri[:10, 0] + tri[:10, 1])                # collinear
@@ -152,12 +139,10 @@ def test_compiled_triangle_helpers_equal_the_numpy_ones(monkeypatch):
     tri[20:30, 1] = tri[20:30, 0]                                   # a repeated vertex
     tri[30:40] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]               # right angle
     centre, radius = descent.enclosing_circles(tri)
-    expected_centre, expected_radius = descent._enclosing_circles(tri)
+    expected_centre, expected_radius = enclosing_circles(tri)
     np.testing.assert_array_equal(centre, expected_centre)
     np.testing.assert_array_equal(radius, expected_radius)
     point = rng.uniform(0.0, 2e-6, (2000, 7, 2))
     point[::3] = 0.5
-    monkeypatch.setattr(descent, "USE_COMPILED", True)
-    fast = descent.merge_minima(point, 1e-6)
-    monkeypatch.setattr(descent, "USE_COMPILED", False)
-    np.testing.assert_array_equal(fast, descent.merge_minima(point, 1e-6))
+    np.testing.assert_array_equal(descent.merge_minima(point, 1e-6),
+                                  merge_minima(point, 1e-6))

@@ -367,7 +367,7 @@ def test_big_grid_consts_are_the_node_values():
 @pytest.mark.parametrize("name", ["ellipse", "heart", "moon", "egg", "arc", "vesica", "star",
                                   "grid", "hexagram", "trapezoid", "ring", "horseshoe",
                                   "quadratic_bezier_stroke"])
-def test_compiled_descent_equals_the_python_loop(name, monkeypatch):
+def test_compiled_descent_equals_the_python_loop(name):
     """The triangle descent over these fields (now inside one compiled call) finds the
     same minima as the Python-driven loop over the numpy fields. For the kinds that
     round differently only the minimum values are compared (measured within 3e-10,
@@ -382,7 +382,7 @@ def test_compiled_descent_equals_the_python_loop(name, monkeypatch):
     tri = random_triangles(f, 200, np.random.default_rng(sorted(PRIMITIVES).index(name)))
     tri[:5, 2] = 0.5 * (tri[:5, 0] + tri[:5, 1])                    # degenerate
     for iterations in (1, 16):
-        (p1, v1, r1), (p2, v2, r2) = both_paths(f, tri, iterations, None, monkeypatch)
+        (p1, v1, r1), (p2, v2, r2) = both_paths(f, tri, iterations, None)
         if _rounds_differently(PRIMITIVES[name]):
             atol = 1e-6 if name.startswith("quadratic_bezier") else 1e-9
             np.testing.assert_allclose(v1, v2, rtol=0.0, atol=atol)

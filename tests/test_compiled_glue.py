@@ -1,8 +1,9 @@
 """The compiled narrowphase glue gives the numpy reference's contacts, bit for bit.
 
 ``mesh_contacts.mesh_in_field`` and ``mesh_sdf.sdf_in_mesh`` run their stages in
-compiled kernels when the fields compile and in numpy otherwise (each module's
-``USE_COMPILED = False``, the reference), as does the tail of
+compiled kernels when the fields compile and in numpy otherwise (the reference: the
+same shapes with their fields hidden from the compiler, ``oracles.opaque_shape``), as
+does the tail of
 ``field_pairs.field_field_contacts`` (``_compiled_field_contacts.field_contacts``) and the
 compiled glue of ``field_pairs.placed_field_contacts`` (``_placed_fields``). The bench
 scene's pair kinds (boxes on boxes, walls and a half-plane ground, a ring and a
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from oracles import Opaque, opaque_shape
 
 from sdfphys.collide import mesh_contacts, mesh_sdf
 from sdfphys.settings import Settings
@@ -34,11 +36,9 @@ SDFS = [
 ]
 
 
-def _both(monkeypatch, module, fn, *args):
-    monkeypatch.setattr(module, "USE_COMPILED", False)
-    reference = fn(*args)
-    monkeypatch.setattr(module, "USE_COMPILED", True)
-    return reference, fn(*args)
+def _both(fn, mesh, other, *args):
+    """fn with other's field hidden from the compiler (the numpy stages), then as is."""
+    return fn(mesh, opaque_shape(other), *args), fn(mesh, other, *args)
 
 
 def _same(reference, got) -> bool:
@@ -47,7 +47,7 @@ def _same(reference, got) -> bool:
 
 
 @pytest.mark.parametrize("other_kind", ["mesh", "sdf"])
-def test_mesh_in_field_compiled_equals_numpy(monkeypatch, other_kind):
+def test_mesh_in_field_compiled_equals_numpy(other_kind):
     rng = np.random.default_rng(2024 if other_kind == "mesh" else 2025)
     meshes = [shape_from_spec(s) for s in MESHES]
     others = meshes if other_kind == "mesh" else [shape_from_spec(s) for s in SDFS]
@@ -62,15 +62,14 @@ def test_mesh_in_field_compiled_equals_numpy(monkeypatch, other_kind):
             pose_other[:, 2] = 0.0
         margin = float(rng.choice([0.0, 0.01, 0.05]))
         settings = Settings(descent_starts=int(rng.choice([4, 7])))
-        reference, got = _both(monkeypatch, mesh_contacts, mesh_contacts.mesh_in_field, mesh,
-                               other, pose_mesh, pose_other, margin, settings,
-                               other_kind == "mesh")
+        reference, got = _both(mesh_contacts.mesh_in_field, mesh, other, pose_mesh,
+                               pose_other, margin, settings, other_kind == "mesh")
         assert _same(reference, got)
         contacts += len(reference[0])
     assert contacts > 500
 
 
-def test_sdf_in_mesh_compiled_equals_numpy(monkeypatch):
+def test_sdf_in_mesh_compiled_equals_numpy():
     rng = np.random.default_rng(2026)
     meshes = [shape_from_spec(s) for s in MESHES[:2] + [{"type": "box", "size": [0.5, 9.0]}]]
     sdfs = [shape_from_spec(s) for s in SDFS[:2] + [{"type": "sdf", "field": {
@@ -87,15 +86,15 @@ def test_sdf_in_mesh_compiled_equals_numpy(monkeypatch):
             pose_mesh[:, 2] += rng.uniform(-0.05, 0.05, n)          # slightly tilted
             pose_sdf[:, 2] = 0.0
         margin = float(rng.choice([0.0, 0.01, 0.05]))
-        reference, got = _both(monkeypatch, mesh_sdf, mesh_sdf.sdf_in_mesh, mesh, sdf,
-                               pose_mesh, pose_sdf, margin, Settings())
+        reference, got = _both(mesh_sdf.sdf_in_mesh, mesh, sdf, pose_mesh, pose_sdf, margin,
+                               Settings())
         assert _same(reference, got)
         contacts += len(reference[0])
         far_ends += int(np.sum(reference[5] >= mesh_sdf.FAR_END))
     assert contacts > 500 and far_ends > 20
 
 
-def test_field_field_contacts_compiled_tail_equals_numpy(monkeypatch):
+def test_field_field_contacts_compiled_tail_equals_numpy():
     """The merge, patch ends and second merge after the descent (``_compiled_descent.
     field_contacts``) against the numpy tail (fields hidden from the compiler, which
     also runs the Python-driven descent: the same bits on these fields)."""
@@ -118,18 +117,16 @@ def test_field_field_contacts_compiled_tail_equals_numpy(monkeypatch):
         regions = np.column_stack([rng.uniform(-0.8, -0.2, (n, 2)),
                                    rng.uniform(0.2, 0.8, (n, 2))])
         margin = float(rng.choice([0.0, 0.01, 0.05]))
-        args = (field_a, field_b, poses, regions, 16, 16, margin)
-        got = field_pairs.field_field_contacts(*args)
-        with monkeypatch.context() as patch:
-            patch.setattr(field_pairs._PairProblem, "programs", lambda self: None)
-            reference = field_pairs.field_field_contacts(*args)
+        args = (poses, regions, 16, 16, margin)
+        got = field_pairs.field_field_contacts(field_a, field_b, *args)
+        reference = field_pairs.field_field_contacts(Opaque(field_a), Opaque(field_b), *args)
         assert _same(reference, got)
         contacts += len(reference[0])
         patch_ends += int(np.sum(reference[4] >= 16))
     assert contacts > 500 and patch_ends > 100
 
 
-def test_mesh_in_field_kink_on_a_face_compiled_equals_numpy(monkeypatch):
+def test_mesh_in_field_kink_on_a_face_compiled_equals_numpy():
     """Two crossing corners (scenes/concave_polygons.toml, poly7 and poly12 at t = 2.30
     s): a descent minimum on the L's medial axis takes the face the arrow's edge runs
     along (``mesh_contacts._face_normals``), and the L's corner is measured below the
@@ -144,19 +141,19 @@ def test_mesh_in_field_kink_on_a_face_compiled_equals_numpy(monkeypatch):
     deepest = 0.0
     for mesh, other, pose_mesh, pose_other in [(arrow, piece, pose_arrow, pose_l),
                                                (piece, arrow, pose_l, pose_arrow)]:
-        reference, got = _both(monkeypatch, mesh_contacts, mesh_contacts.mesh_in_field, mesh,
-                               other, pose_mesh, pose_other, 0.01, Settings(), True)
+        reference, got = _both(mesh_contacts.mesh_in_field, mesh, other, pose_mesh, pose_other,
+                               0.01, Settings(), True)
         assert _same(reference, got)
         deepest = max(deepest, float(np.max(reference[3], initial=0.0)))
     assert deepest > 0.0179
 
 
-def test_placed_field_contacts_compiled_glue_equals_the_numpy_glue(monkeypatch):
+def test_placed_field_contacts_compiled_glue_equals_the_numpy_glue():
     """``field_pairs.placed_field_contacts`` through its compiled glue (``_placed_fields``)
     gives the contacts of the numpy glue (``field_field_contacts`` over the same
     regions), bit for bit: sdf-sdf placements (a bounded or a half-plane), mesh fields
     placed in sdfs, pairs whose regions are empty among them."""
-    from sdfphys.collide import descent, field_pairs
+    from sdfphys.collide import field_pairs
 
     rng = np.random.default_rng(2026)
     sdfs = [shape_from_spec(s) for s in SDFS]
@@ -169,11 +166,9 @@ def test_placed_field_contacts_compiled_glue_equals_the_numpy_glue(monkeypatch):
         offset = rng.uniform(-0.9, 0.9, (n, 2))
         angle = rng.uniform(-4.0, 4.0, n)
         margin = float(rng.choice([0.0, 0.02]))
-        args = (a.field, b.field, offset, angle, a.bounds(), b.bounds(), margin, 7, 24)
-        monkeypatch.setattr(descent, "USE_COMPILED", False)
-        reference = field_pairs.placed_field_contacts(*args)
-        monkeypatch.setattr(descent, "USE_COMPILED", True)
-        got = field_pairs.placed_field_contacts(*args)
+        args = (offset, angle, a.bounds(), b.bounds(), margin, 7, 24)
+        reference = field_pairs.placed_field_contacts(Opaque(a.field), Opaque(b.field), *args)
+        got = field_pairs.placed_field_contacts(a.field, b.field, *args)
         assert _same(reference, got)
         contacts += len(got[1])
         empty += int(np.sum(np.any(got[0][:, 2:] < got[0][:, :2], axis=1)))

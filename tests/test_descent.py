@@ -219,7 +219,7 @@ def test_merge_minima_keeps_the_lowest_start_of_each_cluster():
 
 def test_enclosing_circles_are_minimal():
     tri = random_triangles(field(CIRCLE), 500, np.random.default_rng(3))
-    centre, radius = descent._enclosing_circles(tri)
+    centre, radius = descent.enclosing_circles(tri)
     distance = np.linalg.norm(tri - centre[:, None, :], axis=2)
     assert np.all(distance <= radius[:, None] * (1 + 1e-12) + 1e-15)
     edge = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2)

@@ -3,13 +3,15 @@
 Exact answers against brute force (``test_descent.brute_minimum``, a dense
 barycentric grid refined by a pattern search) on the hard cases of issue #3 and
 on random triangles of the smooth union; the compiled path against the Python
-loop (``USE_COMPILED = False``) bit for bit; the knob through ``mesh_in_field``.
+loop (the field hidden from the compiler, ``oracles.Opaque``) bit for bit; the knob
+through ``mesh_in_field``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from oracles import Opaque, opaque_shape
 from test_descent import CIRCLE, FIELDS, UNION, brute_minimum, in_triangle, random_triangles
 
 from sdfphys.collide import _descent_starts as start_kernels
@@ -22,11 +24,9 @@ from sdfphys.shapes import shape_from_spec
 DEGREES = (3, 4, 5, 8)
 
 
-def _both(monkeypatch, fn, *args, **kwargs):
-    monkeypatch.setattr(descent, "USE_COMPILED", False)
-    reference = fn(*args, **kwargs)
-    monkeypatch.setattr(descent, "USE_COMPILED", True)
-    return reference, fn(*args, **kwargs)
+def _both(fn, f, *args):
+    """fn on a field that does not compile (the Python-driven loop), then on f."""
+    return fn(Opaque(f), *args), fn(f, *args)
 
 
 def test_lattice_weights_and_neighbours():
@@ -95,7 +95,7 @@ HIDDEN_DIP_TRIANGLE = [[0.01876468951029625, -0.242669976122392],
                        [-0.035791552354054956, -0.22997224406541877]]
 
 
-def test_a_dip_beside_a_vertex_that_is_a_local_minimum(monkeypatch):
+def test_a_dip_beside_a_vertex_that_is_a_local_minimum():
     """Degree 4, 2 starts: the dip no lattice sample shows (between samples w = (0,
     0.25, 0.75) and v2) is found, on both paths, to the brute-force minimum."""
     f = field(FIELDS["smooth_union"])
@@ -103,8 +103,7 @@ def test_a_dip_beside_a_vertex_that_is_a_local_minimum(monkeypatch):
     exact = brute_minimum(f, tri[0])
     assert exact == pytest.approx(-0.0887264, abs=1e-7)
     for degree in (4, 5):
-        for point, value in _both(monkeypatch, lattice.triangle_deepest_sampled, f, tri,
-                                  degree, 2):
+        for point, value in _both(lattice.triangle_deepest_sampled, f, tri, degree, 2):
             assert value[0].min() == pytest.approx(exact, abs=1e-9)
             assert f.distance(point[0, 0][None])[0] == value[0, 0]
 
@@ -172,11 +171,11 @@ def test_hidden_dips_keep_the_lowest_predictions_in_order():
 
 
 @pytest.mark.parametrize("name", sorted(FIELDS))
-def test_compiled_equals_the_python_loop(monkeypatch, name):
+def test_compiled_equals_the_python_loop(name):
     f = field(FIELDS[name])
     tri = random_triangles(f, 300, np.random.default_rng(7))
     for degree, k in ((3, 3), (4, 2), (8, 1)):
-        reference, got = _both(monkeypatch, lattice.triangle_deepest_sampled, f, tri, degree, k)
+        reference, got = _both(lattice.triangle_deepest_sampled, f, tri, degree, k)
         for a, b in zip(reference, got):
             assert a.shape == b.shape and a.tobytes() == b.tobytes(), (degree, k)
 
@@ -209,7 +208,7 @@ def test_knob_validation_and_default():
             Settings(descent_lattice=bad)
 
 
-def test_mesh_in_field_with_sampled_starts(monkeypatch):
+def test_mesh_in_field_with_sampled_starts():
     """The knob reaches the mesh contacts: start ids SAMPLED_START + rank (or the
     vertex / edge keys), the same contacts through the compiled and numpy stages."""
     mesh = shape_from_spec({"type": "polygon", "points": [[0, 0], [1, 0.2], [0.6, 0.8],
@@ -222,10 +221,8 @@ def test_mesh_in_field_with_sampled_starts(monkeypatch):
     pose_mesh = np.column_stack([rng.uniform(-0.5, 0.5, (n, 2)), rng.uniform(-4, 4, n)])
     pose_other = np.column_stack([rng.uniform(-0.1, 0.1, (n, 2)), rng.uniform(-4, 4, n)])
     settings = Settings(descent_lattice=4, descent_starts=2)
-    monkeypatch.setattr(mesh_contacts, "USE_COMPILED", False)
-    reference = mesh_contacts.mesh_in_field(mesh, other, pose_mesh, pose_other, 0.01, settings,
-                                            False)
-    monkeypatch.setattr(mesh_contacts, "USE_COMPILED", True)
+    reference = mesh_contacts.mesh_in_field(mesh, opaque_shape(other), pose_mesh, pose_other,
+                                            0.01, settings, False)
     got = mesh_contacts.mesh_in_field(mesh, other, pose_mesh, pose_other, 0.01, settings,
                                       False)
     for a, b in zip(reference, got):

@@ -349,7 +349,7 @@ def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nest
 
 
 # --------------------------------------------------------------------------------------
-# Triangle helpers of ``descent`` (the numpy versions there are the reference)
+# Triangle helpers of ``descent`` (their numpy references are in tests/oracles.py)
 # --------------------------------------------------------------------------------------
 
 @njit(cache=True, error_model="numpy")
@@ -371,8 +371,9 @@ def merge_minima(point: np.ndarray, radius: float) -> np.ndarray:
 
 @njit(cache=True, error_model="numpy")
 def enclosing_circles(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``descent._enclosing_circles``: centres (T, 2) and radii (T,) of the minimal
-    enclosing circles of triangles (T, 3, 2), with the same operations."""
+    """Centres (T, 2) and radii (T,) of the minimal enclosing circles of triangles
+    (T, 3, 2): for a triangle with an obtuse or right angle (collinear points included)
+    the circle on its longest edge as diameter, otherwise its circumcircle."""
     n = tri.shape[0]
     centre = np.empty((n, 2))
     radius = np.empty(n)
@@ -393,6 +394,9 @@ def enclosing_circles(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             centre[t, 0], centre[t, 1] = 0.5 * (ax + bx), 0.5 * (ay + by)
             radius[t] = 0.5 * math.sqrt(longest)
             continue
+        # Circumcentre o relative to c, with p = a - c and r = b - c: |o|^2 = |o - p|^2
+        # = |o - r|^2, i.e. 2 o.p = |p|^2, 2 o.r = |r|^2 (Cramer); an acute triangle is
+        # not degenerate, so the determinant is not zero.
         det = 2.0 * (px * ry - py * rx)
         pp, rr = px * px + py * py, rx * rx + ry * ry
         ox, oy = (ry * pp - py * rr) / det, (px * rr - rx * pp) / det

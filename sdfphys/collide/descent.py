@@ -23,10 +23,11 @@ primitives and operators that mesh and scene shapes use), the whole loop runs
 inside ONE compiled call instead (``_compiled_descent``: the same kernels in
 the same order, the programs evaluated in between), as do everything of
 field-field contacts after their descent (merges and patch search:
-``_compiled_field_contacts.field_contacts``), ``merge_minima`` and the enclosing circles
-of ``triangle_cull``; ``USE_COMPILED = False`` keeps the Python-driven loop, the
-reference the tests compare with (same results, to the bit where the programs
-round as numpy does).
+``_compiled_field_contacts.field_contacts``). A field that does not compile (a user's
+class) keeps the Python-driven loop, which the tests compare the compiled one with
+(tests/oracles.py wraps a field so that it does not compile: the same results, to the
+bit where the programs round as numpy does). ``merge_minima`` and the enclosing
+circles of ``triangle_cull`` need no field and are always compiled.
 
 The descent (shared by the triangle and the field-field problems)
 -----------------------------------------------------------------
@@ -165,45 +166,10 @@ START_BARYCENTRIC = np.array([
 #: Tolerance of the plane and cone fits of ``_descent_starts.triangle_known``
 #: (unit gradients; values relative to the coordinates' and values' size).
 SHAPE_TOL = 1e-12
-#: Run the descent with the fields compiled in (``_compiled_descent``) when they
-#: compile (``sdf.compiled``). False forces the Python-driven loop (the tests
-#: compare the two).
-USE_COMPILED = True
 
 # --------------------------------------------------------------------------------------
 # Triangle geometry
 # --------------------------------------------------------------------------------------
-
-def _enclosing_circles(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Minimal enclosing circles (centre (T, 2), radius (T,)) of triangles (T, 3, 2).
-
-    For a triangle with an obtuse or right angle (collinear points included) it is
-    the circle on the longest edge as diameter; otherwise the circumcircle.
-    """
-    edge = np.roll(tri, -1, axis=1) - tri                          # edge k: v_k -> v_k+1
-    length2 = np.einsum("tkd,tkd->tk", edge, edge)
-    k = np.argmax(length2, axis=1)
-    rows = np.arange(len(tri))
-    a, b = tri[rows, k], tri[rows, (k + 1) % 3]
-    c = tri[rows, (k + 2) % 3]                                     # opposite the longest edge
-    obtuse = np.einsum("td,td->t", a - c, b - c) <= 0.0
-    centre = 0.5 * (a + b)
-    radius = 0.5 * np.sqrt(length2[rows, k])
-
-    # Circumcentre relative to c, with p = a - c and r = b - c: the point o with
-    # |o|^2 = |o - p|^2 = |o - r|^2, i.e. 2 o.p = |p|^2, 2 o.r = |r|^2 (Cramer):
-    # o = (r_y |p|^2 - p_y |r|^2, p_x |r|^2 - r_x |p|^2) / (2 (p_x r_y - p_y r_x)).
-    # An acute triangle is not degenerate, so the determinant is not zero.
-    acute = ~obtuse
-    p, r = (a - c)[acute], (b - c)[acute]
-    det = 2.0 * (p[:, 0] * r[:, 1] - p[:, 1] * r[:, 0])
-    pp, rr = np.einsum("td,td->t", p, p), np.einsum("td,td->t", r, r)
-    off = np.stack([r[:, 1] * pp - p[:, 1] * rr, p[:, 0] * rr - r[:, 0] * pp], axis=1)
-    off /= det[:, None]
-    centre[acute] = c[acute] + off
-    radius[acute] = np.hypot(off[:, 0], off[:, 1])
-    return centre, radius
-
 
 def triangle_cull(field: Field, triangles: np.ndarray, margin: float = 0.0) -> np.ndarray:
     """(T,) bool: False only for triangles on which f >= margin everywhere.
@@ -225,7 +191,7 @@ def triangle_cull(field: Field, triangles: np.ndarray, margin: float = 0.0) -> n
     tri = np.asarray(triangles, dtype=np.float64).reshape(-1, 3, 2)
     if len(tri) == 0:
         return np.zeros(0, dtype=bool)
-    centre, radius = enclosing_circles(np.ascontiguousarray(tri))   # _enclosing_circles, compiled
+    centre, radius = enclosing_circles(np.ascontiguousarray(tri))
     return compiled_distance(field, centre) < radius + margin
 
 
@@ -400,7 +366,7 @@ def _descend(problem: _TriangleProblem | field_pairs._PairProblem, points: np.nd
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     n_points = len(points)
-    programs = problem.programs() if USE_COMPILED else None
+    programs = problem.programs()
     if programs is not None:
         tol = (np.full(n_points, tol, dtype=np.float64) if np.ndim(tol) == 0
                else np.array(tol, dtype=np.float64))               # a copy: writable
@@ -571,13 +537,7 @@ def merge_minima(point: np.ndarray, radius: float) -> np.ndarray:
     a start with a lower id (same triangle) ended within ``radius`` of it, so the
     lowest start id of each cluster is kept (a stable feature key).
     """
-    p = np.asarray(point, dtype=np.float64)
-    if USE_COMPILED:                                              # the same test, compiled
-        return compiled_merge_minima(np.ascontiguousarray(p), float(radius))
-    gap = p[:, :, None, :] - p[:, None, :, :]                     # (T, K, K, 2): k - j
-    near = np.einsum("tkjd,tkjd->tkj", gap, gap) < radius * radius
-    earlier = np.tril(np.ones(near.shape[1:], dtype=bool), k=-1)  # j < k
-    return ~np.any(near & earlier, axis=2)
+    return compiled_merge_minima(np.ascontiguousarray(point, dtype=np.float64), float(radius))
 
 
 def _field_convex(field: Field) -> bool:

@@ -7,8 +7,8 @@ sdf-in-mesh direction of mesh-sdf pairs with the mesh's polygon field);
 on ``_PairProblem`` (see ``descent``'s docstring for the engine); when both fields
 compile (``sdf.compiled``) the descent and everything after it (merges of starts that
 met, flat patches measured along their tangent) run compiled
-(``_compiled_descent.descend`` and ``field_contacts``); ``descent.USE_COMPILED = False``
-keeps the numpy path, the reference the tests compare with.
+(``_compiled_descent.descend`` and ``field_contacts``); otherwise the numpy path runs,
+the reference the tests compare with (tests/oracles.py).
 
 Method: P. Liu, Y. Zhang et al., "Real-time Collision Detection between General SDFs",
 2024, and MuJoCo's SDF-SDF collision (descent on max(f_a, f_b) from low-discrepancy
@@ -201,7 +201,7 @@ def _patch_ends(problem: _PairProblem, pair: np.ndarray, centre: np.ndarray,
     column 1 the +t end (s >= 0 along its direction); ``found`` is False where
     the sliver is empty at m (depth overestimated).
     """
-    programs = problem.programs() if descent.USE_COMPILED else None
+    programs = problem.programs()
     if programs is not None:                          # the same search, compiled
         a, b = programs
         c = np.ascontiguousarray
@@ -339,7 +339,7 @@ def field_field_contacts(field_a: Field, field_b: Field, poses_b_in_a: np.ndarra
     unit = _starts(n_starts)
     starts = (lo[:, None, :] + extent[:, None, :] * unit[None, :, :]).reshape(-1, 2)
     scale_of = scale[pair_of]
-    programs = problem.programs() if descent.USE_COMPILED else None
+    programs = problem.programs()
     if programs is not None:                          # compiled, the same operations
         pair, point, depth, normal, start_id = _compiled_contacts(
             programs, problem.rotation, problem.offset, pair_of, starts, 0.25 * scale_of,
@@ -405,7 +405,7 @@ def placed_field_contacts(field_a: Field, field_b: Field, offset: np.ndarray, an
     bounds_a, bounds_b = np.asarray(bounds_a, np.float64), np.asarray(bounds_b, np.float64)
     offset = np.ascontiguousarray(offset, np.float64)
     programs = ((compile_field(field_a), compile_field(field_b))
-                if descent.USE_COMPILED and n_starts >= 1 else (None, None))
+                if n_starts >= 1 else (None, None))
     if programs[0] is None or programs[1] is None:
         region = overlap_regions(bounds_a, bounds_b, offset, cos, sin, float(margin))
         return (region, *field_field_contacts(field_a, field_b,

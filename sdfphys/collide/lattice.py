@@ -4,8 +4,8 @@ samples and hidden dips, instead of the fixed starts of ``descent.triangle_deepe
 
 The lattice and its neighbour pairs are built once per degree; the starts' choice and
 the dips are compiled (``_descent_starts``), and with fields that compile the whole
-query is one call (``_compiled_descent.descend_sampled``). ``descent.USE_COMPILED =
-False`` keeps the Python-driven loop, the reference of the tests.
+query is one call (``_compiled_descent.descend_sampled``); a field that does not compile
+keeps the Python-driven loop, the reference of the tests.
 """
 
 from __future__ import annotations
@@ -103,7 +103,7 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
     if n_tri == 0:
         return np.zeros((0, k, 2)), np.zeros((0, k))
     tri = np.ascontiguousarray(tri)
-    program = compile_field(field) if descent.USE_COMPILED else None
+    program = compile_field(field)
     if program is not None:
         n_points = n_tri * k
         best, value, _, _, cand, cand_i, candidates = descend_sampled(

@@ -33,8 +33,8 @@ kernels around the descent, with the field's program evaluated inside them:
 frame), each stage's points still evaluated in one batch; a call then costs a
 fixed handful of Python calls, nothing per pair or candidate. Otherwise the
 numpy stages run (``_mesh_in_field_numpy``: the functions above, the reference
-the compiled kernels are tested against, bit for bit; ``USE_COMPILED = False``
-forces them).
+the compiled kernels are tested against, bit for bit, with the field wrapped so
+that it does not compile: tests/oracles.py).
 
 Keys (see ``narrowphase`` for the layout): descent minima keep (triangle, start id; with
 starts chosen by sampling, ``settings.descent_lattice`` > 0, ``SAMPLED_START`` + the
@@ -346,9 +346,6 @@ def _mesh_in_field_numpy(mesh: Shape, other: Shape, pose_mesh: np.ndarray,
 # The compiled path: the same stages, the field's program evaluated in the kernels
 # --------------------------------------------------------------------------------------
 
-#: Run ``mesh_in_field`` through the compiled kernels when the field compiles
-#: (``sdf.compiled``); False forces the numpy stages (the tests compare the two).
-USE_COMPILED = True
 #: Start weights (K, 3) per number of descent starts, in ``_START_PRIORITY`` order.
 _STARTS = {k: np.ascontiguousarray(descent.START_BARYCENTRIC[_START_PRIORITY[:k]])
            for k in range(1, len(_START_PRIORITY) + 1)}
@@ -368,10 +365,10 @@ def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: 
     toward the mesh), depth (C,), key element (C,) and key start (C,).
 
     When other's field compiles (``sdf.compiled``) the stages run in two compiled
-    kernels around the descent (``_place``, ``_finish``); otherwise, and with
-    ``USE_COMPILED = False``, in numpy (``_mesh_in_field_numpy``). Same results.
+    kernels around the descent (``_place``, ``_finish``); otherwise in numpy
+    (``_mesh_in_field_numpy``). Same results.
     """
-    program = compiled.compile_field(other.field) if USE_COMPILED else None
+    program = compiled.compile_field(other.field)
     if program is None:
         return _mesh_in_field_numpy(mesh, other, pose_mesh, pose_other, margin, settings,
                                     polygon_pair)

@@ -59,7 +59,7 @@ per contact in Python. When both fields compile (``sdf.compiled``), stages 2 and
 run in one compiled kernel (``_mesh_sdf_kernels._support``: the same batches, the
 programs evaluated inside it); otherwise in numpy (``_support_numpy``, with ``_deepest_on_sdf``,
 ``_far_ends`` and ``_nearest_edges``: the reference the kernel is tested against,
-bit for bit; ``USE_COMPILED = False`` forces it).
+bit for bit, with a field that does not compile: tests/oracles.py).
 """
 
 from __future__ import annotations
@@ -98,9 +98,6 @@ __all__ = ["FAR_END", "REFINE_ROUNDS", "SDF_CALLS", "sdf_in_mesh"]
 #: the starts, one per support-search round, the far ends' probes, anchors and two
 #: ladders.
 SDF_CALLS = REFINE_ROUNDS + 5
-#: Run stages 2 and 3 in one compiled kernel (``_support``) when both fields compile
-#: (``sdf.compiled``); False forces the numpy stages (the tests compare the two).
-USE_COMPILED = True
 
 
 class _MeshInSdfFrame:
@@ -353,7 +350,7 @@ def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.nda
     if len(pair) == 0:
         return empty
     programs = (compiled.compile_field(sdf.field), compiled.compile_field(mesh.field))
-    if USE_COMPILED and programs[0] is not None and programs[1] is not None:
+    if programs[0] is not None and programs[1] is not None:
         a, b = programs
         return _support(a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
                         b.nesting, mesh.vertices, np.cos(angle), np.sin(angle), offset, co, so,
