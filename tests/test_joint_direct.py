@@ -7,7 +7,8 @@ import pytest
 
 import sdfphys
 from sdfphys.solver import joint_direct as direct
-from sdfphys.solver.joints import RELAX, SOLVE, Output, stiffened_softness
+from sdfphys.solver.joint_direct import kernel_plan
+from sdfphys.solver.joints import RELAX, SOLVE, Output, kernel_rows, stiffened_softness
 from sdfphys.world_stages import body_state
 
 
@@ -61,23 +62,26 @@ def test_one_direct_pass_is_the_dense_solution_of_the_soft_and_the_rigid_system(
     soft, _ = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows, world.settings,
                                  world._gravity, 4.0)
     rng = np.random.default_rng(3)
+    ref = kernel_rows(rows)
     for phase in (SOLVE, RELAX):
-        p = direct.plan(rows, bodies.inv_mass, bodies.inv_inertia)
-        direct.factor(p, bodies.com, bodies.angle, bodies.inv_mass, bodies.inv_inertia, rows,
-                      soft, phase)
+        p = direct.plan(ref, bodies.inv_mass, bodies.inv_inertia)
+        direct.factor(kernel_plan(p), bodies.com, bodies.angle, bodies.inv_mass,
+                      bodies.inv_inertia, ref, soft, phase)
         assert p.ok.tolist() == [True] and len(p.row_joint) == 10
         jac, _, a_matrix, g = dense_system(p, rows, bodies.inv_mass, bodies.inv_inertia)
         velocity = rng.normal(size=(len(bodies.inv_mass), 2))
         spin = rng.normal(size=len(bodies.inv_mass))
-        impulse = np.array([direct._impulse(rows, j, c)
+        impulse = np.array([direct._impulse(ref, j, c)
                             for j, c in zip(p.row_joint, p.row_code)])
         x = np.column_stack([velocity, spin]).reshape(-1)
         expected = np.linalg.solve(a_matrix + g, -(jac @ x + p.rate * p.error) - g @ impulse)
         after = rows._replace(**{f: getattr(rows, f).copy() for f in (
             "linear_impulse", "angular_impulse", "perp_impulse", "axial_impulse")})
         out = Output(np.zeros((0, 2)), np.zeros(0), np.zeros(2))
-        direct.direct_pass(p, velocity, spin, bodies.inv_mass, bodies.inv_inertia, after, out)
-        got = np.array([direct._impulse(after, j, c)
+        after_ref = kernel_rows(after)
+        direct.direct_pass(kernel_plan(p), velocity, spin, bodies.inv_mass, bodies.inv_inertia,
+                           after_ref, out)
+        got = np.array([direct._impulse(after_ref, j, c)
                         for j, c in zip(p.row_joint, p.row_code)]) - impulse
         np.testing.assert_allclose(got, expected, rtol=1e-10, atol=1e-12)
         residual = jac @ np.column_stack([velocity, spin]).reshape(-1) + p.rate * p.error \
@@ -94,16 +98,17 @@ def test_islands_split_at_the_world_and_redundant_rigid_rows_fall_back():
     direct solve at the next soft phase."""
     world = chain_world(links=3, chains=2)
     bodies, rows = body_state(world), world._joints.rows
-    p = direct.plan(rows, bodies.inv_mass, bodies.inv_inertia)
+    p = direct.plan(kernel_rows(rows), bodies.inv_mass, bodies.inv_inertia)
     assert np.diff(p.start).tolist() == [6, 6]
 
     world = chain_world(links=1, pinned_end=True)
     bodies, rows = body_state(world), world._joints.rows
     soft, _ = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows, world.settings,
                                  world._gravity, 4.0)
-    p = direct.plan(rows, bodies.inv_mass, bodies.inv_inertia)
+    ref = kernel_rows(rows)
+    p = direct.plan(ref, bodies.inv_mass, bodies.inv_inertia)
     for phase, ok in ((SOLVE, True), (RELAX, False), (SOLVE, True)):
-        direct.factor(p, bodies.com, bodies.angle, bodies.inv_mass, bodies.inv_inertia, rows,
-                      soft, phase)
+        direct.factor(kernel_plan(p), bodies.com, bodies.angle, bodies.inv_mass,
+                      bodies.inv_inertia, ref, soft, phase)
         assert p.ok.tolist() == [ok]
         assert (p.mask == (direct.equality_mask(0, False, 0.0, 0.0) if ok else 0)).all()

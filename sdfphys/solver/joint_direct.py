@@ -44,6 +44,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from numba.experimental import structref
 
 from .._jit import njit
 from .joints import (
@@ -59,14 +60,15 @@ from .joints import (
     WELD,
     WHEEL,
     Output,
+    PlainFields,
     joint_geometry,
     solve_joints,
     stiffen,
 )
 from .softness import CONVERGED
 
-__all__ = ["MAX_ROWS", "DirectPlan", "direct_pass", "equality_mask", "factor",
-           "joint_passes", "plan"]
+__all__ = ["MAX_ROWS", "DirectPlan", "DirectPlanRef", "direct_pass", "equality_mask",
+           "factor", "joint_passes", "kernel_plan", "plan"]
 #: Row codes (``DirectPlan.row_code``): point x, point y, angle, perpendicular, axial.
 _X, _Y, _ANGLE, _PERP, _AXIAL = range(5)
 #: The largest island solved directly, in rows (dense storage R^2, work <= R^3 / 3).
@@ -100,6 +102,31 @@ class DirectPlan(NamedTuple):
     first: np.ndarray
     matrix: np.ndarray
     ok: np.ndarray
+
+
+@structref.register
+class _DirectPlanType(PlainFields):
+    """Numba's type of ``DirectPlanRef``."""
+
+
+class DirectPlanRef(structref.StructRefProxy):
+    """DirectPlan as the kernels take it, one reference to the same arrays
+    (``kernel_plan``; why: ``joints.kernel_rows``). Opaque to Python."""
+
+
+structref.define_proxy(DirectPlanRef, _DirectPlanType, list(DirectPlan._fields))
+
+
+@njit(cache=True)
+def _direct_plan_ref(mask, row_joint, row_code, start, offset, jac, error, rate, scale,
+                     first, matrix, ok):
+    return DirectPlanRef(mask, row_joint, row_code, start, offset, jac, error, rate, scale,
+                         first, matrix, ok)
+
+
+def kernel_plan(p: DirectPlan) -> DirectPlanRef:
+    """``p`` as the joint kernels take it (``joints.kernel_rows``)."""
+    return _direct_plan_ref(*p)
 
 
 @njit(cache=True)

@@ -38,6 +38,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from numba.core import types
+from numba.experimental import structref
 
 from .._jit import njit
 from .softness import soft_coefficients
@@ -50,9 +52,12 @@ __all__ = [
     "PERP_ROW",
     "POINT_ROWS",
     "JointRows",
+    "JointRowsRef",
     "Output",
+    "PlainFields",
     "joint_geometry",
     "joint_reactions",
+    "kernel_rows",
     "solve_joints",
     "spring_softness",
     "stiffen",
@@ -194,6 +199,55 @@ _FIELDS = {name: ((2,) if name in ("local_a", "local_b", "local_axis", "linear_i
            for name in JointRows._fields}
 
 
+# The kernels take the rows by reference (``kernel_rows``): numba passes a tuple by
+# value, each of its 30 arrays as seven arguments, through every function that takes
+# it, which made each joint kernel several times slower to compile (21 small functions
+# reading two of 30 arrays each: 5.4 s with a NamedTuple, 0.9 s with a StructRef or a
+# tuple of two arrays; scratch measurement). Inside the kernels ``rows.kind[j]`` reads
+# the same arrays either way.
+
+
+class PlainFields(types.StructRef):
+    """A StructRef type whose fields take their values' plain (not literal) types."""
+
+    def preprocess_fields(self, fields):
+        return tuple((name, types.unliteral(t)) for name, t in fields)
+
+
+@structref.register
+class _JointRowsType(PlainFields):
+    """Numba's type of ``JointRowsRef``."""
+
+
+class JointRowsRef(structref.StructRefProxy):
+    """JointRows as the kernels take it: one reference to the same 30 arrays (writes in
+    a kernel are the NamedTuple's). Made by ``kernel_rows``; opaque to Python."""
+
+
+structref.define_proxy(JointRowsRef, _JointRowsType, list(JointRows._fields))
+
+
+@njit(cache=True)
+def _joint_rows_ref(kind, body_a, body_b, local_a, local_b, local_axis, reference_angle,
+                    length, min_length, max_length, lower, upper, has_limit, has_motor,
+                    has_spring, collide_connected, motor_speed, max_motor, max_torque,
+                    max_force, spring_hertz, spring_damping, linear_impulse,
+                    angular_impulse, perp_impulse, axial_impulse, spring_impulse,
+                    motor_impulse, lower_impulse, upper_impulse):
+    return JointRowsRef(kind, body_a, body_b, local_a, local_b, local_axis, reference_angle,
+                        length, min_length, max_length, lower, upper, has_limit, has_motor,
+                        has_spring, collide_connected, motor_speed, max_motor, max_torque,
+                        max_force, spring_hertz, spring_damping, linear_impulse,
+                        angular_impulse, perp_impulse, axial_impulse, spring_impulse,
+                        motor_impulse, lower_impulse, upper_impulse)
+
+
+def kernel_rows(rows: JointRows) -> JointRowsRef:
+    """``rows`` as the joint kernels take them (a compiled call, cached on disk: the
+    proxy's own constructor would compile again in every process)."""
+    return _joint_rows_ref(*rows)
+
+
 def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: JointRows,
                        settings, gravity: np.ndarray, cap: float
                        ) -> tuple[np.ndarray, np.ndarray]:
@@ -211,7 +265,7 @@ def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: Join
     params = np.array([2.0 * math.pi * 2.0 * min(settings.contact_hertz, 0.25 / h),
                        JOINT_DAMPING_RATIO, h, g * h, cap, 1.0])
     soft = np.empty((rows.kind.shape[0], 2, 3))
-    stiffen(inv_mass, inv_inertia, rows, params, soft)
+    stiffen(inv_mass, inv_inertia, kernel_rows(rows), params, soft)
     return soft, params
 
 
@@ -610,7 +664,7 @@ def joint_reactions(com: np.ndarray, angle: np.ndarray, rows: JointRows,
     out = Output(np.zeros((count, 2)), np.zeros(count), np.zeros(2))
     if count:
         zero = np.zeros(len(angle))
-        solve_joints(com, angle, np.zeros_like(com), zero, zero, zero, rows, REACTION,
-                     np.zeros((count, 2, 3)), np.zeros((count, 3)), 1.0 / h, out,
+        solve_joints(com, angle, np.zeros_like(com), zero, zero, zero, kernel_rows(rows),
+                     REACTION, np.zeros((count, 2, 3)), np.zeros((count, 3)), 1.0 / h, out,
                      np.zeros(count, np.int64))
     return out.force / h, out.torque / h

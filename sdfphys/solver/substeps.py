@@ -43,7 +43,7 @@ import numpy as np
 
 from .._jit import njit
 from ..settings import Settings
-from .joint_direct import joint_passes, plan
+from .joint_direct import joint_passes, kernel_plan, plan
 from .joints import (
     JOINT_PASSES,
     RELAX,
@@ -51,6 +51,7 @@ from .joints import (
     WARM,
     JointRows,
     Output,
+    kernel_rows,
     spring_softness,
     stiffened_softness,
 )
@@ -565,10 +566,11 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         rows, cap = joints
         joint_soft, stiffening = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows,
                                                     settings, gravity, float(cap[0]))
-        islands = plan(rows, bodies.inv_mass, bodies.inv_inertia)
+        ref = kernel_rows(rows)
+        islands = kernel_plan(plan(ref, bodies.inv_mass, bodies.inv_inertia))
         joint_args = ((bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity,
                        bodies.inv_mass, bodies.inv_inertia),
-                      (rows, joint_soft, spring_softness(rows, h), stiffening, islands),
+                      (ref, joint_soft, spring_softness(rows, h), stiffening, islands),
                       Output(np.empty((0, 2)), np.empty(0), np.zeros(2)))
     else:
         joint_args = None
