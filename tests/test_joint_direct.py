@@ -112,3 +112,22 @@ def test_islands_split_at_the_world_and_redundant_rigid_rows_fall_back():
                       bodies.inv_inertia, ref, soft, phase)
         assert p.ok.tolist() == [ok]
         assert (p.mask == (direct.equality_mask(0, False, 0.0, 0.0) if ok else 0)).all()
+
+
+def test_the_kernel_references_hold_every_field_in_order():
+    """``kernel_rows`` and ``kernel_plan`` list the bundles' fields by hand (a compiled
+    constructor, cached): they must follow JointRows and DirectPlan field for field, and
+    the reference shares the arrays (a kernel's write is the bundle's)."""
+    import inspect
+
+    from sdfphys.solver import joints
+
+    for maker, bundle in ((joints._joint_rows_ref, joints.JointRows),
+                          (direct._direct_plan_ref, direct.DirectPlan)):
+        assert tuple(inspect.signature(maker.py_func).parameters) == bundle._fields
+    world = chain_world(links=2)
+    rows = world._joints.rows
+    ref = kernel_rows(rows)
+    before = float(rows.angular_impulse[0])
+    direct._add_impulse(ref, 0, direct._ANGLE, 0.25)
+    assert rows.angular_impulse[0] == before + 0.25
