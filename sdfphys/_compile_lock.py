@@ -17,9 +17,10 @@ the lock. A process that finds the lock taken waits (polling every ``POLL_SECOND
 and then looks the kernel up itself, so it loads what the other saved instead of
 compiling it again. Every read and write of a kernel's cache files happens under its
 lock. The lock is re-entrant within a process (compiling a kernel may compile another
-signature of it). A lock whose owner has died (no such pid) or that is older than
-``STALE_SECONDS`` is taken over. Where no lock file can be made (a read-only cache),
-numba compiles unlocked, as without this module.
+signature of it). A lock whose owner has died (no such pid; not asked on Windows, where
+``os.kill`` ends a process) or that is older than ``STALE_SECONDS`` is taken over. Where
+no lock file can be made (a read-only cache), numba compiles unlocked, as without this
+module.
 
 No deadlock: a process waits for a kernel only while compiling a caller of it (numba
 compiles a callee while typing its caller), so two processes waiting for each other
@@ -74,6 +75,8 @@ def _stale(path: str) -> bool:
         return True
     if not text.strip().isdigit():
         return age > 5.0                            # being written, or garbage
+    if os.name == "nt":
+        return False            # os.kill(pid, 0) would terminate the process there
     try:
         os.kill(int(text), 0)
     except ProcessLookupError:
