@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from numba import njit
 
 from sdfphys.collide.contacts import Contacts
 from sdfphys.settings import Settings
@@ -522,3 +523,36 @@ def test_rotation_per_substep_is_capped_at_a_quarter_turn():
     _integrate_positions(com, angle, velocity, w, 400.0, h)
     np.testing.assert_array_equal(w, [10.0, MAX_ROTATION / h, -MAX_ROTATION / h])
     np.testing.assert_allclose(angle, [10.0 * h, MAX_ROTATION, -MAX_ROTATION], rtol=1e-15)
+
+
+def test_the_substep_bundles_hold_their_fields_in_order_and_share_the_arrays():
+    """``solver.bundles``' makers list the fields by hand (compiled, cached): they follow
+    BODY_FIELDS and ROW_FIELDS, which name BodyState's and ContactConstraints' arrays
+    (and the three row coefficients); a kernel's write through the reference is the
+    caller's array's."""
+    import dataclasses
+    import inspect
+
+    from sdfphys.solver import bundles, rows
+
+    assert tuple(inspect.signature(bundles._substep_bodies.py_func).parameters) == \
+        bundles.BODY_FIELDS
+    assert tuple(inspect.signature(bundles._substep_rows.py_func).parameters) == \
+        bundles.ROW_FIELDS
+    body_fields = {f.name for f in dataclasses.fields(rows.BodyState)}
+    row_fields = {f.name for f in dataclasses.fields(rows.ContactConstraints)}
+    assert set(bundles.BODY_FIELDS) <= body_fields
+    assert set(bundles.ROW_FIELDS) - row_fields == {"bias_rate", "mass_scale",
+                                                      "impulse_scale"}
+    n = 3
+    state = rows.BodyState(np.zeros((n, 2)), np.zeros(n), np.zeros((n, 2)), np.zeros(n),
+                           np.ones(n), np.ones(n), np.zeros(n), np.zeros(n),
+                           np.zeros(n, bool))
+    ref = bundles.substep_bodies(state)
+    _bump_first_velocity(ref)
+    assert state.velocity[0, 0] == 1.0
+
+
+@njit
+def _bump_first_velocity(bodies):
+    bodies.velocity[0, 0] += 1.0

@@ -47,6 +47,7 @@ import numpy as np
 from numba.experimental import structref
 
 from .._jit import njit
+from .bundles import PlainFields
 from .joints import (
     ANGLE_ROW,
     AXIAL_ROW,
@@ -60,7 +61,6 @@ from .joints import (
     WELD,
     WHEEL,
     Output,
-    PlainFields,
     joint_geometry,
     solve_joints,
     stiffen,

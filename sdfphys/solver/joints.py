@@ -38,10 +38,10 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba.core import types
 from numba.experimental import structref
 
 from .._jit import njit
+from .bundles import PlainFields
 from .softness import soft_coefficients
 
 __all__ = [
@@ -54,7 +54,6 @@ __all__ = [
     "JointRows",
     "JointRowsRef",
     "Output",
-    "PlainFields",
     "joint_geometry",
     "joint_reactions",
     "kernel_rows",
@@ -199,19 +198,13 @@ _FIELDS = {name: ((2,) if name in ("local_a", "local_b", "local_axis", "linear_i
            for name in JointRows._fields}
 
 
-# The kernels take the rows by reference (``kernel_rows``): numba passes a tuple by
-# value, each of its 30 arrays as seven arguments, through every function that takes
-# it, which made each joint kernel several times slower to compile (21 small functions
-# reading two of 30 arrays each: 5.4 s with a NamedTuple, 0.9 s with a StructRef or a
-# tuple of two arrays; scratch measurement) and to call (the chain bridge's steps took
-# twice as long). Inside the kernels ``rows.kind[j]`` reads the same arrays either way.
-
-
-class PlainFields(types.StructRef):
-    """A StructRef type whose fields take their values' plain (not literal) types."""
-
-    def preprocess_fields(self, fields):
-        return tuple((name, types.unliteral(t)) for name, t in fields)
+# The kernels take the rows by reference (``kernel_rows``, ``bundles``): numba passes a
+# tuple by value, each of its 30 arrays as seven arguments, through every function that
+# takes it, which made each joint kernel several times slower to compile (21 small
+# functions reading two of 30 arrays each: 5.4 s with a NamedTuple, 0.9 s with a
+# StructRef or a tuple of two arrays; scratch measurement) and to call (the chain
+# bridge's steps took twice as long). Inside the kernels ``rows.kind[j]`` reads the
+# same arrays either way.
 
 
 @structref.register

@@ -43,6 +43,7 @@ import numpy as np
 
 from .._jit import njit
 from ..settings import Settings
+from .bundles import substep_bodies, substep_rows
 from .joint_direct import joint_passes, kernel_plan, plan
 from .joints import (
     JOINT_PASSES,
@@ -306,9 +307,9 @@ def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_dept
     """One Gauss-Seidel pass over the pairs ``pairs`` (indices into pair_start, in order):
     normal rows of the pair, then its friction rows.
 
-    bodies: (velocity, angular_velocity, inv_mass, inv_inertia); rows: the contact rows
-    (``_substeps_kernel``'s tuple, ContactConstraints' arrays plus the row coefficients of
-    ``row_softness``); pseudo: (pseudo_velocity, pseudo_angular, pseudo_impulse).
+    bodies: ``bundles.SubstepBodies``; rows: ``bundles.SubstepRows`` (ContactConstraints'
+    arrays plus the row coefficients of ``row_softness``); pseudo: (pseudo_velocity,
+    pseudo_angular, pseudo_impulse).
 
     Normal row k: s > 0 (speculative): bias = s / h, rigid (the gap may close, no more);
     else with ``use_bias`` soft, with row k's coefficients (``row_softness``):
@@ -326,10 +327,14 @@ def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_dept
     ``measured[p]`` (the loaded islands' pairs), N s: how far the pass was from converged
     (``_sweeps``' extra passes stop on their ratio).
     """
-    velocity, angular_velocity, inv_mass, inv_inertia = bodies
-    (body_a, body_b, pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
-     tangent_mass, friction, bias_rate, mass_scale, impulse_scale, normal_impulse,
-     tangent_impulse, total_normal_impulse) = rows
+    velocity, angular_velocity = bodies.velocity, bodies.angular_velocity
+    inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
+    body_a, body_b, pair_start, normal = rows.body_a, rows.body_b, rows.pair_start, rows.normal
+    anchor_a, anchor_b, separation = rows.anchor_a, rows.anchor_b, rows.separation
+    normal_mass, tangent_mass, friction = rows.normal_mass, rows.tangent_mass, rows.friction
+    bias_rate, mass_scale, impulse_scale = rows.bias_rate, rows.mass_scale, rows.impulse_scale
+    normal_impulse, tangent_impulse = rows.normal_impulse, rows.tangent_impulse
+    total_normal_impulse = rows.total_normal_impulse
     pseudo_velocity, pseudo_angular, pseudo_impulse = pseudo
     largest_change = 0.0
     largest_impulse = 0.0
@@ -452,15 +457,14 @@ def _joint_phase(joints, phase, inv_h, passes, moved):
 
 
 @njit(cache=True)
-def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
-                     linear_damping, angular_damping, round_body, gravity, body_a, body_b,
-                     pair_start, loaded, normal, anchor_a0, anchor_b0, anchor_a, anchor_b,
-                     base_separation, separation, normal_mass, tangent_mass, friction,
-                     bias_rate, mass_scale, impulse_scale, normal_impulse, tangent_impulse,
-                     total_normal_impulse, total_tangent_impulse, h, substeps, relax_passes,
-                     max_push_out, max_speed, use_friction, extra_passes, rest_passes, soft_depth,
+def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, max_push_out,
+                     max_speed, use_friction, extra_passes, rest_passes, soft_depth,
                      split_rate, joints, accel):
     """All substeps of one step: integrate v, warm start, solve, integrate x, relax.
+
+    bodies: the bodies (``bundles.SubstepBodies``), rows: the contact rows and their
+    coefficients (``bundles.SubstepRows``), both updated in place. loaded: (every loaded
+    pair, the small islands' ones, (P,) bool: whether pair p is loaded), as ``_sweeps``.
 
     joints: None (no joints: no joint code is compiled, numba prunes the branches on the
     None type), or (the bodies' (com, angle, velocity, angular_velocity, inv_mass,
@@ -483,6 +487,18 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
     Returns (the number of those extra passes run, the number of substeps that had a
     split row).
     """
+    com, angle, velocity = bodies.com, bodies.angle, bodies.velocity
+    angular_velocity, inv_mass, inv_inertia = (bodies.angular_velocity, bodies.inv_mass,
+                                               bodies.inv_inertia)
+    linear_damping, angular_damping = bodies.linear_damping, bodies.angular_damping
+    round_body = bodies.round_body
+    body_a, body_b, pair_start, normal = rows.body_a, rows.body_b, rows.pair_start, rows.normal
+    anchor_a0, anchor_b0, anchor_a, anchor_b = (rows.anchor_a0, rows.anchor_b0, rows.anchor_a,
+                                                rows.anchor_b)
+    base_separation, separation = rows.base_separation, rows.separation
+    normal_impulse, tangent_impulse = rows.normal_impulse, rows.tangent_impulse
+    total_normal_impulse, total_tangent_impulse = (rows.total_normal_impulse,
+                                                   rows.total_tangent_impulse)
     com0 = com.copy()
     angle0 = angle.copy()
     arm_a0 = anchor_a.copy()
@@ -495,10 +511,6 @@ def _substeps_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inert
     pseudo_velocity = np.zeros_like(velocity)
     pseudo_angular = np.zeros_like(angular_velocity)
     pseudo_impulse = np.zeros_like(separation)
-    bodies = (velocity, angular_velocity, inv_mass, inv_inertia)
-    rows = (body_a, body_b, pair_start, normal, anchor_a, anchor_b, separation, normal_mass,
-            tangent_mass, friction, bias_rate, mass_scale, impulse_scale, normal_impulse,
-            tangent_impulse, total_normal_impulse)
     pseudo = (pseudo_velocity, pseudo_angular, pseudo_impulse)
     joint_passes_max = JOINT_PASSES * (extra_passes + 1)
     passes_run = 0
@@ -584,13 +596,8 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     measured[loaded_pairs] = True
     start_tangent = c.tangent_impulse.copy()
     passes, push_outs = _substeps_kernel(
-        bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
-        bodies.inv_inertia, bodies.linear_damping, bodies.angular_damping, bodies.round_body,
-        gravity, c.body_a, c.body_b, c.pair_start, (loaded_pairs, loaded_pairs[small], measured),
-        c.normal,
-        c.anchor_a0, c.anchor_b0, c.anchor_a, c.anchor_b, c.base_separation, c.separation,
-        c.normal_mass, c.tangent_mass, c.friction, bias_rate, mass_scale, impulse_scale,
-        c.normal_impulse, c.tangent_impulse, c.total_normal_impulse, c.total_tangent_impulse,
+        substep_bodies(bodies), substep_rows(c, bias_rate, mass_scale, impulse_scale),
+        gravity, (loaded_pairs, loaded_pairs[small], measured),
         h, settings.substeps, settings.relax_passes, settings.max_push_out,
         settings.max_linear_speed, use_friction, settings.stiff_iterations - 1,
         settings.rest_iterations - 1, settings.soft_depth, settings.split_push_out, joint_args,
