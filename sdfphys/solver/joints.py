@@ -242,8 +242,8 @@ def kernel_rows(rows: JointRows) -> JointRowsRef:
 
 
 def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: JointRows,
-                       settings, gravity: np.ndarray, cap: float
-                       ) -> tuple[np.ndarray, np.ndarray]:
+                       settings, gravity: np.ndarray, cap: float,
+                       ref: JointRowsRef | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(soft (J, 2, 3), params (6,)): bias_rate 1/s, mass_scale, impulse_scale of each
     joint's rigid rows, linear [:, 0] and angular [:, 1] ("Loaded joints" below), from
     the accumulated impulses now; ``joint_passes`` refills them every substep from
@@ -251,14 +251,15 @@ def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: Join
     or raises the cap on r (``cap``: where the last step left it; inf: none).
 
     inv_mass, inv_inertia: (B,); gravity: (2,) m/s^2 (zero, or
-    ``settings.load_stiffening`` false: no stiffening).
+    ``settings.load_stiffening`` false: no stiffening); ref: ``kernel_rows(rows)`` if
+    the caller has it already.
     """
     h = settings.dt / settings.substeps
     g = float(np.hypot(gravity[0], gravity[1])) if settings.load_stiffening else 0.0
     params = np.array([2.0 * math.pi * 2.0 * min(settings.contact_hertz, 0.25 / h),
                        JOINT_DAMPING_RATIO, h, g * h, cap, 1.0])
     soft = np.empty((rows.kind.shape[0], 2, 3))
-    stiffen(inv_mass, inv_inertia, kernel_rows(rows), params, soft)
+    stiffen(inv_mass, inv_inertia, kernel_rows(rows) if ref is None else ref, params, soft)
     return soft, params
 
 

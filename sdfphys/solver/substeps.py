@@ -576,9 +576,9 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     gravity = np.asarray(gravity, dtype=np.float64)
     if joints is not None and len(joints[0].kind) > 0:
         rows, cap = joints
-        joint_soft, stiffening = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows,
-                                                    settings, gravity, float(cap[0]))
         ref = kernel_rows(rows)
+        joint_soft, stiffening = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows,
+                                                    settings, gravity, float(cap[0]), ref)
         islands = kernel_plan(plan(ref, bodies.inv_mass, bodies.inv_inertia))
         joint_args = ((bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity,
                        bodies.inv_mass, bodies.inv_inertia),
