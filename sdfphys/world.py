@@ -293,7 +293,7 @@ class World(WorldJoints):
             constraints = stage.prepare(self, contacts, bodies)
             stage.substeps(self, constraints, bodies)
             stage.restitution(self, constraints, bodies)
-            stage.time_of_impact(self, bodies, start_com, start_angle)
+            stage.time_of_impact(self, bodies, start_com, start_angle, contacts)
             stage.store_impulses(self, constraints)
             self._contacts = rows = WorldContacts.of(contacts, constraints.total_normal_impulse,
                                                      constraints.total_tangent_impulse)

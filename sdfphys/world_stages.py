@@ -173,8 +173,9 @@ def restitution(world: World, constraints: ContactConstraints, bodies: BodyState
 
 
 def time_of_impact(world: World, bodies: BodyState, start_com: np.ndarray,
-                   start_angle: np.ndarray) -> None:
-    """Stage 5: fast bodies stopped at their time of impact (``sdfphys.toi``)."""
+                   start_angle: np.ndarray, contacts: Contacts) -> None:
+    """Stage 5: fast bodies stopped at their time of impact (``sdfphys.toi``); a circle
+    is not traced against a body it had a contact row with (``contacts``, this step's)."""
     s = world.settings
     if not s.time_of_impact:
         return
@@ -189,7 +190,8 @@ def time_of_impact(world: World, bodies: BodyState, start_com: np.ndarray,
                               [getattr(shape, "vertices", None) for shape in world._shapes],
                               world._view("shape_id"), start_com, bodies.com, start_angle,
                               bodies.angle, radius, core, fast, s.linear_slop, group,
-                              pair_filter(world))
+                              pair_filter(world),
+                              np.column_stack([contacts.body_a, contacts.body_b]))
     fast, fraction = world._joints.spread_fractions(group, fast, fraction)
     t = fraction[:, None]
     bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])

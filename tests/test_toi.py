@@ -257,3 +257,25 @@ def test_a_jointed_body_is_not_traced_against_an_obstacle_that_moved():
         t = toi.step_fractions(fields, [None] * 3, np.arange(3), start, end, angle, angle,
                                radius, core, np.array([1]), SLOP, group)
         assert (t[0] < 1.0) == stopped
+
+
+def test_a_circle_with_a_row_against_the_obstacle_is_left_to_the_rows():
+    """A fast ball that ends its step beside the wall is stopped short of it, unless it
+    had a contact row with the wall this step (the row bounds its approach; rewinding
+    it would push it back into what followed it); a box with such a row is still
+    traced (its bounding disc is not its outline, its vertices turn)."""
+    box = {"type": "box", "size": [0.2, 0.2]}
+    shapes = [shape_from_spec(s) for s in (WALL, BALL, box)]
+    fields = [s.field for s in shapes]
+    radius = np.array([s.radius for s in shapes])
+    core = np.array([0.05, 0.1, 0.1])
+    start = np.array([[0.0, 0.0], [-3.0, 0.3], [-3.0, -1.0]])
+    end = np.array([[0.0, 0.0], [-0.15, 0.3], [-0.15, -1.0]])
+    angle = np.zeros(3)
+    for rows, stopped in ((None, [True, True]), (np.array([[0, 1]]), [False, True]),
+                          (np.array([[2, 0], [0, 1]]), [False, True]),
+                          (np.array([[0, 2]]), [True, True])):
+        t = toi.step_fractions(fields, [None, None, shapes[2].vertices], np.arange(3), start,
+                               end, angle, angle, radius, core, np.array([1, 2]), SLOP,
+                               contact_pairs=rows)
+        assert list(t < 1.0) == stopped
