@@ -16,6 +16,7 @@ import pytest
 import sdfphys.world_stages as stages_module
 from sdfphys.settings import Settings
 from sdfphys.solver import MASS_RATIO, contact_softness, row_softness, soft_coefficients
+from sdfphys.solver.softness import IMPACT_HOPS
 from sdfphys.world import World
 
 G = np.array([0.0, -9.81])
@@ -25,10 +26,10 @@ HERTZ = min(SETTINGS.contact_hertz, 0.25 / H)
 ZETA = SETTINGS.contact_damping_ratio
 
 
-def rows(pairs, inv_mass, weights, normals=None, separation=None):
+def rows(pairs, inv_mass, weights, normals=None, separation=None, approach=None):
     """Hand-made constraints: one row per (a, b) pair, normal a -> b straight up unless
     given, normal impulse = ``weights`` kg carried (per substep: w |g| h), separation 0
-    (touching) unless given."""
+    (touching) and relative normal velocity 0 (at rest) unless given."""
     a = np.array([p[0] for p in pairs], np.int64)
     b = np.array([p[1] for p in pairs], np.int64)
     inv_mass = np.asarray(inv_mass, np.float64)
@@ -38,6 +39,7 @@ def rows(pairs, inv_mass, weights, normals=None, separation=None):
         pair_start=np.arange(len(pairs) + 1, dtype=np.int64), normal=normal,
         normal_impulse=np.asarray(weights, np.float64) * 9.81 * H,
         separation=np.zeros(len(pairs)) if separation is None else np.asarray(separation),
+        relative_velocity=np.zeros(len(pairs)) if approach is None else np.asarray(approach),
         stiff=((inv_mass[a] == 0.0) | (inv_mass[b] == 0.0)).astype(np.int64))
 
 
@@ -141,6 +143,99 @@ def test_load_stiffening_off_keeps_the_plain_coefficients():
     soft, stiff = contact_softness(off)
     assert list(bias_rate) == [stiff.bias_rate, soft.bias_rate, soft.bias_rate]
     assert len(loaded) == 0         # masses 1, 2, 3: no neighbours MASS_RATIO apart
+
+
+def column(n_bodies: int, impact_at: int, round_body: bool = True, **knobs):
+    """row_softness of a vertical column of n unit circles (boxes if not ``round_body``)
+    on the ground (rows (0, 1), (1, 2), ...), all at rest but row ``impact_at``, which
+    closes at 1 m/s from 1 mm apart: 1.7 cm in a step, past soft_depth beyond its gap.
+    Returns (loaded pairs, their caps)."""
+    pairs = [(i, i + 1) for i in range(n_bodies)]
+    approach = np.zeros(n_bodies)
+    approach[impact_at] = -1.0
+    separation = np.zeros(n_bodies)
+    separation[impact_at] = 0.001
+    inv_mass, c = rows(pairs, [0.0] + [1.0] * n_bodies, [1.0] * n_bodies,
+                       separation=separation, approach=approach)
+    settings = SETTINGS.with_values(load_stiffening=False, **knobs)
+    return row_softness(inv_mass, c, G, settings,
+                        round_body=np.array([False] + [round_body] * n_bodies))[3:]
+
+
+def test_an_impact_gives_the_contacts_within_impact_hops_its_extra_passes():
+    """Row 10 of a 30-circle column (one island, over stiff_island_limit 8) approaches
+    past soft_depth: the pairs touching a body within IMPACT_HOPS contacts of its two
+    bodies get impact_iterations - 1 extra passes, the rest none; the ground row
+    (static-dynamic) counts as a contact of its dynamic body."""
+    loaded, caps = column(30, 10, stiff_island_limit=8)
+    near = np.arange(10 - IMPACT_HOPS - 1, 10 + IMPACT_HOPS + 2)
+    np.testing.assert_array_equal(loaded, near)
+    assert set(caps) == {SETTINGS.impact_iterations - 1}
+    loaded, caps = column(3, 2, stiff_island_limit=8, impact_iterations=7)
+    np.testing.assert_array_equal(loaded, [0, 1, 2])
+    np.testing.assert_array_equal(caps, [6, 6, 6])
+
+
+def test_no_impact_passes_at_rest_alone_or_above_the_rest_limit():
+    """A column at rest (even 1 cm deep: overlap to push out is no approach), one body
+    alone landing on the ground, an impact in an island over rest_island_limit, and a
+    column of boxes (circles only): no extra pass; impact_iterations 1 turns them off."""
+    loaded, _ = column(30, 10, stiff_island_limit=8, rest_island_limit=29)
+    assert len(loaded) == 0
+    loaded, _ = column(30, 10, round_body=False, stiff_island_limit=8)
+    assert len(loaded) == 0
+    loaded, _ = column(30, 10, stiff_island_limit=8, impact_iterations=1)
+    assert len(loaded) == 0
+    loaded, _ = column(1, 0)
+    assert len(loaded) == 0
+    inv_mass, c = rows([(i, i + 1) for i in range(30)], [0.0] + [1.0] * 30, [1.0] * 30,
+                       separation=np.full(30, -0.01))
+    assert len(row_softness(inv_mass, c, G, SETTINGS.with_values(
+        load_stiffening=False, stiff_island_limit=8), round_body=np.ones(31, bool))[3]) == 0
+
+
+def test_a_loaded_pair_near_an_impact_keeps_the_larger_cap():
+    """A 3-circle column within stiff_island_limit whose bottom circle is 4 times
+    lighter (loaded island, stiff_iterations - 1 extra passes) hit at row 1: its caps
+    stay stiff_iterations - 1."""
+    inv_mass, c = rows([(0, 1), (1, 2), (2, 3)], [0.0, 4.0, 1.0, 1.0], [1.0, 1.0, 1.0],
+                       separation=[0.0, 0.001, 0.0], approach=[0.0, -1.0, 0.0])
+    loaded, caps = row_softness(inv_mass, c, G, SETTINGS, round_body=np.ones(4, bool))[3:]
+    np.testing.assert_array_equal(loaded, [0, 1, 2])
+    assert set(caps) == {SETTINGS.stiff_iterations - 1}
+
+
+def poured_rows(settings: Settings) -> tuple[float, World]:
+    """Deepest contact (m) over 2.5 s of 96 circles (r 0.25, 12 columns of 8 rows, 0.6 m
+    apart) falling together from 3 to 7.2 m onto the ground between two walls: each
+    column's lowest circle stops on the ground, or on the pile, while the ones above
+    still fall (one island of up to 96 bodies, over stiff_island_limit)."""
+    world = World(gravity=tuple(G), settings=settings)
+    world.add_body({"type": "box", "size": [20.0, 2.0]}, position=(0.0, -1.0), kind="static")
+    for x in (-3.9, 3.9):
+        world.add_body({"type": "box", "size": [0.5, 12.0]}, position=(x, 6.0),
+                       kind="static")
+    for row in range(8):
+        for col in range(12):
+            world.add_body({"type": "circle", "radius": 0.25},
+                           position=(-3.3 + 0.6 * col + 0.05 * (row % 2), 3.0 + 0.6 * row),
+                           friction=0.5)
+    deepest = 0.0
+    for _ in range(round(2.5 / settings.dt)):
+        world.step()
+        if len(world.contacts):
+            deepest = max(deepest, float(np.max(world.contacts.depth)))
+    return deepest, world
+
+
+def test_rows_of_circles_landing_at_once_stay_under_a_centimetre():
+    """The impact passes stop a column within its step: deepest contact under 1 cm
+    (3.3 mm when written); with impact_iterations 1 (one pass per substep) over it
+    (13.9 mm)."""
+    deepest, world = poured_rows(SETTINGS)
+    plain, _ = poured_rows(SETTINGS.with_values(impact_iterations=1))
+    assert deepest < 0.01 < plain
+    assert world.stage_counts["converge"] > 0
 
 
 def heavy_on_light(ratio: float, settings: Settings, seconds: float = 2.0) -> tuple[float, World]:

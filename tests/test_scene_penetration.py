@@ -23,10 +23,6 @@ BOUND = 0.01
 
 #: Scenes over the bound, with the cause found (deepest pair, time, figures).
 OPEN: dict[str, str] = {
-    "circles_in_box": "circle-circle body83 / body98 at t = 1.117 s, 2.3 cm: analytic "
-                      "contact present for steps before (1.4 mm, then 2.3 cm); the approach "
-                      "is not stopped in the 150-body pile (one solver pass per substep "
-                      "above stiff_island_limit)",
     "concave_polygons": "poly11 / poly12 at t = 2.10 s, 1.3 cm (1.9 cm at the soft rate "
                         "alone, split_push_out 0; after the kink-face fix: poly7 / poly12 "
                         "4.4 cm -> under 0.8 cm): the L's reflex corner in the arrow, depth "
@@ -43,36 +39,39 @@ OPEN: dict[str, str] = {
                   "contact present from 4 mm five steps before while csg6 rolls at 5 rad/s "
                   "on it: each step's rolling presses a new point in about as fast as the "
                   "split push-out takes the overlap out",
-    "grid_terrain": "circle-mesh body6 / body7 at t = 1.02 s, 2.0 cm (2.9 cm at the soft "
-                    "rate alone; after the medial-axis fix: terrain / body19 4.4 cm -> under "
-                    "1.1 cm): circle-polygon depth exact (brute force), present the steps "
-                    "before (-4.1, +1.2 cm) as the circle falls at 9.5 m/s onto the spinning "
-                    "box: the speculative row's fixed normal misses the box's turn; next "
-                    "body13 / body15 2.0 cm, terrain / body17 1.3 cm (triangle tip touching, "
-                    "-0.4 mm a step before, pushed in by the pile above)",
-    "marble_run": "circle-field track / marble9 at t = 3.27 s, 1.3 cm (1.6 cm at the soft "
-                  "rate alone) reported where the marble is 2.1-5.4 cm above the track "
-                  "(brute force): the smooth union's field is a bound (|grad| 0.80 there), "
+    "grid_terrain": "circle-mesh body14 / body15 at t = 1.33 s, 2.9 cm: the box spinning at "
+                    "29 rad/s (0.49 rad a step), the circle 12.7 mm from it at the step's "
+                    "start: found too late, the speculative row's fixed normal misses the "
+                    "box's turn; the same cause at body6 / body7, t = 1.0 s, 2.0 cm (before "
+                    "the impact passes changed the pile's landings, the deepest); next "
+                    "terrain / body17 1.3 cm (triangle tip touching, -0.4 mm a step before, "
+                    "pushed in by the pile above)",
+    "marble_run": "circle-field track / marble9 at t = 2.97 s, 1.29 cm (before the impact "
+                  "passes changed the marbles' landings: t = 3.27 s, 1.3 cm, 1.6 cm at the "
+                  "soft rate alone, reported where the marble is 2.1-5.4 cm above the track "
+                  "(brute force)): the smooth union's field is a bound (|grad| 0.80 there), "
                   "r - f(c) a false depth",
-    "sdf_primitives": "sdf-sdf vesica / rounded_cross at t = 2.40 s, 2.2 cm: depth exact "
-                      "(brute force of max(f_a, f_b) the steps before: 1.8, 5.9, 13.1 mm "
-                      "against the engine's 2.1, 6.2, 13.4), the contact present and "
-                      "deepening 4-8 mm a step at the vesica's tip while the pair's "
-                      "deepest normal turns from (-0.96, 0.29) to (-0.22, 0.98): not "
-                      "narrowphase, the push along the tip's normal does not separate "
-                      "(cause not yet found). With contacts searched every step "
-                      "(reuse_distance 0, round-off apart the same physics) the "
-                      "trajectory meets hexagram / pie at t = 1.08 s, 5.3 cm, found too "
-                      "late: the step before, the two surfaces run side by side for 15 "
-                      "cm, 5.6 mm apart at the pair's one contact and 8.8 mm at the far "
-                      "end (brute force), which has no contact, and the pie spinning at "
-                      "7.9 rad/s closes it (the field-field descent has no far-end "
-                      "point, as polygons.clip_pair now has)",
-    "showcase": "circle-sdf sdf_moon / body21 at t = 1.48 s, 2.2 cm (6.1 cm at t = 2.27 s "
-                "at the soft rate alone): found too late (b): 3.7 mm apart the step before "
-                "while closing at 4 m/s, the moon turning at 5 rad/s and the contact's "
-                "normal on its horn at 15 degrees a step: the speculative row's fixed "
-                "normal and anchor miss where the horn's surface comes",
+    "sdf_primitives": "sdf-sdf vesica / rounded_cross at t = 1.03 s, 2.4 cm: the contact "
+                      "at the vesica's tip present and deepening (2.0, 5.6, 9.1 mm the steps "
+                      "before) while the pair's deepest normal turns from (0.83, 0.55) to "
+                      "(-0.50, 0.87) in one step and both bodies turn under 0.4 rad/s: not "
+                      "found too late, the push along the tip's normal does not separate "
+                      "(cause not yet found; the same pair and signs at t = 2.40 s, 2.2 cm, "
+                      "with depths exact by brute force of max(f_a, f_b)). With contacts "
+                      "searched every step (reuse_distance 0) the trajectory met hexagram / "
+                      "pie at t = 1.08 s, 5.3 cm, found too late: the two surfaces ran side "
+                      "by side for 15 cm, 5.6 mm apart at the pair's one contact and 8.8 mm "
+                      "at the far end (brute force), which has no contact, and the pie "
+                      "spinning at 7.9 rad/s closed it (the field-field descent has no "
+                      "far-end point, as polygons.clip_pair has)",
+    "showcase": "sdf-sdf terrain / sdf_heart at t = 1.92 s, 2.0 cm: found too late: the "
+                "heart rolls on the flat terrain at 3.4 rad/s with one contact, under its "
+                "touching lobe (-0.3 mm); the step after, its other lobe, 0.72 m away, is "
+                "20 mm deep under the same feature key: the field-field descent reports the "
+                "touching minimum only, none for the lobe coming down (33 mm with "
+                "reuse_distance 0); next body17 / body26 1.7 cm at t = 1.65 s. Before the "
+                "impact passes: circle-sdf sdf_moon / body21 at t = 1.48 s, 2.2 cm, found "
+                "too late as the moon's horn turned 15 degrees a step",
 }
 
 

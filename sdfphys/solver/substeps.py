@@ -405,16 +405,42 @@ def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_dept
 
 
 @njit(cache=True)
+def _still_within(pairs, caps, n):
+    """The pairs (and their caps) whose cap of extra passes exceeds n, in order."""
+    count = 0
+    for i in range(pairs.shape[0]):
+        count += caps[i] > n
+    kept = np.empty(count, np.int64)
+    kept_caps = np.empty(count, np.int64)
+    count = 0
+    for i in range(pairs.shape[0]):
+        if caps[i] > n:
+            kept[count] = pairs[i]
+            kept_caps[count] = caps[i]
+            count += 1
+    return kept, kept_caps
+
+
+@njit(cache=True)
+def _lowest(caps, none):
+    """The smallest cap, ``none`` if there is none."""
+    lowest = none
+    for cap in caps:
+        lowest = min(lowest, cap)
+    return lowest
+
+
+@njit(cache=True)
 def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_depth,
-            split_rate, use_bias, use_friction, passes, extra_passes, rest_passes, joints):
+            split_rate, use_bias, use_friction, passes, joints):
     """One phase of a substep: ``passes`` ``_solve`` passes over every pair, then, if any
-    ran, up to ``extra_passes`` more over the loaded islands' pairs, stopping after a
+    ran, extra passes over the loaded islands' and the impacts' pairs, stopping after a
     pass whose largest normal impulse change is at most CONVERGED times the largest
-    accumulated normal impulse, measured over the loaded pairs; none when the last of
+    accumulated normal impulse, measured over those pairs; none when the last of
     the ``passes`` already meets it (without joints: their passes converge apart).
-    loaded: (every loaded pair, the small islands' ones, (P,) bool: whether pair p is
-    loaded); islands at rest over the small limit take part in the first
-    ``rest_passes`` extra passes only. Returns the number of extra passes run.
+    loaded: (those pairs (L,), their caps (L,): pair i takes part in the first caps[i]
+    extra passes (``row_softness``), (P,) bool: whether pair p is one of them).
+    Returns the number of extra passes run.
 
     joints: None, or (joint bodies, joint rows, Output) (``_substeps_kernel``): with
     joints, each extra pass is followed by one pass over the joints, and convergence
@@ -422,20 +448,24 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_d
     bridge of planks 25 times lighter opened its joints by 19 cm). None is a type, not
     a value, to numba: a scene without joints compiles no joint code.
     """
-    loaded_pairs, small_pairs, measured = loaded
+    pairs, caps, measured = loaded
     change = 0.0
     impulse = 0.0
     for _ in range(passes):
         change, impulse = _solve(bodies, rows, pseudo, all_pairs, measured, inv_h,
                                  max_push_out, soft_depth, split_rate, use_bias, use_friction)
-    if passes == 0 or loaded_pairs.shape[0] == 0:
+    if passes == 0 or pairs.shape[0] == 0:
         return 0
     if joints is None and change <= CONVERGED * impulse:
         return 0
-    for n in range(extra_passes):
-        pairs = loaded_pairs if n < rest_passes else small_pairs
-        if pairs.shape[0] == 0:
-            return n
+    highest = 0
+    for cap in caps:
+        highest = max(highest, cap)
+    lowest = _lowest(caps, highest)
+    for n in range(highest):
+        if n >= lowest:
+            pairs, caps = _still_within(pairs, caps, n)
+            lowest = _lowest(caps, highest)
         change, impulse = _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out,
                                  soft_depth, split_rate, use_bias, use_friction)
         joints_converged = True
@@ -445,7 +475,7 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_d
             joints_converged = progress[0] <= CONVERGED * progress[1]
         if change <= CONVERGED * impulse and joints_converged:
             return n + 1
-    return extra_passes
+    return highest
 
 
 @njit(cache=True)
@@ -458,13 +488,14 @@ def _joint_phase(joints, phase, inv_h, passes, moved):
 
 @njit(cache=True)
 def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, max_push_out,
-                     max_speed, use_friction, extra_passes, rest_passes, soft_depth,
-                     split_rate, joints, accel):
+                     max_speed, use_friction, extra_passes, soft_depth, split_rate, joints,
+                     accel):
     """All substeps of one step: integrate v, warm start, solve, integrate x, relax.
 
     bodies: the bodies (``bundles.SubstepBodies``), rows: the contact rows and their
-    coefficients (``bundles.SubstepRows``), both updated in place. loaded: (every loaded
-    pair, the small islands' ones, (P,) bool: whether pair p is loaded), as ``_sweeps``.
+    coefficients (``bundles.SubstepRows``), both updated in place. loaded: (the pairs
+    with extra passes, their caps, (P,) bool: whether pair p is one), as ``_sweeps``;
+    extra_passes: the most any pair takes (the joints' passes are bounded by it).
 
     joints: None (no joints: no joint code is compiled, numba prunes the branches on the
     None type), or (the bodies' (com, angle, velocity, angular_velocity, inv_mass,
@@ -476,8 +507,8 @@ def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, m
     once more after the contacts when there are both: a contact's single pass must not
     open a loaded joint (a folding chain's links touching each other).
 
-    After the solve and after the relax passes, the pairs of loaded islands
-    (``loaded_pairs``) get up to ``extra_passes`` more passes each (``_sweeps``).
+    After the solve and after the relax passes, the pairs of loaded islands and of
+    impacts get up to their caps of extra passes (``_sweeps``).
     Rows deeper than ``soft_depth`` (m) are split: their overlap moves the positions
     through pseudo-velocities, integrated after the velocities and then discarded
     (``_integrate_pseudo``; see "Split push-out").
@@ -535,7 +566,7 @@ def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, m
         if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
                                   max_push_out, soft_depth, split_rate, True, use_friction, 1,
-                                  extra_passes, rest_passes, joints)
+                                  joints)
         _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h)
         if split:
             _integrate_pseudo(com, angle, pseudo_velocity, pseudo_angular, pseudo_impulse, h)
@@ -548,7 +579,7 @@ def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, m
         if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
                                   max_push_out, soft_depth, split_rate, False, use_friction,
-                                  relax_passes, extra_passes, rest_passes, joints)
+                                  relax_passes, joints)
     return passes_run, push_outs
 
 
@@ -590,17 +621,17 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     spin = 0.0 if bodies.radius is None else w * np.where(bodies.inv_mass > 0.0,
                                                           bodies.radius, 0.0)
     moving = v[:, 0] ** 2 + v[:, 1] ** 2 + spin * spin > REST_SPEED ** 2
-    bias_rate, mass_scale, impulse_scale, loaded_pairs, small = row_softness(
-        bodies.inv_mass, c, gravity, settings, moving)
+    bias_rate, mass_scale, impulse_scale, loaded_pairs, caps = row_softness(
+        bodies.inv_mass, c, gravity, settings, moving, bodies.round_body)
     measured = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
     measured[loaded_pairs] = True
     start_tangent = c.tangent_impulse.copy()
     passes, push_outs = _substeps_kernel(
         substep_bodies(bodies), substep_rows(c, bias_rate, mass_scale, impulse_scale),
-        gravity, (loaded_pairs, loaded_pairs[small], measured),
+        gravity, (loaded_pairs, caps, measured),
         h, settings.substeps, settings.relax_passes, settings.max_push_out,
         settings.max_linear_speed, use_friction, settings.stiff_iterations - 1,
-        settings.rest_iterations - 1, settings.soft_depth, settings.split_push_out, joint_args,
+        settings.soft_depth, settings.split_push_out, joint_args,
         accel)
     if joint_args is not None:
         cap[0] = stiffening[4]
