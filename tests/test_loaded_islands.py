@@ -145,16 +145,19 @@ def test_load_stiffening_off_keeps_the_plain_coefficients():
     assert len(loaded) == 0         # masses 1, 2, 3: no neighbours MASS_RATIO apart
 
 
-def column(n_bodies: int, impact_at: int, round_body: bool = True, **knobs):
+def column(n_bodies: int, impact_at: int, round_body: bool = True, deep_at: int | None = None,
+           **knobs):
     """row_softness of a vertical column of n unit circles (boxes if not ``round_body``)
     on the ground (rows (0, 1), (1, 2), ...), all at rest but row ``impact_at``, which
-    closes at 1 m/s from 1 mm apart: 1.7 cm in a step, past soft_depth beyond its gap.
-    Returns (loaded pairs, their caps)."""
+    closes at 1 m/s from 1 mm apart: 1.7 cm in a step, past soft_depth beyond its gap,
+    and row ``deep_at``, 1 cm deep if given. Returns (loaded pairs, their caps)."""
     pairs = [(i, i + 1) for i in range(n_bodies)]
     approach = np.zeros(n_bodies)
     approach[impact_at] = -1.0
     separation = np.zeros(n_bodies)
     separation[impact_at] = 0.001
+    if deep_at is not None:
+        separation[deep_at] = -0.01
     inv_mass, c = rows(pairs, [0.0] + [1.0] * n_bodies, [1.0] * n_bodies,
                        separation=separation, approach=approach)
     settings = SETTINGS.with_values(load_stiffening=False, **knobs)
@@ -178,9 +181,12 @@ def test_an_impact_gives_the_contacts_within_impact_hops_its_extra_passes():
 
 def test_no_impact_passes_at_rest_alone_or_above_the_rest_limit():
     """A column at rest (even 1 cm deep: overlap to push out is no approach), one body
-    alone landing on the ground, an impact in an island over rest_island_limit, and a
-    column of boxes (circles only): no extra pass; impact_iterations 1 turns them off."""
+    alone landing on the ground, an impact in an island over rest_island_limit, an
+    island pushing out overlap (a jam), and a column of boxes (circles only): no extra
+    pass; impact_iterations 1 turns them off."""
     loaded, _ = column(30, 10, stiff_island_limit=8, rest_island_limit=29)
+    assert len(loaded) == 0
+    loaded, _ = column(30, 10, deep_at=25, stiff_island_limit=8)
     assert len(loaded) == 0
     loaded, _ = column(30, 10, round_body=False, stiff_island_limit=8)
     assert len(loaded) == 0

@@ -39,12 +39,11 @@ OPEN: dict[str, str] = {
                   "contact present from 4 mm five steps before while csg6 rolls at 5 rad/s "
                   "on it: each step's rolling presses a new point in about as fast as the "
                   "split push-out takes the overlap out",
-    "grid_terrain": "circle-mesh body14 / body15 at t = 1.33 s, 2.9 cm: the box spinning at "
-                    "29 rad/s (0.49 rad a step), the circle 12.7 mm from it at the step's "
+    "grid_terrain": "circle-mesh body14 / body15 at t = 1.33 s, 2.0 cm: the box spinning at "
+                    "28 rad/s (0.47 rad a step), the circle 14 mm from it at the step's "
                     "start: found too late, the speculative row's fixed normal misses the "
-                    "box's turn; the same cause at body6 / body7, t = 1.0 s, 2.0 cm (before "
-                    "the impact passes changed the pile's landings, the deepest); next "
-                    "terrain / body17 1.3 cm (triangle tip touching, -0.4 mm a step before, "
+                    "box's turn; the same cause at body6 / body7, t = 1.0 s, 2.0 cm; next "
+                    "terrain / body17 1.1 cm (triangle tip touching, -0.4 mm a step before, "
                     "pushed in by the pile above)",
     "marble_run": "circle-field track / marble9 at t = 2.97 s, 1.29 cm (before the impact "
                   "passes changed the marbles' landings: t = 3.27 s, 1.3 cm, 1.6 cm at the "
@@ -64,14 +63,14 @@ OPEN: dict[str, str] = {
                       "at the far end (brute force), which has no contact, and the pie "
                       "spinning at 7.9 rad/s closed it (the field-field descent has no "
                       "far-end point, as polygons.clip_pair has)",
-    "showcase": "sdf-sdf terrain / sdf_heart at t = 1.92 s, 2.0 cm: found too late: the "
-                "heart rolls on the flat terrain at 3.4 rad/s with one contact, under its "
-                "touching lobe (-0.3 mm); the step after, its other lobe, 0.72 m away, is "
-                "20 mm deep under the same feature key: the field-field descent reports the "
-                "touching minimum only, none for the lobe coming down (33 mm with "
-                "reuse_distance 0); next body17 / body26 1.7 cm at t = 1.65 s. Before the "
-                "impact passes: circle-sdf sdf_moon / body21 at t = 1.48 s, 2.2 cm, found "
-                "too late as the moon's horn turned 15 degrees a step",
+    "showcase": "circle-sdf sdf_moon / body21 at t = 1.48 s, 2.3 cm (6.1 cm at t = 2.27 s "
+                "at the soft rate alone): found too late (b): 3.3 mm deep the step before "
+                "while closing, the moon turning at 5.8 rad/s and the contact's normal on its "
+                "horn at 11 degrees a step: the speculative row's fixed normal and anchor "
+                "miss where the horn's surface comes; next body17 / body26 1.7 cm at t = "
+                "1.65 s; terrain / sdf_heart 1.5 cm at t = 2.55 s (the heart rolling on its "
+                "one contact; its other lobe has none until it is in: the field-field "
+                "descent reports the touching minimum only)",
 }
 
 
