@@ -116,6 +116,8 @@ SWEEPS: dict[str, tuple[Any, ...]] = {
     "time_of_impact": (False, True),
     "load_stiffening": (False, True),
     "stiff_iterations": (1, 8, 64),
+    "impact_iterations": (1, 4, 16),
+    "field_tangent_samples": (0, 3, 6),
     "stiff_island_limit": (0, 64),
     "large_island_load_cap": (1.0, 2.0, 4.0),
     "soft_depth": (0.0, 0.005, 0.02, 1.0),
@@ -225,14 +227,15 @@ def relevant_knobs(counts: dict[str, int], knobs: Sequence[str]) -> list[str]:
     rules = {
         "descent_iterations": mesh, "descent_starts": mesh, "descent_lattice": mesh,
         "field_descent_iterations": fields, "field_descent_starts": fields,
+        "field_tangent_samples": "sdf_sdf" in ran,
         "gradient": bool(ran & set(_SDF_PAIRS)), "grid_cell": bool(ran & set(_SDF_PAIRS)),
         "reuse_distance": bool(ran & set(_SDF_PAIRS)),     # kept contacts: descent pairs
         "restitution_passes": "restitution" in ran,
         "time_of_impact": "time_of_impact" in ran,
     }
     # Loaded islands (solver.row_softness): these knobs act only where extra passes ran.
-    rules.update(dict.fromkeys(("load_stiffening", "stiff_iterations", "stiff_island_limit"),
-                               "converge" in ran))
+    rules.update(dict.fromkeys(("load_stiffening", "stiff_iterations", "stiff_island_limit",
+                                "impact_iterations"), "converge" in ran))
     rules.update(dict.fromkeys(_CONTACT_KNOBS, "solve" in ran))
     return [k for k in knobs if rules.get(k, True)]
 

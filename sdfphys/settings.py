@@ -160,6 +160,11 @@ class Settings:
     field_descent_starts: int = _knob(
         7, "", "Field-field queries: Halton starts over the overlap region per pair. "
         "More: more separate contact regions found.", low=1, high=1024)
+    field_tangent_samples: int = _knob(
+        3, "", "Field-field queries: speculative points per side along each contact's "
+        "tangent, out to the smaller body's bounding radius, kept where within the "
+        "margin: a tilted or rolling sdf body's far side has rows before it lands. "
+        "0: none.", low=0, high=64)
     contacts_per_pair: int = _knob(
         4, "", "Contacts kept per body pair after reduction (the deepest plus the "
         "most spread).", low=1, high=64)

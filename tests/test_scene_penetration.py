@@ -39,38 +39,26 @@ OPEN: dict[str, str] = {
                   "contact present from 4 mm five steps before while csg6 rolls at 5 rad/s "
                   "on it: each step's rolling presses a new point in about as fast as the "
                   "split push-out takes the overlap out",
-    "grid_terrain": "circle-mesh body14 / body15 at t = 1.33 s, 2.0 cm: the box spinning at "
-                    "28 rad/s (0.47 rad a step), the circle 14 mm from it at the step's "
-                    "start: found too late, the speculative row's fixed normal misses the "
-                    "box's turn; the same cause at body6 / body7, t = 1.0 s, 2.0 cm; next "
-                    "terrain / body17 1.1 cm (triangle tip touching, -0.4 mm a step before, "
-                    "pushed in by the pile above)",
+    "grid_terrain": "mesh-sdf terrain / body17 at t = 1.05 s, 1.06 cm: a triangle's tip "
+                    "touching the terrain (-0.4 mm a step before) pushed in by the pile "
+                    "above (the circles' fixed-normal misses of the spinning boxes, 2.0 cm, "
+                    "went with the predicted contacts, collide.predicted)",
     "marble_run": "circle-field track / marble9 at t = 2.97 s, 1.29 cm (before the impact "
                   "passes changed the marbles' landings: t = 3.27 s, 1.3 cm, 1.6 cm at the "
                   "soft rate alone, reported where the marble is 2.1-5.4 cm above the track "
                   "(brute force)): the smooth union's field is a bound (|grad| 0.80 there), "
                   "r - f(c) a false depth",
-    "sdf_primitives": "sdf-sdf vesica / rounded_cross at t = 1.03 s, 2.4 cm: the contact "
-                      "at the vesica's tip present and deepening (2.0, 5.6, 9.1 mm the steps "
-                      "before) while the pair's deepest normal turns from (0.83, 0.55) to "
-                      "(-0.50, 0.87) in one step and both bodies turn under 0.4 rad/s: not "
-                      "found too late, the push along the tip's normal does not separate "
-                      "(cause not yet found; the same pair and signs at t = 2.40 s, 2.2 cm, "
-                      "with depths exact by brute force of max(f_a, f_b)). With contacts "
-                      "searched every step (reuse_distance 0) the trajectory met hexagram / "
-                      "pie at t = 1.08 s, 5.3 cm, found too late: the two surfaces ran side "
-                      "by side for 15 cm, 5.6 mm apart at the pair's one contact and 8.8 mm "
-                      "at the far end (brute force), which has no contact, and the pie "
-                      "spinning at 7.9 rad/s closed it (the field-field descent has no "
-                      "far-end point, as polygons.clip_pair has)",
-    "showcase": "circle-sdf sdf_moon / body21 at t = 1.48 s, 2.3 cm (6.1 cm at t = 2.27 s "
-                "at the soft rate alone): found too late (b): 3.3 mm deep the step before "
-                "while closing, the moon turning at 5.8 rad/s and the contact's normal on its "
-                "horn at 11 degrees a step: the speculative row's fixed normal and anchor "
-                "miss where the horn's surface comes; next body17 / body26 1.7 cm at t = "
-                "1.65 s; terrain / sdf_heart 1.5 cm at t = 2.55 s (the heart rolling on its "
-                "one contact; its other lobe has none until it is in: the field-field "
-                "descent reports the touching minimum only)",
+    "sdf_primitives": "sdf-sdf vesica / rounded_cross at t = 2.28 s, 2.3 cm: the contact "
+                      "at the vesica's tip present and deepening (9.4, 15.1 mm the steps "
+                      "before) while the pair's deepest normal turns from (-0.97, 0.24) to "
+                      "(-0.27, 0.96) and both bodies turn under 1.6 rad/s: not found too "
+                      "late, the push along the tip's normal does not separate (cause not "
+                      "yet found; the same pair and signs at t = 2.40 s, 2.2 cm, before, "
+                      "depths exact by brute force of max(f_a, f_b)); next star / "
+                      "uneven_capsule 2.1 cm at t = 0.67 s: the capsule, turning at 5.3 "
+                      "rad/s, sweeps its uneven end over the star's tip like a cam, material "
+                      "no row holds (the tip's point at the end poses, as collide.predicted "
+                      "gives circles, would hold it); ground / ellipse 1.8 cm at t = 1.40 s",
 }
 
 

@@ -78,6 +78,7 @@ from .contacts import Contacts
 from .filter import PairFilter
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .polygons import SOURCE_CLIP, polygon_table
+from .predicted import predicted_contacts
 from .reduce import reduce_contacts
 
 __all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "ContactCache", "Contacts", "collide",
@@ -314,7 +315,10 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                              settings, ran, cache, radius[body_shape], shape_class == CIRCLE)
         order = merge_order(plain.body_a * np.int64(n) + plain.body_b,
                             other.body_a * np.int64(n) + other.body_b)
-        return Contacts.concatenate([plain, other]).take(order)
+        return _with_predicted(Contacts.concatenate([plain, other]).take(order), distinct,
+                               body_shape, pairs, shape_class == CIRCLE, radius[body_shape],
+                               position, angle, velocity, angular_velocity, reach, settings,
+                               pair_filter)
 
     reach, boxes = np.empty(n), np.empty((n, 4))
     reach_and_boxes(local_bounds, radius, body_shape, position, angle, velocity,
@@ -339,14 +343,38 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
             ran.add(("circle", "mesh"))
         if n_polygons:
             ran.add(("mesh", "mesh"))
-    analytic = Contacts(a, b, point, normal, depth, feature)
-    if len(rest) == 0:
-        return analytic
-    pose = np.column_stack([position, angle])
-    other = _narrowphase(distinct, body_shape, pairs[rest], pose, margin, reach, settings,
-                         ran, cache, radius[body_shape], shape_class[body_shape] == CIRCLE)
-    order = merge_order(a * np.int64(n) + b, other.body_a * np.int64(n) + other.body_b)
-    return Contacts.concatenate([analytic, other]).take(order)
+    contacts = Contacts(a, b, point, normal, depth, feature)
+    if len(rest):
+        pose = np.column_stack([position, angle])
+        other = _narrowphase(distinct, body_shape, pairs[rest], pose, margin, reach, settings,
+                             ran, cache, radius[body_shape], shape_class[body_shape] == CIRCLE)
+        order = merge_order(a * np.int64(n) + b, other.body_a * np.int64(n) + other.body_b)
+        contacts = Contacts.concatenate([contacts, other]).take(order)
+    return _with_predicted(contacts, distinct, body_shape, pairs,
+                           shape_class[body_shape] == CIRCLE, radius[body_shape], position,
+                           angle, velocity, angular_velocity, reach, settings, pair_filter)
+
+
+def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndarray,
+                    pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray,
+                    position: np.ndarray, angle: np.ndarray, velocity: np.ndarray,
+                    angular_velocity: np.ndarray, reach: np.ndarray, settings: Settings,
+                    pair_filter: PairFilter | None) -> Contacts:
+    """``contacts`` (sorted by (body_a, body_b, feature)) with the predicted contacts of
+    circles against fast-turning bodies (``predicted``) among the candidate ``pairs``
+    (sensor pairs left out: a prediction is not a touch), in the same order."""
+    if pair_filter is not None and pair_filter.has_sensors and len(pairs):
+        pairs = pairs[~(pair_filter.sensor[pairs[:, 0]] | pair_filter.sensor[pairs[:, 1]])]
+    extra = predicted_contacts(shapes, body_shape, pairs, is_circle, radius, position, angle,
+                               velocity, angular_velocity, float(settings.dt),
+                               float(settings.linear_slop),
+                               settings.speculative_distance + reach[pairs[:, 0]]
+                               + reach[pairs[:, 1]])
+    if len(extra) == 0:
+        return contacts
+    n = np.int64(len(angle))
+    c = Contacts.concatenate([contacts, extra])
+    return c.take(np.lexsort((c.feature, c.body_a * n + c.body_b)))
 
 
 def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.ndarray,

@@ -31,6 +31,8 @@ Feature key layout (int64): ``source << 56 | element << 8 | start``
                 ``4 << 56 | e << 21 | start``
              5  (``polygons.SOURCE_CLIP``) two convex meshes, separating axes and
                 clipping: element = vertex_a << 24 | vertex_b, start = 0
+             6  (``predicted.SOURCE_PREDICTED``) a circle against a body turning
+                fast, at the pair's end-of-step poses: element = start = 0
     start    0-6: a descent minimum of triangle ``element`` from start id 0-2
              (vertices), 3-5 (edge midpoints), 6 (centroid);
              255 (``VERTEX_START``): mesh vertex ``element``, whichever triangle or
@@ -39,7 +41,8 @@ Feature key layout (int64): ``source << 56 | element << 8 | start``
              sources 3 and 4: a field-field start id (``field_pairs.field_field_contacts``:
              Halton start k < field_descent_starts, or n + 2k, n + 2k + 1 for the two
              ends of start k's flat patch)
-    element  < 2^48
+    element  < 2^48; source 3: 0 for a descent contact, 1 .. 2 field_tangent_samples
+             for the speculative points along its tangent (``field_pairs.tangent_samples``)
 
 Approximations (documented where they act): for a mesh point p inside the other
 field f, depth = -f(p) and normal = -grad f(p), or the depth below the face the
@@ -328,7 +331,7 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     descent iteration is one evaluation of each field over the points of all
     pairs.
     """
-    from .field_pairs import placed_field_contacts
+    from .field_pairs import placed_field_contacts, tangent_samples
 
     if not np.all(np.isfinite(sdf_b.bounds())) and np.all(np.isfinite(sdf_a.bounds())):
         # The descent's region is b's bounds placed in a's frame: solve with the
@@ -340,9 +343,12 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     _, pair, point, depth, normal, start = placed_field_contacts(
         sdf_a.field, sdf_b.field, offset, angle, sdf_a.bounds(), sdf_b.bounds(), margin,
         settings.field_descent_starts, settings.field_descent_iterations)
+    pair, point, depth, normal, start, element = tangent_samples(
+        sdf_a.field, sdf_b.field, offset, angle, pair, point, depth, normal, start, margin,
+        min(sdf_a.radius, sdf_b.radius), settings.field_tangent_samples)
     rot = pose_a[pair, 2]
     return Contacts(body_a[pair], body_b[pair], rotate(point, rot) + pose_a[pair, :2],
-                    rotate(normal, rot), depth, feature_key(SOURCE_FIELDS, 0, start))
+                    rotate(normal, rot), depth, feature_key(SOURCE_FIELDS, element, start))
 
 
 #: (kind_a, kind_b) -> pair function, kind_a <= kind_b in KIND_ORDER.

@@ -1,0 +1,99 @@
+"""Predicted contacts: a circle against a body that turns fast, at the step's end poses.
+
+A contact row keeps its normal and its two material points for the whole step (the
+solver re-measures its separation as the bodies move, ``solver.substeps``). That is
+right while the surface under the contact is the same material: a resting box, a
+rolling circle. It is wrong when the other body turns fast: a spinning box's corner,
+or a turning crescent's horn, sweeps toward a circle through material that no row
+holds, and the circle is found inside it at the next step (in scenes/grid_terrain.toml
+a box spinning at 28 rad/s met a circle 14 mm from it at the step's start 20 mm deep
+at its end; in scenes/showcase.toml the moon's horn, turning at 5.8 rad/s, 23 mm).
+
+So for each candidate pair of a circle (centre c, radius r, velocity v_c) and a body b
+that is not round and turns by more than ``linear_slop`` at its bounding radius this
+step (|w_b| R_b dt > slop), the pair is also measured at its predicted end poses, the
+step's start velocities held (x' = x + v dt, angle' = angle + w dt): with
+(d', g') = f_b and its unit gradient at c' in b's end frame, b's surface point nearest
+the circle at the end is q' = c' - d' n', n' = R(angle'_b) g' (world, out of b). The
+material point of b that reaches q' is q0 = x_b + R(-w_b dt) (q' - x'_b). The row is
+that material point against the circle, along n':
+
+    normal a -> b: n = -n' (circle toward b), s0 = n . (q0 - c) - r (depth -s0),
+    point = q0 - s0 / 2 n (both surface points on the line through q0 along n).
+
+The solver moves q0 with b and the circle's point with the circle (a circle's anchor
+is not turned), so at the end of the step s = s0 + n . (dq0 - dc) = n . (q' - c') - r
+when b moved as predicted: the row forbids what the end pose would overlap, and with
+s0 > 0 it is speculative, inert unless the gap closes. A collision that changes b's
+spin makes the prediction approximate, no worse than the fixed normal it adds to.
+
+Kept when within the pair's margin (depth > -(speculative distance + reach_a +
+reach_b)); key ``source SOURCE_PREDICTED`` (6), element 0, start 0, one per pair.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..sdf import compiled, safe_normalize
+from ..shapes import Shape
+from ..vec2 import rotate
+from .contacts import Contacts
+
+__all__ = ["SOURCE_PREDICTED", "predicted_contacts"]
+
+#: Feature key source of predicted contacts (``narrowphase``'s key layout).
+SOURCE_PREDICTED = 6
+
+
+def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: np.ndarray,
+                       is_circle: np.ndarray, radius: np.ndarray, position: np.ndarray,
+                       angle: np.ndarray, velocity: np.ndarray,
+                       angular_velocity: np.ndarray, dt: float, slop: float,
+                       pair_margin: np.ndarray) -> Contacts:
+    """The predicted contacts (module docstring) of the candidate ``pairs`` (P, 2), i < j.
+
+    shapes: distinct Shape objects, body_shape (B,) index into them; is_circle (B,)
+    bool; radius (B,) m, bounding radii about the centres of mass (a circle's is its
+    radius); position (B, 2) m, angle (B,) rad, velocity (B, 2) m/s, angular_velocity
+    (B,) rad/s: the step's start values; dt s; slop m (``Settings.linear_slop``);
+    pair_margin (P,) m, each pair's margin. Returns body_a < body_b contacts, sorted by
+    pair, at most one per pair.
+    """
+    i, j = pairs[:, 0], pairs[:, 1]
+    circle_first = is_circle[i] & ~is_circle[j]
+    circle_second = is_circle[j] & ~is_circle[i]
+    circle = np.where(circle_first, i, j)
+    other = np.where(circle_first, j, i)
+    with np.errstate(invalid="ignore"):
+        turning = np.abs(angular_velocity[other]) * radius[other] * dt > slop
+    rows = np.flatnonzero((circle_first | circle_second) & turning)
+    if len(rows) == 0:
+        return Contacts.empty()
+    c, b = circle[rows], other[rows]
+    turn = angular_velocity[b] * dt
+    centre_end = position[c] + velocity[c] * dt
+    body_end = position[b] + velocity[b] * dt
+    local = rotate(centre_end - body_end, -(angle[b] + turn))
+    d = np.empty(len(rows))
+    g = np.empty((len(rows), 2))
+    for sid in np.unique(body_shape[b]):
+        at = np.flatnonzero(body_shape[b] == sid)
+        d[at], g[at] = compiled.evaluate(shapes[sid].field, local[at])
+    out = rotate(safe_normalize(g), angle[b] + turn)                   # n', out of b
+    surface_end = centre_end - d[:, None] * out                        # q'
+    material = position[b] + rotate(surface_end - body_end, -turn)     # q0
+    normal = -out                                                      # circle -> b
+    arm = material - position[c]
+    gap = normal[:, 0] * arm[:, 0] + normal[:, 1] * arm[:, 1] - radius[c]
+    gap = np.maximum(gap, 0.0)
+    keep = gap < pair_margin[rows]
+    flip = c > b                                    # rows are stored body_a < body_b
+    normal = np.where(flip[:, None], -normal, normal)
+    point = material + (0.5 * gap)[:, None] * np.where(flip[:, None], normal, -normal)
+    keep = np.flatnonzero(keep)
+    return Contacts(np.minimum(c, b)[keep], np.maximum(c, b)[keep], point[keep],
+                    normal[keep], -gap[keep],
+                    np.full(len(keep), np.int64(SOURCE_PREDICTED) << np.int64(56)))

@@ -1,0 +1,85 @@
+"""Predicted contacts (``collide.predicted``): circles against bodies that turn fast."""
+
+import numpy as np
+import pytest
+
+from sdfphys.collide.predicted import SOURCE_PREDICTED, predicted_contacts
+from sdfphys.shapes import shape_from_spec
+from sdfphys.vec2 import rotate
+
+DT = 1.0 / 60.0
+SLOP = 0.005
+PADDLE = {"type": "box", "size": [1.2, 0.2]}
+BALL = {"type": "circle", "radius": 0.1}
+
+
+def query(position, angle, velocity, spin, margin=0.5, specs=(PADDLE, BALL)):
+    """predicted_contacts of body 0 and body 1 (one candidate pair)."""
+    shapes = [shape_from_spec(s) for s in specs]
+    return predicted_contacts(
+        shapes, np.arange(2), np.array([[0, 1]]),
+        np.array([s.kind == "circle" for s in shapes]), np.array([s.radius for s in shapes]),
+        np.array(position, float), np.array(angle, float), np.array(velocity, float),
+        np.array(spin, float), DT, SLOP, np.array([margin]))
+
+
+def test_the_row_is_the_pair_at_its_end_poses_carried_back_to_the_start():
+    """A paddle spinning at 20 rad/s (0.33 rad a step) and moving, a ball moving: the row's
+    normal is the paddle's outward normal at the ball's end position (turned into the
+    world, negated: ball -> paddle is b -> a here, stored a -> b), its paddle point turned
+    and moved by the step is the paddle's surface point nearest the ball's end centre,
+    and its separation is the end-pose gap |c' - q'| - r (exact box field)."""
+    paddle_v, ball_v, spin = np.array([0.3, -0.2]), np.array([-0.5, 0.4]), 20.0
+    position = [[0.0, 0.0], [0.40, 0.45]]
+    c = query(position, [0.1, 0.0], [paddle_v, ball_v], [spin, 0.0])
+    assert len(c) == 1 and c.body_a[0] == 0 and c.body_b[0] == 1
+    assert c.feature[0] == SOURCE_PREDICTED << 56
+    end_angle = 0.1 + spin * DT
+    centre_end = np.array(position[1]) + ball_v * DT
+    paddle_end = np.array(position[0]) + paddle_v * DT
+    box = shape_from_spec(PADDLE).field
+    local = rotate((centre_end - paddle_end)[None], -end_angle)
+    d = float(box.distance(local)[0])
+    gap = d - 0.1
+    assert gap > 0.0
+    n, s0 = c.normal[0], -c.depth[0]                # paddle (a) -> ball (b)
+    # The paddle's material point under the row, carried to the end pose, lies on the
+    # paddle's end surface, d from the ball's end centre along -n; the row's separation
+    # carried by the two bodies' moves is the end-pose gap.
+    material = c.point[0] - 0.5 * s0 * n             # a's surface point: point - s0 n / 2
+    carried = paddle_end + rotate((material - position[0])[None], spin * DT)[0]
+    np.testing.assert_allclose(carried, centre_end - d * n, atol=1e-12)
+    end_local = rotate((carried - paddle_end)[None], -end_angle)
+    assert abs(float(box.distance(end_local)[0])) < 1e-12
+    moved = (carried - material) - (centre_end - position[1])
+    assert s0 - n @ moved == pytest.approx(gap, abs=1e-12)
+
+
+def test_a_predicted_overlap_is_held_as_touching_never_reported_deep():
+    """Where the end pose would overlap, the row starts at separation 0 (it stops the
+    approach along its normal; it does not push now): depth exactly 0."""
+    c = query([[0.0, 0.0], [0.62, 0.12]], [0.0, 0.0], [[0.0, 0.0], [0.0, 0.0]], [30.0, 0.0])
+    assert len(c) == 1 and c.depth[0] == 0.0
+
+
+def test_no_prediction_for_slow_turns_two_circles_or_far_pairs():
+    """|w| R dt at most the slop (R = 0.608 m: w <= 0.49 rad/s), two circles, or a gap
+    beyond the pair's margin: no row."""
+    rest = [[0.0, 0.0], [0.0, 0.0]]
+    assert len(query([[0.0, 0.0], [0.45, 0.3]], [0.1, 0.0], rest, [0.49, 0.0])) == 0
+    assert len(query([[0.0, 0.0], [0.45, 0.3]], [0.1, 0.0], rest, [0.5, 0.0])) == 1
+    assert len(query([[0.0, 0.0], [0.25, 0.0]], [0.0, 0.0], rest, [50.0, 0.0],
+                     specs=(BALL, BALL))) == 0
+    assert len(query([[0.0, 0.0], [0.45, 0.3]], [0.1, 0.0], rest, [20.0, 0.0],
+                     margin=0.01)) == 0
+
+
+def test_the_circle_may_be_either_body():
+    """Ball first (body 0), paddle second: the same row, normal a -> b (ball -> paddle)."""
+    one = query([[0.0, 0.0], [0.40, 0.45]], [0.1, 0.0], [[0.0, 0.0], [0.0, 0.0]], [20.0, 0.0])
+    two = query([[0.40, 0.45], [0.0, 0.0]], [0.0, 0.1], [[0.0, 0.0], [0.0, 0.0]], [0.0, 20.0],
+                specs=(BALL, PADDLE))
+    assert len(one) == len(two) == 1 and one.depth[0] < 0.0
+    assert two.depth[0] == one.depth[0]
+    np.testing.assert_allclose(two.normal[0], -one.normal[0], atol=1e-15)
+    np.testing.assert_allclose(two.point[0], one.point[0], atol=1e-15)
