@@ -99,8 +99,9 @@ class Settings:
     impact_iterations: int = _knob(
         4, "", "Solver passes per substep, at most, over the circles within 4 contacts "
         "of an impact (a pair that would close more than soft_depth beyond its gap this "
-        "step), in islands up to rest_island_limit; they stop once converged. 150 "
-        "circles poured into a box: deepest contact 23 mm at 1, 5.1 mm at 4.",
+        "step) and the static rows of the bodies they touch, in islands up to "
+        "rest_island_limit; they stop once converged. 150 circles poured into a box: "
+        "deepest contact 23 mm at 1, 5.1 mm at 4.",
         low=1, high=1024)
     stiff_island_limit: int = _knob(
         64, "", "Largest island (dynamic bodies in contact) that load stiffening and "

@@ -200,6 +200,21 @@ def test_no_impact_passes_at_rest_alone_or_above_the_rest_limit():
         load_stiffening=False, stiff_island_limit=8), round_body=np.ones(31, bool))[3]) == 0
 
 
+def test_a_body_a_struck_circle_rests_on_gets_its_ground_rows_too():
+    """Circle 3 strikes circle 2, which rests on box 1 on the ground (0); box 4 also
+    rests on box 1. The circles' rows get the impact passes, and so does box 1's row on
+    the ground (the blow goes through it: scenes/grid_terrain.toml, a triangle's tip
+    driven 1.06 cm into the terrain by a circle landing on it at 10 m/s); the box-box
+    row does not (converging polygon rows turned landings into spins)."""
+    inv_mass, c = rows([(0, 1), (1, 2), (1, 4), (2, 3)], [0.0, 1.0, 1.0, 1.0, 1.0],
+                       [1.0, 1.0, 1.0, 1.0], separation=[0.0, 0.0, 0.0, 0.001],
+                       approach=[0.0, 0.0, 0.0, -1.0])
+    loaded, caps = row_softness(inv_mass, c, G, SETTINGS.with_values(load_stiffening=False),
+                                round_body=np.array([False, False, True, True, False]))[3:]
+    np.testing.assert_array_equal(loaded, [0, 1, 3])
+    assert set(caps) == {SETTINGS.impact_iterations - 1}
+
+
 def test_a_loaded_pair_near_an_impact_keeps_the_larger_cap():
     """A 3-circle column within stiff_island_limit whose bottom circle is 4 times
     lighter (loaded island, stiff_iterations - 1 extra passes) hit at row 1: its caps

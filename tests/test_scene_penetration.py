@@ -39,10 +39,6 @@ OPEN: dict[str, str] = {
                   "contact present from 4 mm five steps before while csg6 rolls at 5 rad/s "
                   "on it: each step's rolling presses a new point in about as fast as the "
                   "split push-out takes the overlap out",
-    "grid_terrain": "mesh-sdf terrain / body17 at t = 1.05 s, 1.06 cm: a triangle's tip "
-                    "touching the terrain (-0.4 mm a step before) pushed in by the pile "
-                    "above (the circles' fixed-normal misses of the spinning boxes, 2.0 cm, "
-                    "went with the predicted contacts, collide.predicted)",
     "marble_run": "circle-field track / marble9 at t = 2.97 s, 1.29 cm (before the impact "
                   "passes changed the marbles' landings: t = 3.27 s, 1.3 cm, 1.6 cm at the "
                   "soft rate alone, reported where the marble is 2.1-5.4 cm above the track "

@@ -185,7 +185,10 @@ IMPACT_HOPS = 4
 # exact, one normal each; with polygons and fields in the region too, the concave
 # polygons' scene went from 13.1 mm deepest to 14, 17, 32 and 160 mm (2, 3, 4 and 8
 # passes): converging their per-feature rows turns a landing into a spin whose far
-# vertices no row sees. Figures: docs/solver.md, "Impacts".
+# vertices no row sees. A body that is not a circle but touches a region's circle gets
+# its rows against static bodies into the passes (a circle landing at 10 m/s on a
+# triangle drove its tip 1.06 cm into the terrain, scenes/grid_terrain.toml; 6.2 mm
+# with them). Figures: docs/solver.md, "Impacts".
 # --------------------------------------------------------------------------------------
 
 
@@ -241,7 +244,8 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
     passes: (P,) int64, filled per loaded pair: its extra passes per phase, at most,
     extra_passes (stiff, impact, rest: islands of at most ``limit`` bodies, the pairs
     of an impact's region (``_impact_region``; relative_velocity (K,) m/s, dt s,
-    round_body (B,) bool), the islands at rest up to rest_limit); the largest that
+    round_body (B,) bool) and the static rows of the other bodies its circles touch,
+    the islands at rest up to rest_limit); the largest that
     applies. moving: (B,) bool, bodies faster than REST_SPEED (their islands are not at
     rest).
     """
@@ -288,6 +292,16 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
     region = _impact_region(inv_mass, body_a, body_b, separation, relative_velocity, dt,
                             soft_depth, root, size, rest_limit, round_body)
     stiff_passes, impact_passes, rest_passes = extra_passes
+    # The other bodies a region's circle touches: their rows against static bodies too
+    # (the blow goes through them into the ground), not their rows with each other.
+    touched = np.zeros(nb, np.bool_)
+    for k in range(body_a.shape[0]):
+        a = body_a[k]
+        b = body_b[k]
+        if region[a] and inv_mass[b] > 0.0 and not round_body[b]:
+            touched[b] = True
+        if region[b] and inv_mass[a] > 0.0 and not round_body[a]:
+            touched[a] = True
     count = 0
     for p in range(n_pairs):
         first = pair_start[p]
@@ -301,7 +315,8 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
         if inv_mass[b] > 0.0:
             r = max(r, ratio[b] if hot_b else min(ratio[b], large_cap))
         cap = 0
-        if region[a] or region[b]:
+        if (region[a] or region[b] or (touched[a] and inv_mass[b] == 0.0)
+                or (touched[b] and inv_mass[a] == 0.0)):
             cap = impact_passes
         if hot_a or hot_b:
             small = ((not hot_a or size[root[a]] <= limit)
