@@ -273,9 +273,9 @@ def step_fractions(fields: list[Field], vertices: list[np.ndarray | None],
     the candidate pairs found once for both (arguments as theirs). pair_filter: the
     bodies' ``collide.filter.PairFilter`` or None: pairs it filters out, and pairs with a
     sensor, are not traced. contact_pairs: (K, 2) int64 body pairs that had contact
-    rows this step (any order, repeats allowed), or None: a fast disc that is its body's own outline
-    (a circle: bounding radius = core radius) is not traced against a body it had a row
-    with (see "Rows" below). group: (B,) labels
+    rows this step (any order, repeats allowed), or None: a fast disc that is its
+    body's own outline (a circle: bounding radius = core radius) is not traced against a
+    body it had a row with (see "Rows" below). group: (B,) labels
     of bodies joined by joints (``joints.JointTable.groups``), or None: a fast body is
     not stopped against a body of its own group (the group stops as one, and rewinding
     one member against another would open their joints).

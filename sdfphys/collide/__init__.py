@@ -19,7 +19,9 @@ One step of ``find_contacts`` (no Python loop over bodies, pairs or contacts):
    found keeps them, carried with the bodies, and is not searched (the
    closed-form pairs of the fast path below never are);
 4. contacts with depth > -margin of their pair kept, reduced to at most
-   ``contacts_per_pair`` per pair (``reduce``), sorted by (body_a, body_b, feature).
+   ``contacts_per_pair`` per pair (``reduce``), sorted by (body_a, body_b, feature);
+5. a circle against a body that turns more than the slop this step gets one more,
+   speculative contact: the pair at its end-of-step poses carried back (``predicted``).
 
 Fast path (``circle_kernels``, the default): steps 1-2 are one compiled pass over
 the bodies and the grid broadphase; the circle-circle, circle-box (``TriangleMesh.box``)
