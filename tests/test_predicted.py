@@ -83,3 +83,47 @@ def test_the_circle_may_be_either_body():
     assert two.depth[0] == one.depth[0]
     np.testing.assert_allclose(two.normal[0], -one.normal[0], atol=1e-15)
     np.testing.assert_allclose(two.point[0], one.point[0], atol=1e-15)
+
+
+def field_query(spin, settings=None, position=((0.0, 0.0), (0.62, 0.28)), angle=(0.0, 0.4)):
+    """predicted_field_contacts of a static sdf slab (body 0, top face y = 0.1) and an
+    sdf plank (body 1, 0.6 x 0.1, its lower end 1.7 cm above the slab) turning at
+    ``spin`` rad/s, with the pair's contacts at the end poses (the narrowphase)."""
+    from sdfphys.collide import _narrowphase
+    from sdfphys.collide.predicted import predicted_field_contacts
+    from sdfphys.settings import Settings
+
+    settings = settings or Settings()
+    specs = ({"type": "sdf", "field": {"type": "box", "size": [2.0, 0.2]}},
+             {"type": "sdf", "field": {"type": "box", "size": [0.6, 0.1]}})
+    shapes = [shape_from_spec(s) for s in specs]
+    position, angle = np.array(position, float), np.array(angle, float)
+    velocity, spin_ = np.zeros((2, 2)), np.array([0.0, spin])
+    reach = np.array([0.0, 0.2])
+    got = predicted_field_contacts(shapes, np.arange(2), np.array([[0, 1]]),
+                                   np.array([s.radius for s in shapes]), position, angle,
+                                   velocity, spin_, reach, settings)
+    poses = np.column_stack([position, angle + spin_ * settings.dt])
+    end = _narrowphase(shapes, np.arange(2), np.array([[0, 1]]), poses,
+                       settings.speculative_distance, reach,
+                       settings.with_values(field_tangent_samples=0))
+    return got, end
+
+
+def test_an_sdf_pair_turning_fast_gets_its_end_pose_contacts_carried_back():
+    """The plank turning at 20 rad/s, its end down into the slab (4.8 cm at the end
+    pose): one row per end-pose contact, along its normal, keyed source 6 with the
+    FIELD_PAIR bit and the end contact's start; never deeper than touching (separation
+    clamped at 0). Turning slowly: none."""
+    from sdfphys.collide.predicted import FIELD_PAIR
+
+    got, end = field_query(20.0)
+    assert len(got) == len(end) >= 1 and np.max(end.depth) > 0.04
+    np.testing.assert_array_equal(got.normal, end.normal)
+    assert np.all(got.feature >> 56 == SOURCE_PREDICTED)
+    assert np.all(got.feature & FIELD_PAIR)
+    np.testing.assert_array_equal(got.feature & 0xFF, end.feature & 0xFF)
+    assert len(set(got.feature)) == len(got)
+    assert np.all(got.depth <= 0.0)
+    slow, _ = field_query(-0.005 / (0.32 * DT))
+    assert len(slow) == 0
