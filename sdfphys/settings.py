@@ -161,12 +161,6 @@ class Settings:
     field_descent_starts: int = _knob(
         7, "", "Field-field queries: Halton starts over the overlap region per pair. "
         "More: more separate contact regions found.", low=1, high=1024)
-    predicted_contacts: bool = _knob(
-        True, "", "Circles, and sdf bodies against sdf bodies, near a body that turns "
-        "more than linear_slop a step get speculative rows measured at the step's end "
-        "poses: a spinning corner or a rolling bulge no longer sweeps through material "
-        "no row holds. Deepest contact off -> on: showcase 16.8 -> 7.6 mm, grid_terrain "
-        "25.3 -> 6.2, csg_bodies 10.4 -> 1.9, sdf_primitives 22.9 -> 16.7.")
     field_tangent_samples: int = _knob(
         3, "", "Field-field queries: speculative points per side along each contact's "
         "tangent, out to the smaller body's bounding radius, kept where within the "

@@ -20,9 +20,8 @@ One step of ``find_contacts`` (no Python loop over bodies, pairs or contacts):
    closed-form pairs of the fast path below never are);
 4. contacts with depth > -margin of their pair kept, reduced to at most
    ``contacts_per_pair`` per pair (``reduce``), sorted by (body_a, body_b, feature);
-5. a circle, or an sdf body against another, with a body that turns more than the
-   slop this step gets speculative contacts: the pair at its end-of-step poses carried
-   back (``predicted``; ``Settings.predicted_contacts``).
+5. a circle against a body that turns more than the slop this step gets one more,
+   speculative contact: the pair at its end-of-step poses carried back (``predicted``).
 
 Fast path (``circle_kernels``, the default): steps 1-2 are one compiled pass over
 the bodies and the grid broadphase; the circle-circle, circle-box (``TriangleMesh.box``)
@@ -81,7 +80,7 @@ from .contacts import Contacts
 from .filter import PairFilter
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .polygons import SOURCE_CLIP, polygon_table
-from .predicted import predicted_contacts, predicted_field_contacts
+from .predicted import predicted_contacts
 from .reduce import reduce_contacts
 
 __all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "ContactCache", "Contacts", "collide",
@@ -319,7 +318,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         order = merge_order(plain.body_a * np.int64(n) + plain.body_b,
                             other.body_a * np.int64(n) + other.body_b)
         return _with_predicted(Contacts.concatenate([plain, other]).take(order), distinct,
-                               body_shape, shape_class == CIRCLE, radius[body_shape],
+                               body_shape, pairs, shape_class == CIRCLE, radius[body_shape],
                                position, angle, velocity, angular_velocity, reach, settings,
                                pair_filter)
 
@@ -353,38 +352,29 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                              ran, cache, radius[body_shape], shape_class[body_shape] == CIRCLE)
         order = merge_order(a * np.int64(n) + b, other.body_a * np.int64(n) + other.body_b)
         contacts = Contacts.concatenate([contacts, other]).take(order)
-    return _with_predicted(contacts, distinct, body_shape,
+    return _with_predicted(contacts, distinct, body_shape, pairs,
                            shape_class[body_shape] == CIRCLE, radius[body_shape], position,
                            angle, velocity, angular_velocity, reach, settings, pair_filter)
 
 
 def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndarray,
-                    is_circle: np.ndarray, radius: np.ndarray,
+                    pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray,
                     position: np.ndarray, angle: np.ndarray, velocity: np.ndarray,
                     angular_velocity: np.ndarray, reach: np.ndarray, settings: Settings,
                     pair_filter: PairFilter | None) -> Contacts:
     """``contacts`` (sorted by (body_a, body_b, feature)) with the predicted contacts of
-    circles and sdf pairs against fast-turning bodies (``predicted``) among the pairs
-    that have contacts (sensor pairs left out: a prediction is not a touch), in the
-    same order; none without ``settings.predicted_contacts``."""
-    if not settings.predicted_contacts or len(contacts) == 0:
-        return contacts
-    # Only pairs with a contact: the others are farther apart than their margin, which
-    # holds every point's travel in the step (the reach), so they cannot meet by its end.
-    n = np.int64(len(angle))
-    pairs = np.unique(contacts.body_a * n + contacts.body_b)
-    pairs = np.column_stack([pairs // n, pairs % n])
+    circles against fast-turning bodies (``predicted``) among the candidate ``pairs``
+    (sensor pairs left out: a prediction is not a touch), in the same order."""
     if pair_filter is not None and pair_filter.has_sensors and len(pairs):
         pairs = pairs[~(pair_filter.sensor[pairs[:, 0]] | pair_filter.sensor[pairs[:, 1]])]
-    margin = settings.speculative_distance + reach[pairs[:, 0]] + reach[pairs[:, 1]]
-    extra = Contacts.concatenate([
-        predicted_contacts(shapes, body_shape, pairs, is_circle, radius, position, angle,
-                           velocity, angular_velocity, float(settings.dt),
-                           float(settings.linear_slop), margin),
-        predicted_field_contacts(shapes, body_shape, pairs, radius, position, angle,
-                                 velocity, angular_velocity, reach, settings)])
+    extra = predicted_contacts(shapes, body_shape, pairs, is_circle, radius, position, angle,
+                               velocity, angular_velocity, float(settings.dt),
+                               float(settings.linear_slop),
+                               settings.speculative_distance + reach[pairs[:, 0]]
+                               + reach[pairs[:, 1]])
     if len(extra) == 0:
         return contacts
+    n = np.int64(len(angle))
     c = Contacts.concatenate([contacts, extra])
     return c.take(np.lexsort((c.feature, c.body_a * n + c.body_b)))
 

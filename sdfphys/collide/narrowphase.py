@@ -31,10 +31,8 @@ Feature key layout (int64): ``source << 56 | element << 8 | start``
                 ``4 << 56 | e << 21 | start``
              5  (``polygons.SOURCE_CLIP``) two convex meshes, separating axes and
                 clipping: element = vertex_a << 24 | vertex_b, start = 0
-             6  (``predicted.SOURCE_PREDICTED``) a pair with a body turning fast, at
-                its end-of-step poses: a circle's element = start = 0; an sdf pair's
-                ``predicted.FIELD_PAIR`` | the end contact's source << 52 | its
-                element and start
+             6  (``predicted.SOURCE_PREDICTED``) a circle against a body turning
+                fast, at the pair's end-of-step poses: element = start = 0
     start    0-6: a descent minimum of triangle ``element`` from start id 0-2
              (vertices), 3-5 (edge midpoints), 6 (centroid);
              255 (``VERTEX_START``): mesh vertex ``element``, whichever triangle or

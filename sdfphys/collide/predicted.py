@@ -1,4 +1,4 @@
-"""Predicted contacts: pairs with a body that turns fast, measured at the step's end poses.
+"""Predicted contacts: a circle against a body that turns fast, at the step's end poses.
 
 A contact row keeps its normal and its two material points for the whole step (the
 solver re-measures its separation as the bodies move, ``solver.substeps``). That is
@@ -9,10 +9,9 @@ holds, and the circle is found inside it at the next step (in scenes/grid_terrai
 a box spinning at 28 rad/s met a circle 14 mm from it at the step's start 20 mm deep
 at its end; in scenes/showcase.toml the moon's horn, turning at 5.8 rad/s, 23 mm).
 
-So for each pair with a contact (the others are farther apart than every point's
-travel in the step, ``collide``'s reach) of a circle (centre c, radius r, velocity v_c)
-and a body b that is not round and turns by more than ``linear_slop`` at its bounding
-radius this step (|w_b| R_b dt > slop), the pair is also measured at its predicted end poses, the
+So for each candidate pair of a circle (centre c, radius r, velocity v_c) and a body b
+that is not round and turns by more than ``linear_slop`` at its bounding radius this
+step (|w_b| R_b dt > slop), the pair is also measured at its predicted end poses, the
 step's start velocities held (x' = x + v dt, angle' = angle + w dt): with
 (d', g') = f_b and its unit gradient at c' in b's end frame, b's surface point nearest
 the circle at the end is q' = c' - d' n', n' = R(angle'_b) g' (world, out of b). The
@@ -25,29 +24,11 @@ that material point against the circle, along n':
 The solver moves q0 with b and the circle's point with the circle (a circle's anchor
 is not turned), so at the end of the step s = s0 + n . (dq0 - dc) = n . (q' - c') - r
 when b moved as predicted: the row forbids what the end pose would overlap, and with
-s0 > 0 it is speculative, inert unless the gap closes. s0 is clamped at 0: where the
-row's points already overlap along n (b's surface sweeps past the circle's place
-within the step), the row starts touching, stopping the approach along n without
-pushing now. A collision that changes b's spin makes the prediction approximate, no
-worse than the fixed normal it adds to.
+s0 > 0 it is speculative, inert unless the gap closes. A collision that changes b's
+spin makes the prediction approximate, no worse than the fixed normal it adds to.
 
 Kept when within the pair's margin (depth > -(speculative distance + reach_a +
 reach_b)); key ``source SOURCE_PREDICTED`` (6), element 0, start 0, one per pair.
-
-Sdf pairs (``predicted_field_contacts``). Two sdf bodies, one turning fast, meet the
-same way: a rolling CSG body presses new material into the other every step
-(scenes/csg_bodies.toml, 10.4 mm, its contacts present but their normals 6 degrees a
-step behind). Their contacts at the end poses come from the pair's own query (the
-narrowphase at x + v dt, angle + w dt, without tangent samples);
-each end contact's two surface points, m' = point -+ s' / 2 n' (s' = -depth), are
-carried back with their bodies, m = x + R(-w dt) (m' - x'), and the row is
-s0 = max(n' . (m_b - m_a), 0) along the end normal n', at the midpoint of m_a and m_b
-(the solver's anchors are that point -+ s0 / 2 n': off the material points by half
-their offset along the tangent). Key: source 6, bit FIELD_PAIR, then the end contact's
-source, element and start. Cost: one more query per such pair (scenes/showcase.toml:
-0.7 ms a step, against 0.1 ms for its circles' rows). Mesh-sdf pairs too
-were measured worse (sdf_primitives 18.4 -> 30.1 mm deepest: its rolling ellipse held,
-its moon wedged into the hexagram instead) and are left out.
 """
 
 from __future__ import annotations
@@ -61,15 +42,10 @@ from ..shapes import Shape
 from ..vec2 import rotate
 from .contacts import Contacts
 
-__all__ = ["FIELD_PAIR", "SOURCE_PREDICTED", "predicted_contacts", "predicted_field_contacts"]
+__all__ = ["SOURCE_PREDICTED", "predicted_contacts"]
 
 #: Feature key source of predicted contacts (``narrowphase``'s key layout).
 SOURCE_PREDICTED = 6
-#: Key bit of an sdf pair's predicted contact; below it the end-pose contact's source
-#: (3 bits from bit 52) and its element and start (under 2^52: triangle, edge and start
-#: indices of any real mesh).
-FIELD_PAIR = np.int64(1) << np.int64(55)
-_LOW = (np.int64(1) << np.int64(52)) - np.int64(1)
 
 
 def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: np.ndarray,
@@ -121,47 +97,3 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
     return Contacts(np.minimum(c, b)[keep], np.maximum(c, b)[keep], point[keep],
                     normal[keep], -gap[keep],
                     np.full(len(keep), np.int64(SOURCE_PREDICTED) << np.int64(56)))
-
-
-def predicted_field_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
-                             pairs: np.ndarray, radius: np.ndarray, position: np.ndarray,
-                             angle: np.ndarray, velocity: np.ndarray,
-                             angular_velocity: np.ndarray, reach: np.ndarray,
-                             settings) -> Contacts:
-    """The predicted contacts of sdf-sdf candidate ``pairs`` (P, 2) with a body that turns
-    more than the slop at its bounding radius this step (module docstring, "Sdf
-    pairs").
-
-    shapes, body_shape, radius, position, angle, velocity, angular_velocity: as
-    ``predicted_contacts``; reach (B,) m, the bodies' reach (the pairs keep their
-    margins); settings: the world's. Returns body_a < body_b contacts sorted by (pair,
-    feature).
-    """
-    from . import _narrowphase
-
-    dt, slop = float(settings.dt), float(settings.linear_slop)
-    kind = np.array([shape.kind for shape in shapes])[body_shape]
-    i, j = pairs[:, 0], pairs[:, 1]
-    with np.errstate(invalid="ignore"):
-        turn = np.abs(angular_velocity) * np.where(np.isfinite(radius), radius, 0.0) * dt
-    rows = np.flatnonzero((kind[i] == "sdf") & (kind[j] == "sdf")
-                          & (np.maximum(turn[i], turn[j]) > slop))
-    if len(rows) == 0:
-        return Contacts.empty()
-    end = np.column_stack([position + velocity * dt, angle + angular_velocity * dt])
-    c = _narrowphase(shapes, body_shape, pairs[rows], end, settings.speculative_distance,
-                     reach, settings.with_values(field_tangent_samples=0))
-    if len(c) == 0:
-        return c
-    a, b = c.body_a, c.body_b
-    s_end = -c.depth
-    m_a = c.point - (0.5 * s_end)[:, None] * c.normal
-    m_b = c.point + (0.5 * s_end)[:, None] * c.normal
-    back_a = position[a] + rotate(m_a - end[a, :2], -angular_velocity[a] * dt)
-    back_b = position[b] + rotate(m_b - end[b, :2], -angular_velocity[b] * dt)
-    arm = back_b - back_a
-    gap = np.maximum(c.normal[:, 0] * arm[:, 0] + c.normal[:, 1] * arm[:, 1], 0.0)
-    source = c.feature >> np.int64(56)
-    return Contacts(a, b, 0.5 * (back_a + back_b), c.normal, -gap,
-                    (np.int64(SOURCE_PREDICTED) << np.int64(56)) | FIELD_PAIR
-                    | (source << np.int64(52)) | (c.feature & _LOW))
