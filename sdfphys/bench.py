@@ -118,6 +118,7 @@ SWEEPS: dict[str, tuple[Any, ...]] = {
     "stiff_iterations": (1, 8, 64),
     "impact_iterations": (1, 4, 16),
     "field_tangent_samples": (0, 3, 6),
+    "predicted_contacts": (False, True),
     "stiff_island_limit": (0, 64),
     "large_island_load_cap": (1.0, 2.0, 4.0),
     "soft_depth": (0.0, 0.005, 0.02, 1.0),

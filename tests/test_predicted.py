@@ -83,3 +83,23 @@ def test_the_circle_may_be_either_body():
     assert two.depth[0] == one.depth[0]
     np.testing.assert_allclose(two.normal[0], -one.normal[0], atol=1e-15)
     np.testing.assert_allclose(two.point[0], one.point[0], atol=1e-15)
+
+
+@pytest.mark.parametrize("on", [True, False])
+def test_the_world_query_adds_the_row_unless_the_knob_is_off(on):
+    """``find_contacts`` with the paddle spinning at 20 rad/s beside the ball: its contacts
+    plus the predicted row (source 6) with ``predicted_contacts`` on, without it off, the
+    other rows the same either way."""
+    from sdfphys.collide import find_contacts
+    from sdfphys.settings import Settings
+
+    shapes = [shape_from_spec(s) for s in (PADDLE, BALL)]
+    settings = Settings(predicted_contacts=on)
+    args = (shapes, np.arange(2), np.array([[0.0, 0.0], [0.40, 0.35]]), np.array([0.1, 0.0]),
+            np.array([True, True]), settings, np.zeros((2, 2)), np.array([20.0, 0.0]))
+    got = find_contacts(*args)
+    predicted = (got.feature >> 56) == SOURCE_PREDICTED
+    assert np.count_nonzero(predicted) == (1 if on else 0)
+    plain = find_contacts(*args[:5], Settings(predicted_contacts=False), *args[6:])
+    np.testing.assert_array_equal(got.feature[~predicted], plain.feature)
+    np.testing.assert_array_equal(got.depth[~predicted], plain.depth)

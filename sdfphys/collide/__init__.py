@@ -21,7 +21,8 @@ One step of ``find_contacts`` (no Python loop over bodies, pairs or contacts):
 4. contacts with depth > -margin of their pair kept, reduced to at most
    ``contacts_per_pair`` per pair (``reduce``), sorted by (body_a, body_b, feature);
 5. a circle against a body that turns more than the slop this step gets one more,
-   speculative contact: the pair at its end-of-step poses carried back (``predicted``).
+   speculative contact: the pair at its end-of-step poses carried back (``predicted``;
+   ``Settings.predicted_contacts``).
 
 Fast path (``circle_kernels``, the default): steps 1-2 are one compiled pass over
 the bodies and the grid broadphase; the circle-circle, circle-box (``TriangleMesh.box``)
@@ -364,7 +365,10 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
                     pair_filter: PairFilter | None) -> Contacts:
     """``contacts`` (sorted by (body_a, body_b, feature)) with the predicted contacts of
     circles against fast-turning bodies (``predicted``) among the candidate ``pairs``
-    (sensor pairs left out: a prediction is not a touch), in the same order."""
+    (sensor pairs left out: a prediction is not a touch), in the same order; none
+    without ``settings.predicted_contacts``."""
+    if not settings.predicted_contacts:
+        return contacts
     if pair_filter is not None and pair_filter.has_sensors and len(pairs):
         pairs = pairs[~(pair_filter.sensor[pairs[:, 0]] | pair_filter.sensor[pairs[:, 1]])]
     extra = predicted_contacts(shapes, body_shape, pairs, is_circle, radius, position, angle,
