@@ -194,19 +194,13 @@ IMPACT_HOPS = 4
 
 @njit(cache=True)
 def _impact_region(inv_mass, body_a, body_b, separation, relative_velocity, dt, soft_depth,
-                   root, size, rest_limit, round_body):
+                   root, size, rest_limit, round_body, pushing):
     """(B,) bool: the dynamic circles (``round_body`` (B,) bool) within IMPACT_HOPS
     circle-circle contacts of an impact's circle (section above), in islands (``root``,
     ``size`` (B,): dynamic bodies per root) of 2 to ``rest_limit`` bodies (a body alone
-    has no column to stop) with no row deeper than soft_depth (a jam). separation,
-    relative_velocity: (K,) m and m/s at the start of the step; dt: s; soft_depth: m."""
-    # Islands pushing out overlap deeper than soft_depth are jams, not impacts.
-    pushing = np.zeros(inv_mass.shape[0], np.bool_)
-    for k in range(body_a.shape[0]):
-        if separation[k] < -soft_depth:
-            for i in (body_a[k], body_b[k]):
-                if inv_mass[i] > 0.0:
-                    pushing[root[i]] = True
+    has no column to stop) not ``pushing`` (per root: a row deeper than soft_depth, a
+    jam, not an impact). separation, relative_velocity: (K,) m and m/s at the start of
+    the step; dt: s; soft_depth: m."""
     region = np.zeros(inv_mass.shape[0], np.bool_)
     for k in range(body_a.shape[0]):
         if max(separation[k], 0.0) + dt * relative_velocity[k] < -soft_depth:
@@ -273,15 +267,16 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
                 hot[root[i]] = True
     # An island pushing out overlap deeper than soft_depth (split rows), or with a body
     # faster than REST_SPEED, is not at rest.
-    largest = np.full(nb, max(limit, rest_limit), np.int64)
-    for i in range(nb):
-        if inv_mass[i] > 0.0 and moving[i]:
-            largest[root[i]] = limit
+    pushing = np.zeros(nb, np.bool_)
     for k in range(body_a.shape[0]):
         if separation[k] < -soft_depth:
             for i in (body_a[k], body_b[k]):
                 if inv_mass[i] > 0.0:
-                    largest[root[i]] = limit
+                    pushing[root[i]] = True
+    largest = np.full(nb, max(limit, rest_limit), np.int64)
+    for i in range(nb):
+        if inv_mass[i] > 0.0 and (moving[i] or pushing[root[i]]):
+            largest[root[i]] = limit
     for p in range(n_pairs):
         a = body_a[pair_start[p]]
         b = body_b[pair_start[p]]
@@ -290,7 +285,7 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
         if ma > 0.0 and mb > 0.0 and (ma >= MASS_RATIO * mb or mb >= MASS_RATIO * ma):
             hot[root[a]] = True
     region = _impact_region(inv_mass, body_a, body_b, separation, relative_velocity, dt,
-                            soft_depth, root, size, rest_limit, round_body)
+                            soft_depth, root, size, rest_limit, round_body, pushing)
     stiff_passes, impact_passes, rest_passes = extra_passes
     # The other bodies a region's circle touches: their rows against static bodies too
     # (the blow goes through them into the ground), not their rows with each other.
