@@ -331,7 +331,7 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     descent iteration is one evaluation of each field over the points of all
     pairs.
     """
-    from .field_pairs import placed_field_contacts, tangent_samples
+    from .field_pairs import one_sided_depths, placed_field_contacts, tangent_samples
 
     if not np.all(np.isfinite(sdf_b.bounds())) and np.all(np.isfinite(sdf_a.bounds())):
         # The descent's region is b's bounds placed in a's frame: solve with the
@@ -343,6 +343,8 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     _, pair, point, depth, normal, start = placed_field_contacts(
         sdf_a.field, sdf_b.field, offset, angle, sdf_a.bounds(), sdf_b.bounds(), margin,
         settings.field_descent_starts, settings.field_descent_iterations)
+    point, depth, normal = one_sided_depths(sdf_a.field, sdf_b.field, offset, angle, pair,
+                                            point, depth, normal)
     pair, point, depth, normal, start, element = tangent_samples(
         sdf_a.field, sdf_b.field, offset, angle, pair, point, depth, normal, start, margin,
         min(sdf_a.radius, sdf_b.radius), settings.field_tangent_samples)
