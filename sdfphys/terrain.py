@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 import operator
+from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -47,6 +48,7 @@ from .sdf.build import suggest
 from .sdf.edit import edit_grid, write_window
 from .sdf.grid import GridField
 from .shapes import SdfShape, Shape
+from .vec2 import rotate
 from .world_bodies import shape_number
 
 __all__ = ["MARGIN_CELLS", "Edit", "TerrainShape", "apply_due", "edit", "schedule",
@@ -185,7 +187,8 @@ def edit(world: Any, body: Any, spec: Any, position: Any, angle: float = 0.0,
     c, s = math.cos(turn), math.sin(turn)
     dx, dy = position - com
     local = (c * dx + s * dy, c * dy - s * dx)          # R(-turn) (position - com)
-    window = edit_grid(terrain.grid, shape, local, angle - turn, deposit)
+    clear = _clear_of_bodies(world, i, shape, position, angle) if deposit else None
+    window = edit_grid(terrain.grid, shape, local, angle - turn, deposit, clear)
     if window is None:
         return
     # The ray and overlap queries pack a copy of every program's constants (cached on
@@ -204,6 +207,38 @@ def edit(world: Any, body: Any, spec: Any, position: Any, angle: float = 0.0,
     contacts = world._contacts
     world._contacts = contacts.take((contacts.body_a != i) & (contacts.body_b != i))
     world._contact_cache.forget(i)
+
+
+def _clear_of_bodies(world: Any, i: int, shape: Field, position: np.ndarray,
+                     angle: float) -> Callable[[np.ndarray], np.ndarray] | None:
+    """What a deposit of ``shape`` at world ``position``, ``angle`` on body ``i`` must
+    leave clear: the dynamic bodies whose bounding circles meet the placed shape's
+    bounding circle, as a function of points (N, 2) in body i's frame giving the
+    distance (N,) m to the nearest of them (the minimum of their fields, negative
+    inside); None when no body is that near (``sdf.edit.edit_grid``)."""
+    d = world._data
+    box = np.asarray(shape.bounds(), dtype=np.float64)
+    if not np.all(np.isfinite(box)):
+        return None
+    c, s = math.cos(angle), math.sin(angle)
+    middle = 0.5 * (box[:2] + box[2:])
+    centre = position + np.array([c * middle[0] - s * middle[1],
+                                  s * middle[0] + c * middle[1]])
+    reach = 0.5 * float(np.hypot(box[2] - box[0], box[3] - box[1]))
+    gap = np.hypot(*(d["com"] - centre).T) - d["radius"] - reach
+    near = np.flatnonzero((d["kind"] == _DYNAMIC) & (gap < 0.0))
+    if len(near) == 0:
+        return None
+    com, turn = d["com"][i].copy(), float(d["angle"][i])
+    bodies = [(d["com"][j].copy(), float(d["angle"][j]),
+               world._shapes[int(d["shape_id"][j])].field) for j in near]
+
+    def clear(points: np.ndarray) -> np.ndarray:
+        world_points = com + rotate(points, turn)
+        return np.min([field.distance(rotate(world_points - at, -turned))
+                       for at, turned, field in bodies], axis=0)
+
+    return clear
 
 
 def user_field(world: Any, body: Any) -> Field:

@@ -59,6 +59,42 @@ def test_a_crate_falls_into_a_hole_carved_under_it(ground):
     assert np.all(w.contacts.depth < 0.01)
 
 
+@pytest.mark.parametrize("crate", [CRATE, {"type": "circle", "radius": 0.25}],
+                         ids=["box", "circle"])
+def test_a_deposit_fills_around_a_body_and_buries_none(crate):
+    """A mound deposited over a resting body: the new material stops at the body's
+    surface (brute force over points on and inside the body), and the body neither
+    sinks into it nor is thrown out by it."""
+    w = _two_crates(GROUND)
+    w.remove_body(2)
+    w.add_body(crate, position=(0.0, 0.75 if crate is not CRATE else 0.7), name="crate")
+    for _ in range(60):
+        w.step()
+    rest = w.position[-1].copy()
+    w.deposit("ground", {"type": "circle", "radius": 0.8}, (0.0, 0.4))
+    grown = w.field("ground")
+    # New material keeps a carve cell clear of the body (the grid's bilinear level set
+    # rounds the pocket's corners by less): no point of the body reads inside the new
+    # field, brute force over points of the body; its contacts are the old ground's.
+    body = field(crate)
+    u = np.linspace(-0.3, 0.3, 61)
+    local = np.stack(np.meshgrid(u, u), -1).reshape(-1, 2)
+    depth = -body.distance(local)
+    ground = grown.distance(local + rest - w.position[0])
+    cell = w.settings.carve_cell
+    assert np.sum(depth > 0.0) > 100
+    assert np.all(ground[depth > 0.0] > -0.001)
+    # ... and no more than that: 2.5 cells beside the body is the mound's inside.
+    side = rest + np.array([-body.distance(np.zeros((1, 2)))[0] + 2.5 * cell, 0.0])
+    assert grown.distance((side - w.position[0])[None])[0] < 0.0
+    # Material was added beside it: the mound's top at x = +-0.6 is above the old ground.
+    assert np.all(grown.distance(np.array([[-0.6, 0.55], [0.6, 0.55]])) < 0.0)
+    for _ in range(60):
+        w.step()
+    assert np.linalg.norm(w.position[-1] - rest) < 0.05
+    assert np.all(w.contacts.depth < 0.01)
+
+
 def test_a_baked_grid_keeps_its_nodes_at_its_first_edit():
     w = _two_crates(BAKED)
     w.carve(0, {"type": "circle", "radius": 0.1}, (2.0, 0.5))

@@ -43,6 +43,7 @@ deposited there).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -72,8 +73,9 @@ def write_window(code: np.ndarray, consts: np.ndarray, row: int, grid: GridField
     consts[o:o + nx * ny].reshape(nx, ny)[i0:i1, j0:j1] = grid._values[i0:i1, j0:j1]
 
 
-def edit_grid(grid: GridField, shape: Field, position, angle: float,
-              deposit: bool) -> tuple[int, int, int, int] | None:
+def edit_grid(grid: GridField, shape: Field, position, angle: float, deposit: bool,
+              clear: Callable[[np.ndarray], np.ndarray] | None = None
+              ) -> tuple[int, int, int, int] | None:
     """Carve ``shape`` from ``grid`` (or deposit it, ``deposit`` True), in place.
 
     grid: a float64 GridField (``GridField.from_values``); shape: any Field, placed with
@@ -82,7 +84,11 @@ def edit_grid(grid: GridField, shape: Field, position, angle: float,
     the window ``[i0, i1) x [j0, j1)`` of node indices, which it returns (None when the
     shape's bounds, grown by the reach, miss the grid). Nodes on the grid's rim never
     go below min(their value, 0), so the grid's bounds stay valid (a deposit is
-    clipped at the grid's edge).
+    clipped at the grid's edge). clear: for a deposit, the distance (m, negative
+    inside) from points (N, 2) of the grid's frame to what must stay clear of it
+    (dynamic bodies): the deposited field becomes max(c, cell - clear), so new
+    material fills around them one cell away (the grid's bilinear level set rounds
+    a pocket's corners by less than a cell) and buries none; old material is kept.
     """
     h = grid.cell
     nx, ny = grid.shape
@@ -107,6 +113,9 @@ def edit_grid(grid: GridField, shape: Field, position, angle: float,
     dx, dy = gx.ravel() - position[0], gy.ravel() - position[1]
     local = np.column_stack([c * dx + s * dy, c * dy - s * dx])    # R(-angle) (p - t)
     d = shape.distance(local).reshape(gx.shape)
+    if deposit and clear is not None:
+        points = np.column_stack([gx.ravel(), gy.ravel()])
+        d = np.maximum(d, h - clear(points).reshape(gx.shape))
     values = grid._values
     window = values[i0:i1, j0:j1]
     old = window.copy()
