@@ -1,4 +1,5 @@
-"""Predicted contacts (``collide.predicted``): circles against bodies that turn fast."""
+"""Predicted contacts (``collide.predicted``): circles against bodies that turn fast or
+that they move fast against."""
 
 import numpy as np
 import pytest
@@ -103,3 +104,55 @@ def test_the_world_query_adds_the_row_unless_the_knob_is_off(on):
     plain = find_contacts(*args[:5], Settings(predicted_contacts=False), *args[6:])
     np.testing.assert_array_equal(got.feature[~predicted], plain.feature)
     np.testing.assert_array_equal(got.depth[~predicted], plain.depth)
+
+
+def test_a_fast_circle_gets_its_end_pose_row_through_its_centre():
+    """A still paddle, a ball moving at (3, -2) m/s past its corner: the row's normal is
+    the paddle's outward normal at the ball's end centre, its separation carried by the
+    ball's move is the end-pose gap d' - r, and its point lies on the line through the
+    ball's centre along the normal (no torque on the ball), midway across the gap."""
+    ball_v = np.array([3.0, -2.0])
+    position = [[0.0, 0.0], [0.62, 0.22]]
+    c = query(position, [0.0, 0.0], [[0.0, 0.0], ball_v], [0.0, 0.0])
+    assert len(c) == 1 and c.body_a[0] == 0 and c.body_b[0] == 1
+    centre_end = np.array(position[1]) + ball_v * DT
+    box = shape_from_spec(PADDLE).field
+    d = float(box.distance(centre_end[None])[0])
+    corner = np.array([0.6, 0.1])
+    n_end = (centre_end - corner) / np.linalg.norm(centre_end - corner)   # corner region
+    np.testing.assert_allclose(c.normal[0], n_end, atol=1e-12)
+    s0 = -c.depth[0]
+    assert s0 > 0.0
+    assert s0 + n_end @ (ball_v * DT) == pytest.approx(d - 0.1, abs=1e-12)
+    arm = c.point[0] - np.array(position[1])
+    assert abs(arm[0] * n_end[1] - arm[1] * n_end[0]) < 1e-12
+    assert -arm @ n_end == pytest.approx(0.1 + 0.5 * s0, abs=1e-12)
+
+
+def test_a_fast_circle_inside_its_end_tangent_gets_no_row():
+    """Against a body that does not turn the row is kept only when speculative: a ball
+    sliding fast along the paddle's top face into its corner region, already below the
+    end pose's tangent line through the corner (s0 < 0), gets none."""
+    c = query([[0.0, 0.0], [0.55, 0.2]], [0.0, 0.0], [[0.0, 0.0], [6.0, 0.0]], [0.0, 0.0])
+    assert len(c) == 0
+
+
+def test_a_row_that_repeats_a_contact_is_dropped():
+    """``find_contacts``: a ball falling fast onto the paddle's flat top has its plain
+    contact and no predicted row (same normal, same separation: it would repeat it); the
+    same ball moving fast toward the paddle's corner has one."""
+    from sdfphys.collide import find_contacts
+    from sdfphys.settings import Settings
+
+    shapes = [shape_from_spec(s) for s in (PADDLE, BALL)]
+
+    def rows(ball, velocity):
+        got = find_contacts(shapes, np.arange(2), np.array([[0.0, 0.0], ball]),
+                            np.zeros(2), np.array([True, True]), Settings(),
+                            np.array([[0.0, 0.0], velocity]), np.zeros(2))
+        return got, (got.feature >> 56) == SOURCE_PREDICTED
+
+    got, predicted = rows([0.0, 0.25], [0.0, -5.0])
+    assert len(got) == 1 and not predicted.any()
+    got, predicted = rows([0.72, 0.16], [-4.0, 0.0])
+    assert np.count_nonzero(predicted) == 1

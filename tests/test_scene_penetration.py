@@ -39,11 +39,6 @@ OPEN: dict[str, str] = {
                   "end fix): depth exact (brute force), contact present from 4 mm five steps "
                   "before while csg6 rolls at 5 rad/s on it: each step's rolling presses a "
                   "new point in about as fast as the split push-out takes the overlap out",
-    "marble_run": "circle-field track / marble9 at t = 2.97 s, 1.29 cm (before the impact "
-                  "passes changed the marbles' landings: t = 3.27 s, 1.3 cm, 1.6 cm at the "
-                  "soft rate alone, reported where the marble is 2.1-5.4 cm above the track "
-                  "(brute force)): the smooth union's field is a bound (|grad| 0.80 there), "
-                  "r - f(c) a false depth",
     "sdf_primitives": "sdf-sdf vesica / rounded_cross at t = 2.28 s, 2.6 cm (2.3 cm before "
                       "the one-sided depths, which read deeper and truer at sharp "
                       "features): the contact present and deepening (6.7, 8.4, 12.1, 17.5 "

@@ -376,11 +376,38 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
                                float(settings.linear_slop),
                                settings.speculative_distance + reach[pairs[:, 0]]
                                + reach[pairs[:, 1]])
+    n = np.int64(len(angle))
+    if len(extra):
+        extra = extra.take(~_implied(contacts, extra, n))
     if len(extra) == 0:
         return contacts
-    n = np.int64(len(angle))
     c = Contacts.concatenate([contacts, extra])
     return c.take(np.lexsort((c.feature, c.body_a * n + c.body_b)))
+
+
+#: Separations of a pair's contact and of its predicted contact along one normal that
+#: differ by less than this (m) are equal: the two are computed by different paths
+#: (a narrowphase, a field at the end pose), whose round-off differs by ~1e-16 m.
+IMPLIED_ROUND_OFF = 1e-9
+
+
+def _implied(contacts: Contacts, extra: Contacts, n: np.int64) -> np.ndarray:
+    """(len(extra),) bool: whether each predicted contact is implied by a contact of its
+    pair in ``contacts`` (sorted by pair) with the same normal and no larger
+    separation, both to round-off (``IMPLIED_ROUND_OFF`` m): both measure the circle's
+    move along one normal, so the predicted row would only repeat it (a circle falling
+    on or rolling along a flat face)."""
+    keys = contacts.body_a * n + contacts.body_b
+    wanted = extra.body_a * n + extra.body_b
+    lo = np.searchsorted(keys, wanted, "left")
+    count = np.searchsorted(keys, wanted, "right") - lo
+    owner = np.repeat(np.arange(len(extra)), count)
+    row = np.repeat(lo - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
+    same = np.einsum("ij,ij->i", contacts.normal[row], extra.normal[owner]) >= 1.0 - 1e-12
+    repeats = same & (contacts.depth[row] >= extra.depth[owner] - IMPLIED_ROUND_OFF)
+    implied = np.zeros(len(extra), bool)
+    np.logical_or.at(implied, owner, repeats)
+    return implied
 
 
 def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.ndarray,

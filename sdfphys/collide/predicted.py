@@ -1,4 +1,5 @@
-"""Predicted contacts: a circle against a body that turns fast, at the step's end poses.
+"""Predicted contacts: a circle against a body that turns fast, or that it moves fast
+against, at the step's end poses.
 
 A contact row keeps its normal and its two material points for the whole step (the
 solver re-measures its separation as the bodies move, ``solver.substeps``). That is
@@ -7,19 +8,23 @@ rolling circle. It is wrong when the other body turns fast: a spinning box's cor
 or a turning crescent's horn, sweeps toward a circle through material that no row
 holds, and the circle is found inside it at the next step (in scenes/grid_terrain.toml
 a box spinning at 28 rad/s met a circle 14 mm from it at the step's start 20 mm deep
-at its end; in scenes/showcase.toml the moon's horn, turning at 5.8 rad/s, 23 mm).
+at its end; in scenes/showcase.toml the moon's horn, turning at 5.8 rad/s, 23 mm). And
+it is wrong when the circle itself moves fast along a curved surface: the surface it
+will meet by the step's end faces another way than the one under it now (in
+scenes/marble_run.toml marbles at 5 m/s ran into the arc's concave curve, found 13 mm
+inside it a step later).
 
 So for each candidate pair of a circle (centre c, radius r, velocity v_c) and a body b
 that is not round and turns by more than ``linear_slop`` at its bounding radius this
-step (|w_b| R_b dt > slop), the pair is also measured at its predicted end poses, the
+step (|w_b| R_b dt > slop), or that the circle moves against by more than the slop
+(|v_c - v_b| dt > slop), the pair is also measured at its predicted end poses, the
 step's start velocities held (x' = x + v dt, angle' = angle + w dt): with
 (d', g') = f_b and its unit gradient at c' in b's end frame, b's surface point nearest
 the circle at the end is q' = c' - d' n', n' = R(angle'_b) g' (world, out of b). The
 material point of b that reaches q' is q0 = x_b + R(-w_b dt) (q' - x'_b). The row is
 that material point against the circle, along n':
 
-    normal a -> b: n = -n' (circle toward b), s0 = n . (q0 - c) - r (depth -s0),
-    point = q0 - s0 / 2 n (both surface points on the line through q0 along n).
+    normal a -> b: n = -n' (circle toward b), s0 = n . (q0 - c) - r (depth -s0).
 
 The solver moves q0 with b and the circle's point with the circle (a circle's anchor
 is not turned), so at the end of the step s = s0 + n . (dq0 - dc) = n . (q' - c') - r
@@ -27,8 +32,18 @@ when b moved as predicted: the row forbids what the end pose would overlap, and 
 s0 > 0 it is speculative, inert unless the gap closes. A collision that changes b's
 spin makes the prediction approximate, no worse than the fixed normal it adds to.
 
+Against a turning body s0 is clamped at 0 and the row's point is on q0, midway across
+the gap along n (both surface points on the line through q0): the material point is
+what the row must carry. Against a body that does not turn, b's points all move alike,
+so the row's point is on the line through the circle's centre along n, as for every
+contact of a circle (its normal impulse exerts no torque on it; on q0, v dt ahead of a
+rolling ball, it spun the ball), and the row is kept only when speculative (s0 > 0:
+a circle already inside the end pose's tangent line is pressed along the current
+normal by its own rows).
+
 Kept when within the pair's margin (depth > -(speculative distance + reach_a +
-reach_b)); key ``source SOURCE_PREDICTED`` (6), element 0, start 0, one per pair.
+reach_b)); key ``source SOURCE_PREDICTED`` (6), element 0, start 0, one per pair. The
+caller drops the rows that only repeat a contact of the pair (``collide._implied``).
 """
 
 from __future__ import annotations
@@ -62,17 +77,20 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
     pair_margin (P,) m, each pair's margin. Returns body_a < body_b contacts, sorted by
     pair, at most one per pair.
     """
-    i, j = pairs[:, 0], pairs[:, 1]
-    circle_first = is_circle[i] & ~is_circle[j]
-    circle_second = is_circle[j] & ~is_circle[i]
+    mixed = np.flatnonzero(is_circle[pairs[:, 0]] != is_circle[pairs[:, 1]])
+    i, j = pairs[mixed, 0], pairs[mixed, 1]
+    circle_first = is_circle[i]
     circle = np.where(circle_first, i, j)
     other = np.where(circle_first, j, i)
     with np.errstate(invalid="ignore"):
         turning = np.abs(angular_velocity[other]) * radius[other] * dt > slop
-    rows = np.flatnonzero((circle_first | circle_second) & turning)
-    if len(rows) == 0:
+        relative = velocity[circle] - velocity[other]
+        fast = (relative[:, 0] ** 2 + relative[:, 1] ** 2) * dt * dt > slop * slop
+    chosen = np.flatnonzero(turning | fast)
+    if len(chosen) == 0:
         return Contacts.empty()
-    c, b = circle[rows], other[rows]
+    rows, turning = mixed[chosen], turning[chosen]
+    c, b = circle[chosen], other[chosen]
     turn = angular_velocity[b] * dt
     centre_end = position[c] + velocity[c] * dt
     body_end = position[b] + velocity[b] * dt
@@ -88,11 +106,16 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
     normal = -out                                                      # circle -> b
     arm = material - position[c]
     gap = normal[:, 0] * arm[:, 0] + normal[:, 1] * arm[:, 1] - radius[c]
+    keep = (gap < pair_margin[rows]) & (turning | (gap > 0.0))
     gap = np.maximum(gap, 0.0)
-    keep = gap < pair_margin[rows]
+    # The row's point: on b's material point q0 against a turning body; otherwise on
+    # the line through the circle's centre along n, as every contact of a circle (its
+    # normal impulse exerts no torque on it), midway across the gap.
+    on_line = position[c] + (radius[c] + 0.5 * gap)[:, None] * normal
+    point = np.where(turning[:, None], material - (0.5 * gap)[:, None] * normal,
+                     on_line)
     flip = c > b                                    # rows are stored body_a < body_b
     normal = np.where(flip[:, None], -normal, normal)
-    point = material + (0.5 * gap)[:, None] * np.where(flip[:, None], normal, -normal)
     keep = np.flatnonzero(keep)
     return Contacts(np.minimum(c, b)[keep], np.maximum(c, b)[keep], point[keep],
                     normal[keep], -gap[keep],
