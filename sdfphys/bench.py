@@ -119,6 +119,7 @@ SWEEPS: dict[str, tuple[Any, ...]] = {
     "impact_iterations": (1, 4, 16),
     "field_tangent_samples": (0, 3, 6),
     "predicted_contacts": (False, True),
+    "curvature_anchors": (False, True),
     "stiff_island_limit": (0, 64),
     "large_island_load_cap": (1.0, 2.0, 4.0),
     "soft_depth": (0.0, 0.005, 0.02, 1.0),
@@ -231,6 +232,7 @@ def relevant_knobs(counts: dict[str, int], knobs: Sequence[str]) -> list[str]:
         "field_tangent_samples": "sdf_sdf" in ran,
         "gradient": bool(ran & set(_SDF_PAIRS)), "grid_cell": bool(ran & set(_SDF_PAIRS)),
         "reuse_distance": bool(ran & set(_SDF_PAIRS)),     # kept contacts: descent pairs
+        "curvature_anchors": bool(ran & set(_SDF_PAIRS)),  # turning sdf bodies
         "restitution_passes": "restitution" in ran,
         "time_of_impact": "time_of_impact" in ran,
     }

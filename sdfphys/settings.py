@@ -161,6 +161,11 @@ class Settings:
     field_descent_starts: int = _knob(
         7, "", "Field-field queries: Halton starts over the overlap region per pair. "
         "More: more separate contact regions found.", low=1, high=1024)
+    curvature_anchors: bool = _knob(
+        True, "", "A turning sdf body's contact rows are anchored at the centre of "
+        "curvature of its surface there, not at its surface point, which rises as the "
+        "body turns and lets a rolling or spinning curved body sink by rho dq^2 / 2 a "
+        "step (as a circle's rows are: round bodies).")
     predicted_contacts: bool = _knob(
         True, "", "A circle near a body that turns more than linear_slop a step, or that "
         "it moves against by more than that, gets one more speculative row, measured at "

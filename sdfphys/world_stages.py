@@ -17,6 +17,7 @@ import numpy as np
 from . import world_sleep
 from .collide import Contacts, find_contacts
 from .collide import compile_ahead as collide_ahead
+from .collide.curvature import curvature_radii, turning_bodies
 from .collide.filter import PairFilter
 from .collide.narrowphase import PAIR_FUNCTIONS
 from .events import StepReport, WorldContacts, sensor_overlaps
@@ -31,7 +32,7 @@ from .solver import (
 )
 from .solver import store_impulses as impulse_cache
 from .toi import fast_bodies, step_fractions
-from .world_bodies import DYNAMIC
+from .world_bodies import DYNAMIC, STATIC
 
 if TYPE_CHECKING:
     from .world import World
@@ -129,11 +130,19 @@ def collide(world: World, bodies: BodyState, active: np.ndarray | None) -> Conta
 
 
 def prepare(world: World, contacts: Contacts, bodies: BodyState) -> ContactConstraints:
-    """Stage 2: anchors, masses, base separations, warm-start impulses."""
+    """Stage 2: anchors (at the centre of curvature of a turning sdf body's surface,
+    ``collide.curvature``), masses, base separations, warm-start impulses."""
+    curvature = None
+    if world.settings.curvature_anchors and len(contacts):
+        turning = turning_bodies(world._view("kind") == STATIC, bodies.angular_velocity,
+                                 bodies.radius, world.settings.dt)
+        if np.any(turning):
+            curvature = curvature_radii(collision_shapes(world), world._view("shape_id"),
+                                        bodies.com, bodies.angle, turning, contacts)
     constraints = prepare_contacts(contacts, bodies, world._view("friction"),
                                    world._view("restitution"), world._impulses,
                                    world.settings.warm_starting, world._gravity,
-                                   world.settings.linear_slop)
+                                   world.settings.linear_slop, curvature)
     if len(constraints):
         world.stage_counts["prepare"] += 1
     return constraints

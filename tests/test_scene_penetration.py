@@ -34,25 +34,16 @@ OPEN: dict[str, str] = {
                         "face (normal (0.79, 0.62), +0.3 mm) sinks 1.4 cm through the other "
                         "face (-0.24, 0.97) in one step: found too late, no speculative "
                         "contact on the second face",
-    "csg_bodies": "sdf-sdf csg2 / csg6 at t = 0.97 s, 1.02 cm (1.04 cm before the one-sided "
-                  "depths; 1.26 cm at the soft rate alone; 4.36 cm before the rounded far "
-                  "end fix): depth exact (brute force), contact present from 4 mm five steps "
-                  "before while csg6 rolls at 5 rad/s on it: each step's rolling presses a "
-                  "new point in about as fast as the split push-out takes the overlap out",
-    "sdf_primitives": "sdf-sdf vesica / rounded_cross at t = 2.28 s, 2.6 cm (2.3 cm before "
-                      "the one-sided depths, which read deeper and truer at sharp "
-                      "features): the contact present and deepening (6.7, 8.4, 12.1, 17.5 "
-                      "mm the steps before, one-sided within 10 % of them) while the "
-                      "rounded cross falls onto the vesica at 0.3 to 1.0 m/s and the "
-                      "contact's normal stays within 16 degrees of horizontal (-0.97, "
-                      "0.26): one overlap region, one normal, whose rows barely hold the "
-                      "fall; next star / uneven_capsule 1.3 cm at t = 0.72 s: the capsule, "
-                      "turning at 5.3 rad/s, sweeps its uneven end over the star's tip "
-                      "like a cam, material no row holds (the tip's point at the end "
-                      "poses, as collide.predicted gives circles, would hold it); ground / "
-                      "ellipse 1.8 cm at t = 1.42 s: the ellipse lands spinning at 7 to 9 "
-                      "rad/s and its turning brings new material down faster than the "
-                      "split push-out lifts it",
+    "sdf_primitives": "sdf-sdf hexagram / pie at t = 1.15 s, 3.2 cm: spinning at -3.1 and "
+                      "+3.7 rad/s, touching at one contact 1 to 7 mm deep, they meet at a "
+                      "second place 0.4 m from it, a corner swept into the other body "
+                      "within one step where no row was: material no row holds, the cam "
+                      "case (the corner's point at the end poses, as collide.predicted "
+                      "gives circles, would hold it); next moon / hexagram 2.3 cm at "
+                      "t = 1.17 s and star / uneven_capsule 1.3 cm at t = 0.72 s, "
+                      "turning bodies too (not yet traced); "
+                      "ground / ellipse 1.1 cm at t = 1.42 s (1.7 cm before the curvature "
+                      "anchors): the ellipse lands spinning at 7 to 9 rad/s",
 }
 
 

@@ -203,7 +203,9 @@ def _prepare_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inerti
 def prepare_contacts(contacts: Contacts, bodies: BodyState, friction: np.ndarray,
                      restitution: np.ndarray, cache: ImpulseCache,
                      warm_starting: bool, gravity: np.ndarray | None = None,
-                     match_tolerance: float = 0.0) -> ContactConstraints:
+                     match_tolerance: float = 0.0,
+                     curvature: tuple[np.ndarray, np.ndarray] | None = None
+                     ) -> ContactConstraints:
     """Contact rows for this step from ``contacts`` and the bodies at the start of the step.
 
     friction, restitution: (B,) per-body coefficients, mixed per contact as
@@ -212,7 +214,10 @@ def prepare_contacts(contacts: Contacts, bodies: BodyState, friction: np.ndarray
     contact of the same pair lies within ``match_tolerance`` (m) in body a's frame
     (``ImpulseCache.match``; the world passes the linear slop). gravity: (2,)
     m/s^2 (None: zero), which speeds up a speculative point's approach before it
-    touches.
+    touches. curvature: None, or (rho_a, rho_b) (K,) m, the radii of curvature of each
+    body's surface at each contact (``collide.curvature``): a body's anchor is then its
+    centre of curvature, p_a - rho_a n and p_b + rho_b n, and the base separation less
+    rho_a + rho_b, the same separation now, turning as a round body's.
     """
     k = len(contacts)
     anchor_a, anchor_b = np.empty((k, 2)), np.empty((k, 2))
@@ -230,6 +235,11 @@ def prepare_contacts(contacts: Contacts, bodies: BodyState, friction: np.ndarray
         anchor_a, anchor_b, arm_a, arm_b, local_anchor, base_separation, normal_mass,
         tangent_mass, mixed_friction, mixed_restitution, relative_velocity, stiff, pair_start,
         np.zeros(2) if gravity is None else np.asarray(gravity, np.float64))
+    if curvature is not None:
+        rho_a, rho_b = curvature
+        anchor_a -= rho_a[:, None] * normal
+        anchor_b += rho_b[:, None] * normal
+        base_separation -= rho_a + rho_b
     if warm_starting:
         normal_impulse, tangent_impulse = cache.match(contacts.body_a, contacts.body_b,
                                                       contacts.feature, local_anchor,
