@@ -134,8 +134,10 @@ def prepare(world: World, contacts: Contacts, bodies: BodyState) -> ContactConst
     ``collide.curvature``), masses, base separations, warm-start impulses."""
     curvature = None
     if world.settings.curvature_anchors and len(contacts):
-        turning = turning_bodies(world._view("kind") == STATIC, bodies.angular_velocity,
-                                 bodies.radius, world.settings.dt)
+        sdf = np.array([shape.kind == "sdf" for shape in world._shapes])
+        turning = sdf[world._view("shape_id")] & turning_bodies(
+            world._view("kind") == STATIC, bodies.angular_velocity, bodies.radius,
+            world.settings.dt)
         if np.any(turning):
             curvature = curvature_radii(collision_shapes(world), world._view("shape_id"),
                                         bodies.com, bodies.angle, turning, contacts)
