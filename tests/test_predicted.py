@@ -1,6 +1,8 @@
 """Predicted contacts (``collide.predicted``): circles against bodies that turn fast or
 that they move fast against."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -156,3 +158,58 @@ def test_a_row_that_repeats_a_contact_is_dropped():
     assert len(got) == 1 and not predicted.any()
     got, predicted = rows([0.72, 0.16], [-4.0, 0.0])
     assert np.count_nonzero(predicted) == 1
+
+
+def _field_rows(specs, position, angle, velocity, spin):
+    """``find_contacts`` of two sdf bodies: (all contacts, the sdf pair's predicted rows)."""
+    from sdfphys.collide import find_contacts
+    from sdfphys.collide.predicted import FIELD_PAIR
+    from sdfphys.settings import Settings
+
+    shapes = [shape_from_spec(s) for s in specs]
+    got = find_contacts(shapes, np.arange(2), np.array(position, float),
+                        np.array(angle, float), np.array([False, True]), Settings(),
+                        np.array(velocity, float), np.array(spin, float))
+    field = ((got.feature >> 56) == SOURCE_PREDICTED) & ((got.feature & FIELD_PAIR) != 0)
+    return got, got.take(field)
+
+
+SLAB = {"type": "sdf", "field": {"type": "box", "size": [4.0, 1.0]}}    # top face y = 0.5
+
+
+def test_a_turning_sdf_corner_gets_rows_at_its_end_pose():
+    """An sdf square (side 0.4) spinning at 20 rad/s and falling at 2 m/s, a corner 2 mm
+    over a still sdf slab: at the end poses (one step on, 0.33 rad turned) its lowest
+    corner e is in the slab, a contact along the face's normal (0, 1) (measured from the
+    corner). Carried back, the row holds that corner's start position m against the
+    face point under e: separation max(m_y - 0.5, 0), point midway between the two."""
+    square = {"type": "sdf", "field": {"type": "box", "size": [0.4, 0.4]}}
+    centre = np.array([0.0, 0.5 + 0.2 * math.sqrt(2.0) + 0.002])
+    fall, spin = np.array([0.0, -2.0]), 20.0
+    _, rows = _field_rows((SLAB, square), [[0.0, 0.0], centre], [0.0, math.pi / 4],
+                          [[0.0, 0.0], fall], [0.0, spin])
+    assert len(rows) == 1 and rows.body_a[0] == 0 and rows.body_b[0] == 1
+    corners = np.array([[0.2, 0.2], [-0.2, 0.2], [-0.2, -0.2], [0.2, -0.2]])
+    end_angle = math.pi / 4 + spin * DT
+    ends = centre + fall * DT + rotate(corners, np.full(4, end_angle))
+    lowest = int(np.argmin(ends[:, 1]))
+    e = ends[lowest]
+    assert e[1] < 0.5                                   # the end pose overlaps
+    m = centre + rotate(corners[lowest:lowest + 1], np.array([math.pi / 4]))[0]
+    np.testing.assert_allclose(rows.normal[0], [0.0, 1.0], atol=1e-12)
+    assert -rows.depth[0] == pytest.approx(max(m[1] - 0.5, 0.0), abs=1e-9)
+    np.testing.assert_allclose(rows.point[0], 0.5 * (np.array([e[0], 0.5]) + m), atol=1e-9)
+
+
+def test_no_field_rows_for_a_rolling_curve_or_a_slow_turn():
+    """An sdf disc rolling on the slab (its end contact has a centre of curvature: its
+    own rows, anchored there, hold it; a row on the point ahead would brake it), and the
+    square turning at 0.05 rad/s: none."""
+    disc = {"type": "sdf", "field": {"type": "circle", "radius": 0.3}}
+    _, rows = _field_rows((SLAB, disc), [[0.0, 0.0], [0.0, 0.8]], [0.0, 0.0],
+                          [[0.0, 0.0], [3.0, 0.0]], [0.0, -10.0])
+    assert len(rows) == 0
+    square = {"type": "sdf", "field": {"type": "box", "size": [0.4, 0.4]}}
+    _, rows = _field_rows((SLAB, square), [[0.0, 0.0], [0.0, 0.5 + 0.2 * math.sqrt(2.0)]],
+                          [0.0, math.pi / 4], [[0.0, 0.0], [0.0, 0.0]], [0.0, 0.05])
+    assert len(rows) == 0

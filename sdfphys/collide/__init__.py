@@ -20,8 +20,10 @@ One step of ``find_contacts`` (no Python loop over bodies, pairs or contacts):
    closed-form pairs of the fast path below never are);
 4. contacts with depth > -margin of their pair kept, reduced to at most
    ``contacts_per_pair`` per pair (``reduce``), sorted by (body_a, body_b, feature);
-5. a circle against a body that turns more than the slop this step gets one more,
-   speculative contact: the pair at its end-of-step poses carried back (``predicted``;
+5. a circle against a body that turns, or that it moves against, by more than the
+   slop this step gets one more, speculative contact, and an sdf pair with a contact
+   and a turning body gets its end-pose contacts at the turning body's corners: the
+   pair at its end-of-step poses carried back (``predicted``;
    ``Settings.predicted_contacts``).
 
 Fast path (``circle_kernels``, the default): steps 1-2 are one compiled pass over
@@ -81,7 +83,7 @@ from .contacts import Contacts
 from .filter import PairFilter
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .polygons import SOURCE_CLIP, polygon_table
-from .predicted import predicted_contacts
+from .predicted import predicted_contacts, predicted_field_contacts
 from .reduce import reduce_contacts
 
 __all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "ContactCache", "Contacts", "collide",
@@ -363,10 +365,12 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
                     position: np.ndarray, angle: np.ndarray, velocity: np.ndarray,
                     angular_velocity: np.ndarray, reach: np.ndarray, settings: Settings,
                     pair_filter: PairFilter | None) -> Contacts:
-    """``contacts`` (sorted by (body_a, body_b, feature)) with the predicted contacts of
-    circles against fast-turning bodies (``predicted``) among the candidate ``pairs``
-    (sensor pairs left out: a prediction is not a touch), in the same order; none
-    without ``settings.predicted_contacts``."""
+    """``contacts`` (sorted by (body_a, body_b, feature)) with the predicted contacts
+    (``predicted``) of circles among the candidate ``pairs`` (those a contact of the
+    pair implies dropped, ``_implied``) and of sdf pairs with a contact (sensor pairs
+    left out: a prediction is not a touch), in the same order; none without
+    ``settings.predicted_contacts``. An sdf pair's row is another material point than
+    its contact's, so no contact implies it."""
     if not settings.predicted_contacts:
         return contacts
     if pair_filter is not None and pair_filter.has_sensors and len(pairs):
@@ -379,6 +383,17 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
     n = np.int64(len(angle))
     if len(extra):
         extra = extra.take(~_implied(contacts, extra, n))
+    if len(contacts):
+        # sdf pairs: only those with a contact (the others are farther apart than their
+        # margin, which holds every point's travel in the step, so they cannot meet).
+        touching = np.unique(contacts.body_a * n + contacts.body_b)
+        touching = np.column_stack([touching // n, touching % n])
+        if pair_filter is not None and pair_filter.has_sensors:
+            touching = touching[~(pair_filter.sensor[touching[:, 0]]
+                                  | pair_filter.sensor[touching[:, 1]])]
+        extra = Contacts.concatenate([extra, predicted_field_contacts(
+            shapes, body_shape, touching, radius, position, angle, velocity,
+            angular_velocity, reach, settings)])
     if len(extra) == 0:
         return contacts
     c = Contacts.concatenate([contacts, extra])
