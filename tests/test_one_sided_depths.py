@@ -84,3 +84,24 @@ def test_an_sdf_square_pressed_corner_first_reports_its_corner():
     deepest = np.argmax(c.depth)
     assert c.depth[deepest] == pytest.approx(DEPTH, abs=1e-12)
     np.testing.assert_allclose(c.normal[deepest], [0.0, 1.0], atol=1e-12)
+
+
+def test_a_reading_against_the_balance_normal_is_not_taken():
+    """The square's corner driven through a plate 6 cm thick (3 cm out of its far face):
+    among the descent's contacts one balances at 6.0 cm along (0.92, -0.38); measured
+    from a side, the deepest reading there is 6.2 cm along (-0.71, 0.71), against it (a
+    depth to the nearest face of a thin part passed through, which pushes the wrong
+    way): that contact keeps its balance, and no contact's normal turns against its
+    balance normal (scenes/sdf_primitives.toml: the vesica's tip in the rounded cross,
+    its normal flipping from step to step, 10.03 mm; 9.6 mm with this rule)."""
+    plate = field({"type": "box", "size": [10.0, 0.06]})
+    offset, angle = np.array([[0.3, 0.224]]), np.array([math.pi / 4])
+    pair, point, depth, normal = _balanced(plate, SQUARE, offset, angle)
+    across = np.flatnonzero(normal[:, 0] > 0.9)
+    assert len(across) >= 1
+    np.testing.assert_allclose(depth[across], 0.06, atol=1e-9)
+    out_point, out_depth, out_normal = one_sided_depths(plate, SQUARE, offset, angle, pair,
+                                                        point, depth, normal)
+    np.testing.assert_array_equal(out_depth[across], depth[across])
+    np.testing.assert_array_equal(out_normal[across], normal[across])
+    assert np.all(np.einsum("ij,ij->i", out_normal, normal) > 0.0)

@@ -34,14 +34,6 @@ OPEN: dict[str, str] = {
                         "face (normal (0.79, 0.62), +0.3 mm) sinks 1.4 cm through the other "
                         "face (-0.24, 0.97) in one step: found too late, no speculative "
                         "contact on the second face",
-    "sdf_primitives": "sdf-sdf vesica / rounded_cross at t = 2.50 s, 1.003 cm (3.2 cm, "
-                      "counter-spinning corners meeting where no row was, before the "
-                      "corner rows at the end poses): nearly at rest (under 0.5 rad/s), "
-                      "their second contact's normal is not stable, (-0.90, 0.44), "
-                      "(-0.63, -0.78), (0.95, -0.32), (-0.88, 0.48) in the world over "
-                      "four steps, while its depth goes 1.5 -> 10.0 mm (not yet traced "
-                      "further); next ground / ellipse 9.6 mm at t = 1.42 s, the ellipse "
-                      "landing on the mesh ground spinning at 7 to 9 rad/s",
 }
 
 
