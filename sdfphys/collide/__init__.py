@@ -383,11 +383,15 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
     n = np.int64(len(angle))
     if len(extra):
         extra = extra.take(~_implied(contacts, extra, n))
-    if len(contacts):
+    sdf = np.array([shape.kind == "sdf" for shape in shapes])[body_shape]
+    both = np.flatnonzero(sdf[contacts.body_a] & sdf[contacts.body_b])
+    if len(both):
         # sdf pairs: only those with a contact (the others are farther apart than their
-        # margin, which holds every point's travel in the step, so they cannot meet).
-        touching = np.unique(contacts.body_a * n + contacts.body_b)
-        touching = np.column_stack([touching // n, touching % n])
+        # margin, which holds every point's travel in the step, so they cannot meet);
+        # contacts are sorted by pair.
+        key = contacts.body_a[both] * n + contacts.body_b[both]
+        key = key[np.concatenate([[True], key[1:] != key[:-1]])]
+        touching = np.column_stack([key // n, key % n])
         if pair_filter is not None and pair_filter.has_sensors:
             touching = touching[~(pair_filter.sensor[touching[:, 0]]
                                   | pair_filter.sensor[touching[:, 1]])]
