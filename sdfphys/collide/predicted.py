@@ -1,5 +1,5 @@
-"""Predicted contacts: a circle against a body that turns fast, or that it moves fast
-against, at the step's end poses.
+"""Predicted contacts at the step's end poses: a circle against a body that turns fast,
+or that it moves fast against; the corners of a turning sdf body against another.
 
 A contact row keeps its normal and its two material points for the whole step (the
 solver re-measures its separation as the bodies move, ``solver.substeps``). That is

@@ -56,9 +56,10 @@ class ContactConstraints:
 
     body_a, body_b, feature: (K,) int64, from the Contacts (body_a < body_b).
     normal: (K, 2) unit, a -> b.  separation: (K,) m, current s (< 0 overlapping).
-    anchor_a0, anchor_b0: (K, 2) m, each body's own surface point (point -+ n s0 / 2)
-        relative to its centre of mass at the start of the step (the separation carries
-        them with the bodies' moves; module docstring).
+    anchor_a0, anchor_b0: (K, 2) m, each body's own surface point (point -+ n s0 / 2),
+        or for a turning sdf body its centre of curvature there (``prepare_contacts``'
+        curvature), relative to its centre of mass at the start of the step (the
+        separation carries them with the bodies' moves; module docstring).
     anchor_a, anchor_b: (K, 2) m, the lever arms the impulses use, re-based after each
         position update so that x_a + anchor_a = x_b + anchor_b (module docstring).
     base_separation: (K,) m, s0 - n.(anchor_b0 - anchor_a0).
