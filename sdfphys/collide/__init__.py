@@ -373,8 +373,7 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
     its contact's, so no contact implies it."""
     if not settings.predicted_contacts:
         return contacts
-    if pair_filter is not None and pair_filter.has_sensors and len(pairs):
-        pairs = pairs[~(pair_filter.sensor[pairs[:, 0]] | pair_filter.sensor[pairs[:, 1]])]
+    pairs = _without_sensors(pairs, pair_filter)
     extra = predicted_contacts(shapes, body_shape, pairs, is_circle, radius, position, angle,
                                velocity, angular_velocity, float(settings.dt),
                                float(settings.linear_slop),
@@ -391,10 +390,7 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
         # contacts are sorted by pair.
         key = contacts.body_a[both] * n + contacts.body_b[both]
         key = key[np.concatenate([[True], key[1:] != key[:-1]])]
-        touching = np.column_stack([key // n, key % n])
-        if pair_filter is not None and pair_filter.has_sensors:
-            touching = touching[~(pair_filter.sensor[touching[:, 0]]
-                                  | pair_filter.sensor[touching[:, 1]])]
+        touching = _without_sensors(np.column_stack([key // n, key % n]), pair_filter)
         extra = Contacts.concatenate([extra, predicted_field_contacts(
             shapes, body_shape, touching, radius, position, angle, velocity,
             angular_velocity, reach, settings)])
@@ -402,6 +398,13 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
         return contacts
     c = Contacts.concatenate([contacts, extra])
     return c.take(np.lexsort((c.feature, c.body_a * n + c.body_b)))
+
+
+def _without_sensors(pairs: np.ndarray, pair_filter: PairFilter | None) -> np.ndarray:
+    """The body pairs (P, 2) without those with a sensor (a prediction is not a touch)."""
+    if pair_filter is None or not pair_filter.has_sensors or len(pairs) == 0:
+        return pairs
+    return pairs[~(pair_filter.sensor[pairs[:, 0]] | pair_filter.sensor[pairs[:, 1]])]
 
 
 #: Separations of a pair's contact and of its predicted contact along one normal that

@@ -443,6 +443,17 @@ def _compiled_contacts(programs: tuple[Program, Program], rotation: np.ndarray,
                           n_starts, float(margin), iterations, _MERGE, _SLIVER)
 
 
+def _in_b(field_b: Field, offset: np.ndarray, angle: np.ndarray, placed: np.ndarray,
+          q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """f_b and grad f_b (a's frame) at points q (N, 2) of a's frame, b placed by
+    ``offset``, ``angle`` rows ``placed`` (N,)."""
+    c, s = np.cos(angle[placed]), np.sin(angle[placed])
+    rel = q - offset[placed]
+    f, g = compiled.evaluate(field_b, np.column_stack([c * rel[:, 0] + s * rel[:, 1],
+                                                       c * rel[:, 1] - s * rel[:, 0]]))
+    return f, np.column_stack([c * g[:, 0] - s * g[:, 1], s * g[:, 0] + c * g[:, 1]])
+
+
 def tangent_samples(field_a: Field, field_b: Field, offset: np.ndarray, angle: np.ndarray,
                     pair: np.ndarray, point: np.ndarray, depth: np.ndarray, normal: np.ndarray,
                     start: np.ndarray, margin: float, extent: float, per_side: int
@@ -484,11 +495,7 @@ def tangent_samples(field_a: Field, field_b: Field, offset: np.ndarray, angle: n
     q = point[owner] + np.tile(t, k)[:, None] * tangent[owner]
     placed = pair[owner]
     f_a, g_a = compiled.evaluate(field_a, q)
-    c, s = np.cos(angle[placed]), np.sin(angle[placed])
-    rel = q - offset[placed]
-    f_b, g_b = compiled.evaluate(field_b, np.column_stack([c * rel[:, 0] + s * rel[:, 1],
-                                                           c * rel[:, 1] - s * rel[:, 0]]))
-    g_b = np.column_stack([c * g_b[:, 0] - s * g_b[:, 1], s * g_b[:, 0] + c * g_b[:, 1]])
+    f_b, g_b = _in_b(field_b, offset, angle, placed, q)
     gap = f_a + f_b
     rows = np.flatnonzero((gap >= 0.0) & (gap < margin) & (f_a < margin) & (f_b < margin))
     n_q = safe_normalize(g_a[rows] - g_b[rows])
@@ -513,17 +520,6 @@ _RING = np.exp(2j * np.pi * np.arange(8) / 8)
 #: went in by 2.5 mm a step (17.5 mm at 10 %).
 _FEATURE_RELATIVE = 0.01
 _FEATURE_ABSOLUTE = 1e-4
-
-
-def _in_b(field_b: Field, offset: np.ndarray, angle: np.ndarray, placed: np.ndarray,
-          q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """f_b and grad f_b (a's frame) at points q (N, 2) of a's frame, b placed by
-    ``offset``, ``angle`` rows ``placed`` (N,)."""
-    c, s = np.cos(angle[placed]), np.sin(angle[placed])
-    rel = q - offset[placed]
-    f, g = compiled.evaluate(field_b, np.column_stack([c * rel[:, 0] + s * rel[:, 1],
-                                                       c * rel[:, 1] - s * rel[:, 0]]))
-    return f, np.column_stack([c * g[:, 0] - s * g[:, 1], s * g[:, 0] + c * g[:, 1]])
 
 
 def one_sided_depths(field_a: Field, field_b: Field, offset: np.ndarray, angle: np.ndarray,

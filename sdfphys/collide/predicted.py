@@ -85,6 +85,15 @@ FIELD_PAIR = np.int64(1) << np.int64(55)
 _LOW = (np.int64(1) << np.int64(52)) - np.int64(1)
 
 
+def _turns(angular_velocity: np.ndarray, radius: np.ndarray, dt: float,
+           slop: float) -> np.ndarray:
+    """Whether each body turns by more than ``slop`` (m) at its bounding ``radius`` (m)
+    in ``dt`` (s) at ``angular_velocity`` (rad/s): |w| R dt > slop (an unbounded body
+    turns if it spins at all)."""
+    with np.errstate(invalid="ignore"):
+        return np.abs(angular_velocity) * radius * dt > slop
+
+
 def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: np.ndarray,
                        is_circle: np.ndarray, radius: np.ndarray, position: np.ndarray,
                        angle: np.ndarray, velocity: np.ndarray,
@@ -104,8 +113,8 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
     circle_first = is_circle[i]
     circle = np.where(circle_first, i, j)
     other = np.where(circle_first, j, i)
+    turning = _turns(angular_velocity[other], radius[other], dt, slop)
     with np.errstate(invalid="ignore"):
-        turning = np.abs(angular_velocity[other]) * radius[other] * dt > slop
         relative = velocity[circle] - velocity[other]
         fast = (relative[:, 0] ** 2 + relative[:, 1] ** 2) * dt * dt > slop * slop
     chosen = np.flatnonzero(turning | fast)
@@ -149,9 +158,9 @@ def predicted_field_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
                              angle: np.ndarray, velocity: np.ndarray,
                              angular_velocity: np.ndarray, reach: np.ndarray,
                              settings: Settings) -> Contacts:
-    """The predicted contacts of sdf-sdf ``pairs`` (P, 2) (pairs with a contact) with a
-    body that turns more than the slop at its bounding radius this step, at its corners
-    (module docstring, "Sdf pairs").
+    """The predicted contacts of sdf-sdf ``pairs`` (P, 2) (pairs of two sdf bodies with a
+    contact) with a body that turns more than the slop at its bounding radius this step,
+    at its corners (module docstring, "Sdf pairs").
 
     shapes, body_shape, radius, position, angle, velocity, angular_velocity: as
     ``predicted_contacts``; reach (B,) m, the bodies' reach (the pairs keep their
@@ -160,13 +169,9 @@ def predicted_field_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
     """
     from . import _narrowphase
 
-    dt, slop = float(settings.dt), float(settings.linear_slop)
-    sdf = np.array([shape.kind == "sdf" for shape in shapes])[body_shape]
-    i, j = pairs[:, 0], pairs[:, 1]
-    with np.errstate(invalid="ignore"):
-        turning = np.abs(angular_velocity) * np.where(np.isfinite(radius), radius, 0.0) * dt \
-            > slop
-    rows = np.flatnonzero(sdf[i] & sdf[j] & (turning[i] | turning[j]))
+    dt = float(settings.dt)
+    turning = _turns(angular_velocity, radius, dt, float(settings.linear_slop))
+    rows = np.flatnonzero(turning[pairs[:, 0]] | turning[pairs[:, 1]])
     if len(rows) == 0:
         return Contacts.empty()
     end = np.column_stack([position + velocity * dt, angle + angular_velocity * dt])
