@@ -170,10 +170,11 @@ class Settings:
         True, "", "A circle near a body that turns more than linear_slop a step, or that "
         "it moves against by more than that, gets one more speculative row, measured at "
         "the step's end poses, and so do the corners of a turning sdf body touching "
-        "another: a spinning corner or a turning horn no longer sweeps through material "
-        "no row holds, a fast marble meets a curve ahead of it (showcase 16.8 -> 9.1 mm "
-        "deepest contact, grid_terrain 25.3 -> 6.2, marble_run 12.9 -> 4.1, "
-        "sdf_primitives 31.7 -> 10.0). About 0.1 ms a step on the showcase.")
+        "another and a concave polygon's vertices moving onto another face: a spinning "
+        "corner or a turning horn no longer sweeps through material no row holds, a fast "
+        "marble meets a curve ahead of it (showcase 16.8 -> 9.1 mm deepest contact, "
+        "grid_terrain 25.3 -> 6.2, marble_run 12.9 -> 4.1, sdf_primitives 31.7 -> 10.0). "
+        "About 0.1 ms a step on the showcase.")
     field_tangent_samples: int = _knob(
         3, "", "Field-field queries: speculative points per side along each contact's "
         "tangent, out to the smaller body's bounding radius, kept where within the "

@@ -146,18 +146,18 @@ def test_load_stiffening_off_keeps_the_plain_coefficients():
 
 
 def column(n_bodies: int, impact_at: int, round_body: bool = True, deep_at: int | None = None,
-           **knobs):
+           deep: float = 0.06, **knobs):
     """row_softness of a vertical column of n unit circles (boxes if not ``round_body``)
     on the ground (rows (0, 1), (1, 2), ...), all at rest but row ``impact_at``, which
     closes at 1 m/s from 1 mm apart: 1.7 cm in a step, past soft_depth beyond its gap,
-    and row ``deep_at``, 1 cm deep if given. Returns (loaded pairs, their caps)."""
+    and row ``deep_at``, ``deep`` m deep if given. Returns (loaded pairs, their caps)."""
     pairs = [(i, i + 1) for i in range(n_bodies)]
     approach = np.zeros(n_bodies)
     approach[impact_at] = -1.0
     separation = np.zeros(n_bodies)
     separation[impact_at] = 0.001
     if deep_at is not None:
-        separation[deep_at] = -0.01
+        separation[deep_at] = -deep
     inv_mass, c = rows(pairs, [0.0] + [1.0] * n_bodies, [1.0] * n_bodies,
                        separation=separation, approach=approach)
     settings = SETTINGS.with_values(load_stiffening=False, **knobs)
@@ -181,8 +181,10 @@ def test_an_impact_gives_the_contacts_within_impact_hops_its_extra_passes():
 
 def test_no_impact_passes_at_rest_alone_or_above_the_rest_limit():
     """A column at rest (even 1 cm deep: overlap to push out is no approach), one body
-    alone landing on the ground, an impact in an island over rest_island_limit, an
-    island pushing out overlap (a jam), and a column of boxes (circles only): no extra
+    alone landing on the ground, an impact in an island over rest_island_limit, a jammed
+    island (a row 6 cm deep, more than a step's capped push-out clears: soft_depth +
+    max_push_out dt = 5.5 cm), and a column of boxes (impacts between polygons give only
+    their rows on static bodies passes; the column's struck boxes have none): no extra
     pass; impact_iterations 1 turns them off."""
     loaded, _ = column(30, 10, stiff_island_limit=8, rest_island_limit=29)
     assert len(loaded) == 0
@@ -198,6 +200,39 @@ def test_no_impact_passes_at_rest_alone_or_above_the_rest_limit():
                        separation=np.full(30, -0.01))
     assert len(row_softness(inv_mass, c, G, SETTINGS.with_values(
         load_stiffening=False, stiff_island_limit=8), round_body=np.ones(31, bool))[3]) == 0
+
+
+def test_a_row_just_past_soft_depth_is_no_jam():
+    """A row 1 cm deep (past soft_depth, which an impact leaves) or 5 cm (within one
+    step's capped push-out, 5.5 cm) elsewhere in the column does not turn the impact's
+    passes off (it did: in scenes/circles_in_box.toml one such row anywhere left every
+    circle with one pass, deepest contact over five nearby runs 5.0-11.4 mm; 5.0-5.4 mm
+    now)."""
+    plain = column(30, 10, stiff_island_limit=8)
+    for deep in (0.01, 0.05):
+        loaded, caps = column(30, 10, deep_at=25, deep=deep, stiff_island_limit=8)
+        np.testing.assert_array_equal(loaded, plain[0])
+        np.testing.assert_array_equal(caps, plain[1])
+
+
+def test_boxes_struck_by_a_box_get_their_rows_on_static_bodies():
+    """Box 3 strikes box 2, which rests on box 1 on the ground (0); box 4 rests on box 1
+    too. The struck pair's rows on static bodies get the impact passes (the ground row
+    of box 1 is not one: box 1 is not in the struck pair), its own row and the other
+    box rows do not (converging polygon rows turned landings into spins). Box 2 on the
+    ground instead: its ground row gets them."""
+    inv_mass, c = rows([(0, 1), (1, 2), (1, 4), (2, 3)], [0.0, 1.0, 1.0, 1.0, 1.0],
+                       [1.0, 1.0, 1.0, 1.0], separation=[0.0, 0.0, 0.0, 0.001],
+                       approach=[0.0, 0.0, 0.0, -1.0])
+    settings = SETTINGS.with_values(load_stiffening=False)
+    boxes = np.zeros(5, bool)
+    assert len(row_softness(inv_mass, c, G, settings, round_body=boxes)[3]) == 0
+    inv_mass, c = rows([(0, 1), (0, 2), (1, 4), (2, 3)], [0.0, 1.0, 1.0, 1.0, 1.0],
+                       [1.0, 1.0, 1.0, 1.0], separation=[0.0, 0.0, 0.0, 0.001],
+                       approach=[0.0, 0.0, 0.0, -1.0])
+    loaded, caps = row_softness(inv_mass, c, G, settings, round_body=boxes)[3:]
+    np.testing.assert_array_equal(loaded, [1])
+    assert set(caps) == {SETTINGS.impact_iterations - 1}
 
 
 def test_a_body_a_struck_circle_rests_on_gets_its_ground_rows_too():

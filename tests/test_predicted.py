@@ -213,3 +213,53 @@ def test_no_field_rows_for_a_rolling_curve_or_a_slow_turn():
     _, rows = _field_rows((SLAB, square), [[0.0, 0.0], [0.0, 0.5 + 0.2 * math.sqrt(2.0)]],
                           [0.0, math.pi / 4], [[0.0, 0.0], [0.0, 0.0]], [0.0, 0.05])
     assert len(rows) == 0
+
+
+STEP = {"type": "polygon", "points": [[-2, -1], [1, -1], [1, 1], [0, 1], [0, 0], [-2, 0]]}
+SMALL_BOX = {"type": "box", "size": [0.2, 0.2]}
+
+
+def _mesh_rows(floor, box_x, speed):
+    """``find_contacts`` of a still polygon ``floor`` (user origin at the world origin) and
+    a 0.2 m box 1 mm over its top y = 0 at ``box_x``, sliding along +x at ``speed``:
+    (all contacts, the predicted rows with the end-pose bit)."""
+    from sdfphys.collide import find_contacts
+    from sdfphys.collide.predicted import FIELD_PAIR
+    from sdfphys.settings import Settings
+
+    shapes = [shape_from_spec(floor), shape_from_spec(SMALL_BOX)]
+    got = find_contacts(shapes, np.arange(2), np.array([-shapes[0].origin, [box_x, 0.101]]),
+                        np.zeros(2), np.array([False, True]), Settings(),
+                        np.array([[0.0, 0.0], [speed, 0.0]]), np.zeros(2))
+    end = ((got.feature >> 56) == SOURCE_PREDICTED) & ((got.feature & FIELD_PAIR) != 0)
+    return got, got.take(end)
+
+
+def test_a_vertex_sliding_toward_a_concave_body_s_wall_gets_a_row_on_that_wall():
+    """A box slides at 3 m/s (5 cm a step) on a concave step's floor toward its wall
+    x = 0, its right face 2 cm from it. Its bottom-right corner's contact is on the floor
+    (normal (0, 1)); at the end poses that corner is 3 cm into the wall. The row carried
+    back: along the wall's normal (-1, 0) (step -> box), on the corner's start position
+    against the wall point level with it, separation 2 cm, at their midpoint; its key
+    names the corner's contact (same low bits), under the predicted source."""
+    got, rows = _mesh_rows(STEP, -0.12, 3.0)
+    assert len(rows) == 1 and rows.body_a[0] == 0 and rows.body_b[0] == 1
+    np.testing.assert_allclose(rows.normal[0], [-1.0, 0.0], atol=1e-12)
+    assert -rows.depth[0] == pytest.approx(0.02, abs=1e-12)
+    np.testing.assert_allclose(rows.point[0], [-0.01, 0.001], atol=1e-12)
+    low = (1 << 52) - 1
+    corner = [k for k in range(len(got)) if (got.feature[k] >> 56) != SOURCE_PREDICTED
+              and (got.feature[k] & low) == (rows.feature[0] & low)]
+    assert len(corner) == 1
+    np.testing.assert_allclose(got.normal[corner[0]], [0.0, 1.0], atol=1e-12)
+
+
+def test_no_end_pose_row_for_a_slow_slide_a_face_already_held_or_a_convex_floor():
+    """The same box at 0.2 m/s (3.3 mm a step, under the slop); at 3 m/s far from the
+    wall (every end contact on the floor its contacts already hold); at 3 m/s toward a
+    box's face (convex pairs are clipped, no end-pose pass): no row."""
+    assert len(_mesh_rows(STEP, -0.12, 0.2)[1]) == 0
+    assert len(_mesh_rows(STEP, -1.5, 3.0)[1]) == 0
+    wall = {"type": "polygon", "points": [[-2, -1], [2, -1], [2, 1], [-2, 1]]}   # x >= -2
+    got, rows = _mesh_rows(wall, -2.12, 3.0)
+    assert len(got) > 0 and len(rows) == 0

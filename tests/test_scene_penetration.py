@@ -11,10 +11,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from sdfphys.scene import read_scene
+from sdfphys.summary import simulate, steps_for
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = sorted(p.stem for p in (ROOT / "scenes").glob("*.toml"))
@@ -23,30 +23,23 @@ BOUND = 0.01
 
 #: Scenes over the bound, with the cause found (deepest pair, time, figures).
 OPEN: dict[str, str] = {
-    "concave_polygons": "poly11 / poly12 at t = 2.10 s, 1.3 cm (1.9 cm at the soft rate "
-                        "alone, split_push_out 0; after the kink-face fix: poly7 / poly12 "
-                        "4.4 cm -> under 0.8 cm): the L's reflex corner in the arrow, depth "
-                        "exact (brute force) and present the steps before, 0.7, 0.8, 1.1 cm, "
-                        "while the normal speed at the contact after each step is within "
-                        "0.02 m/s (the L pivots about it, its centre falling at 2.6 m/s): "
-                        "not narrowphase, solver side; next poly10 / poly15 1.45 cm at "
-                        "t = 1.25 s: a vertex near the arrow's corner measured against one "
-                        "face (normal (0.79, 0.62), +0.3 mm) sinks 1.4 cm through the other "
-                        "face (-0.24, 0.97) in one step: found too late, no speculative "
-                        "contact on the second face",
+    "concave_polygons": "poly5 / poly10 at t = 0.93 s, 10.3 mm: the two fall together "
+                        "at 5 m/s, poly5 is stopped by poly0 under it within the step "
+                        "(an end-pose row on poly0's face) and poly10, 3 mm above it "
+                        "and barely closing at the step's start, presses 10.3 mm "
+                        "into it by the step's end: a column struck at once, which the "
+                        "impact passes solve for circles only (converged polygon rows "
+                        "spin: docs/solver.md, Impacts); nudged runs "
+                        "(tools/penetration_spread.py) 10.3 mm each",
 }
 
 
 def deepest_contact(name: str) -> float:
-    """The largest contact depth (m) over ``sim.duration`` of scenes/<name>.toml."""
+    """The largest contact depth (m) over ``sim.duration`` of scenes/<name>.toml: the
+    ``run`` summary's max penetration."""
     scene = read_scene(ROOT / "scenes" / f"{name}.toml")
     world = scene.build()
-    deepest = 0.0
-    for _ in range(round(scene.duration / world.settings.dt)):
-        world.step()
-        if len(world.contacts):
-            deepest = max(deepest, float(np.max(world.contacts.depth)))
-    return deepest
+    return simulate(world, steps_for(scene.duration, world.settings.dt)).max_penetration
 
 
 @pytest.mark.slow

@@ -83,7 +83,7 @@ from .contacts import Contacts
 from .filter import PairFilter
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .polygons import SOURCE_CLIP, polygon_table
-from .predicted import predicted_contacts, predicted_field_contacts
+from .predicted import predicted_contacts, predicted_field_contacts, predicted_mesh_contacts
 from .reduce import reduce_contacts
 
 __all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "ContactCache", "Contacts", "collide",
@@ -367,10 +367,11 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
                     pair_filter: PairFilter | None) -> Contacts:
     """``contacts`` (sorted by (body_a, body_b, feature)) with the predicted contacts
     (``predicted``) of circles among the candidate ``pairs`` (those a contact of the
-    pair implies dropped, ``_implied``) and of sdf pairs with a contact (sensor pairs
-    left out: a prediction is not a touch), in the same order; none without
-    ``settings.predicted_contacts``. An sdf pair's row is another material point than
-    its contact's, so no contact implies it."""
+    pair implies dropped, ``_implied``) and of sdf pairs and concave mesh pairs with a
+    contact (sensor pairs left out: a prediction is not a touch), in the same order;
+    none without ``settings.predicted_contacts``. An sdf pair's row is another material
+    point than its contact's, so no contact implies it; a mesh pair's is on a face no
+    contact of its element has."""
     if not settings.predicted_contacts:
         return contacts
     pairs = _without_sensors(pairs, pair_filter)
@@ -382,18 +383,26 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
     n = np.int64(len(angle))
     if len(extra):
         extra = extra.take(~_implied(contacts, extra, n))
+    # Pairs with a contact only (the others are farther apart than their margin, which
+    # holds every point's travel in the step, so they cannot meet); contacts are sorted
+    # by pair. Sdf pairs, and pairs of a concave (triangulated) mesh with a body that is
+    # not a circle.
     sdf = np.array([shape.kind == "sdf" for shape in shapes])[body_shape]
-    both = np.flatnonzero(sdf[contacts.body_a] & sdf[contacts.body_b])
-    if len(both):
-        # sdf pairs: only those with a contact (the others are farther apart than their
-        # margin, which holds every point's travel in the step, so they cannot meet);
-        # contacts are sorted by pair.
-        key = contacts.body_a[both] * n + contacts.body_b[both]
+    concave = np.array([shape.kind == "mesh" and _shape_class(shape) == OTHER
+                        for shape in shapes])[body_shape]
+    a, b = contacts.body_a, contacts.body_b
+    fields = sdf[a] & sdf[b]
+    meshes = (concave[a] | concave[b]) & ~is_circle[a] & ~is_circle[b]
+    for chosen, is_mesh in ((fields, False), (meshes, True)):
+        if not np.any(chosen):
+            continue
+        key = a[chosen] * n + b[chosen]
         key = key[np.concatenate([[True], key[1:] != key[:-1]])]
         touching = _without_sensors(np.column_stack([key // n, key % n]), pair_filter)
-        extra = Contacts.concatenate([extra, predicted_field_contacts(
-            shapes, body_shape, touching, radius, position, angle, velocity,
-            angular_velocity, reach, settings)])
+        state = (radius, position, angle, velocity, angular_velocity, reach, settings)
+        extra = Contacts.concatenate([extra, predicted_mesh_contacts(
+            shapes, body_shape, contacts, touching, *state) if is_mesh else
+            predicted_field_contacts(shapes, body_shape, touching, *state)])
     if len(extra) == 0:
         return contacts
     c = Contacts.concatenate([contacts, extra])
@@ -419,12 +428,7 @@ def _implied(contacts: Contacts, extra: Contacts, n: np.int64) -> np.ndarray:
     separation, both to round-off (``IMPLIED_ROUND_OFF`` m): both measure the circle's
     move along one normal, so the predicted row would only repeat it (a circle falling
     on or rolling along a flat face)."""
-    keys = contacts.body_a * n + contacts.body_b
-    wanted = extra.body_a * n + extra.body_b
-    lo = np.searchsorted(keys, wanted, "left")
-    count = np.searchsorted(keys, wanted, "right") - lo
-    owner = np.repeat(np.arange(len(extra)), count)
-    row = np.repeat(lo - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
+    owner, row = contacts.pair_rows(extra, n)
     same = np.einsum("ij,ij->i", contacts.normal[row], extra.normal[owner]) >= 1.0 - 1e-12
     repeats = same & (contacts.depth[row] >= extra.depth[owner] - IMPLIED_ROUND_OFF)
     implied = np.zeros(len(extra), bool)

@@ -60,6 +60,18 @@ class Contacts:
         c.body_b = c.body_b - (c.body_b > index)
         return c
 
+    def pair_rows(self, other: Contacts, n: np.int64) -> tuple[np.ndarray, np.ndarray]:
+        """Every (row of ``other``, row of ``self`` of the same body pair), as two
+        index arrays (M,) (owner into ``other``, row into ``self``); ``self`` sorted by
+        pair (key body_a n + body_b, n the body count)."""
+        keys = self.body_a * n + self.body_b
+        wanted = other.body_a * n + other.body_b
+        lo = np.searchsorted(keys, wanted, "left")
+        count = np.searchsorted(keys, wanted, "right") - lo
+        owner = np.repeat(np.arange(len(other)), count)
+        row = np.repeat(lo - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
+        return owner, row
+
 
 _NAMES: dict[type, tuple[str, ...]] = {}
 

@@ -1,5 +1,6 @@
 """Predicted contacts at the step's end poses: a circle against a body that turns fast,
-or that it moves fast against; the corners of a turning sdf body against another.
+or that it moves fast against; the corners of a turning sdf body against another; a
+concave mesh's elements against the faces they move onto.
 
 A contact row keeps its normal and its two material points for the whole step (the
 solver re-measures its separation as the bodies move, ``solver.substeps``). That is
@@ -59,6 +60,22 @@ curved surface is held by its own rows, anchored at its centre of curvature, and
 row on the material point its end-pose contact is made of, ahead of the current one,
 brakes it (an sdf disc rolling down a ramp: acceleration 0.3 % -> 6 % off). Key:
 source 6, bit FIELD_PAIR, then the end contact's source, element and start.
+
+Mesh pairs (``predicted_mesh_contacts``). A contact of a concave (triangulated) mesh
+is an element (a vertex, a triangle's deepest point) measured against the face of the
+other body nearest it; its row holds that face only. An element sliding along one face
+toward another that rises ahead of it (into a concave corner), or pushed around a
+corner, crosses the second face within a step while its row holds the first
+(scenes/concave_polygons.toml: an arrow struck sideways slid 20 mm a step along a
+star's face into the next, found 10.8 mm inside it; a vertex near the arrow's corner
+held against one face sank 11.2 mm through the other). So for each pair with a
+contact, a concave mesh and no circle, whose bodies move against each other by more
+than the slop this step (|v_a - v_b| dt + (|w_a| R_a + |w_b| R_b) dt > slop), the
+pair's query runs at the end poses as for sdf pairs, and an end contact is kept where
+its element has no contact now along the same normal (to the bodies' turn in the step
+plus ``NEW_FACE_ANGLE``): the face it will meet. Carried back and keyed as the sdf
+pairs' rows. Convex pairs (boxes, convex polygons) are clipped as Box2D clips them and
+get none.
 """
 
 from __future__ import annotations
@@ -74,7 +91,8 @@ from ..vec2 import rotate
 from .contacts import Contacts
 from .curvature import curvature_radii
 
-__all__ = ["FIELD_PAIR", "SOURCE_PREDICTED", "predicted_contacts", "predicted_field_contacts"]
+__all__ = ["FIELD_PAIR", "SOURCE_PREDICTED", "predicted_contacts", "predicted_field_contacts",
+           "predicted_mesh_contacts"]
 
 #: Feature key source of predicted contacts (``narrowphase``'s key layout).
 SOURCE_PREDICTED = 6
@@ -83,6 +101,10 @@ SOURCE_PREDICTED = 6
 #: indices of any real mesh).
 FIELD_PAIR = np.int64(1) << np.int64(55)
 _LOW = (np.int64(1) << np.int64(52)) - np.int64(1)
+#: Angle (rad), beyond the step's turn of the two bodies, by which a mesh pair's end
+#: contact's normal must differ from its element's contact now to be on a new face (a
+#: polygon's faces meet at tens of degrees; the same face turns with its body).
+NEW_FACE_ANGLE = 0.05
 
 
 def _turns(angular_velocity: np.ndarray, radius: np.ndarray, dt: float,
@@ -167,23 +189,72 @@ def predicted_field_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
     margins); settings: the world's. Returns body_a < body_b contacts sorted by (pair,
     feature).
     """
-    from . import _narrowphase
-
     dt = float(settings.dt)
     turning = _turns(angular_velocity, radius, dt, float(settings.linear_slop))
-    rows = np.flatnonzero(turning[pairs[:, 0]] | turning[pairs[:, 1]])
-    if len(rows) == 0:
-        return Contacts.empty()
-    end = np.column_stack([position + velocity * dt, angle + angular_velocity * dt])
-    c = _narrowphase(shapes, body_shape, pairs[rows], end, settings.speculative_distance,
-                     reach, settings.with_values(field_tangent_samples=0))
+    pairs = pairs[turning[pairs[:, 0]] | turning[pairs[:, 1]]]
+    c, end = _end_contacts(shapes, body_shape, pairs, position, angle, velocity,
+                           angular_velocity, reach, settings)
     if len(c) == 0:
         return c
     # A turning body's corner or flat (no centre of curvature at its end contact).
     rho_a, rho_b = curvature_radii(shapes, body_shape, end[:, :2], end[:, 2],
                                    np.ones(len(angle), bool), c)
     corner = (turning[c.body_a] & (rho_a == 0.0)) | (turning[c.body_b] & (rho_b == 0.0))
-    c = c.take(corner)
+    return _carried_back(c.take(corner), position, end, angular_velocity, dt)
+
+
+def predicted_mesh_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
+                            contacts: Contacts, pairs: np.ndarray, radius: np.ndarray,
+                            position: np.ndarray, angle: np.ndarray, velocity: np.ndarray,
+                            angular_velocity: np.ndarray, reach: np.ndarray,
+                            settings: Settings) -> Contacts:
+    """The predicted contacts of ``pairs`` (P, 2) with a concave mesh and a contact
+    (``contacts``, sorted by pair) whose bodies move against each other by more than the
+    slop this step, where an element meets a face its contact now is not on (module
+    docstring, "Mesh pairs"). Other arguments as ``predicted_field_contacts``."""
+    dt = float(settings.dt)
+    with np.errstate(invalid="ignore"):
+        relative = velocity[pairs[:, 0]] - velocity[pairs[:, 1]]
+        travel = (np.sqrt(relative[:, 0] ** 2 + relative[:, 1] ** 2)
+                  + np.abs(angular_velocity[pairs[:, 0]]) * radius[pairs[:, 0]]
+                  + np.abs(angular_velocity[pairs[:, 1]]) * radius[pairs[:, 1]]) * dt
+    c, end = _end_contacts(shapes, body_shape, pairs[travel > settings.linear_slop],
+                           position, angle, velocity, angular_velocity, reach, settings)
+    if len(c) == 0:
+        return c
+    # New faces: an end contact whose element (feature key) has no contact now along its
+    # normal, up to the bodies' turn in the step.
+    owner, row = contacts.pair_rows(c, np.int64(len(angle)))
+    turn = (np.abs(angular_velocity[c.body_a]) + np.abs(angular_velocity[c.body_b])) * dt
+    aligned = ((contacts.feature[row] == c.feature[owner])
+               & (np.einsum("ij,ij->i", contacts.normal[row], c.normal[owner])
+                  >= np.cos(turn[owner] + NEW_FACE_ANGLE)))
+    seen = np.zeros(len(c), bool)
+    np.logical_or.at(seen, owner, aligned)
+    return _carried_back(c.take(~seen), position, end, angular_velocity, dt)
+
+
+def _end_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: np.ndarray,
+                  position: np.ndarray, angle: np.ndarray, velocity: np.ndarray,
+                  angular_velocity: np.ndarray, reach: np.ndarray,
+                  settings: Settings) -> tuple[Contacts, np.ndarray]:
+    """The pairs' (P, 2) contacts at their end poses (x + v dt, angle + w dt, no tangent
+    samples), and those poses (B, 3)."""
+    from . import _narrowphase
+
+    dt = float(settings.dt)
+    end = np.column_stack([position + velocity * dt, angle + angular_velocity * dt])
+    if len(pairs) == 0:
+        return Contacts.empty(), end
+    return _narrowphase(shapes, body_shape, pairs, end, settings.speculative_distance,
+                        reach, settings.with_values(field_tangent_samples=0)), end
+
+
+def _carried_back(c: Contacts, position: np.ndarray, end: np.ndarray,
+                  angular_velocity: np.ndarray, dt: float) -> Contacts:
+    """End-pose contacts ``c`` carried back to the step's start with their bodies: rows
+    on the two surface points' start positions, along the end normals (module
+    docstring, "Sdf pairs")."""
     a, b = c.body_a, c.body_b
     s_end = -c.depth
     m_a = c.point - (0.5 * s_end)[:, None] * c.normal

@@ -177,35 +177,44 @@ IMPACT_HOPS = 4
 # islands of 2 to rest_island_limit bodies) get up to ``Settings.impact_iterations``
 # passes per phase, stopping once converged as the loaded islands' do. Their rows keep
 # their softness (an impact is no load). Piles over rest_island_limit (thousands of
-# circles) keep one pass, so their cost does not grow; islands pushing out overlap
-# (a row deeper than soft_depth) are jams, not impacts, and keep it too: 625 circles
-# packed 0.2 m deep (tests/stability) separated at 4.0 m/s with the passes, over the
-# 3 m/s push-out cap (converged jammed rows store what the split push-out keeps out
-# of the velocities, "Loaded islands" above). Circles only: their contacts are
+# circles) keep one pass, so their cost does not grow; jammed islands, with a row
+# deeper than one step's capped push-out clears (soft_depth + max_push_out dt, 55 mm
+# at the defaults), keep it too: 625 circles packed 0.2 m deep (tests/stability)
+# separated at 6.9 m/s with the passes, over the 3 m/s push-out cap (converged jammed
+# rows store what the split push-out keeps out of the velocities, "Loaded islands"
+# above). A row just past soft_depth is no jam: it is what an impact leaves, and with
+# that as the rule one such row anywhere in the box of scenes/circles_in_box.toml
+# turned the passes off for all its circles (deepest contact over five runs of the
+# scene, start poses moved by 1e-6 m: 5.0-11.4 mm; 5.0-5.4 mm with the jam depth).
+# Circles only: their contacts are
 # exact, one normal each; with polygons and fields in the region too, the concave
 # polygons' scene went from 13.1 mm deepest to 14, 17, 32 and 160 mm (2, 3, 4 and 8
 # passes): converging their per-feature rows turns a landing into a spin whose far
-# vertices no row sees. A body that is not a circle but touches a region's circle gets
-# its rows against static bodies into the passes (a circle landing at 10 m/s on a
-# triangle drove its tip 1.06 cm into the terrain, scenes/grid_terrain.toml; 6.2 mm
-# with them). Figures: docs/solver.md, "Impacts".
+# vertices no row sees (with them in the region now: 43 mm). A body that is not a
+# circle but touches a region's circle gets its rows against static bodies into the
+# passes (a circle landing at 10 m/s on a triangle drove its tip 1.06 cm into the
+# terrain, scenes/grid_terrain.toml; 6.2 mm with them), and so do the two bodies of an
+# impact that is not between two circles (a U-shaped polygon struck an L resting on
+# the ground, whose row against it, the last one solved, drove the L's corner 12.2 mm
+# into the ground in one step, scenes/concave_polygons.toml). Figures: docs/solver.md,
+# "Impacts".
 # --------------------------------------------------------------------------------------
 
 
 @njit(cache=True)
 def _impact_region(inv_mass, body_a, body_b, separation, relative_velocity, dt, soft_depth,
-                   root, size, rest_limit, round_body, pushing):
+                   root, size, rest_limit, round_body, jammed):
     """(B,) bool: the dynamic circles (``round_body`` (B,) bool) within IMPACT_HOPS
     circle-circle contacts of an impact's circle (section above), in islands (``root``,
     ``size`` (B,): dynamic bodies per root) of 2 to ``rest_limit`` bodies (a body alone
-    has no column to stop) not ``pushing`` (per root: a row deeper than soft_depth, a
-    jam, not an impact). separation, relative_velocity: (K,) m and m/s at the start of
-    the step; dt: s; soft_depth: m."""
+    has no column to stop) not ``jammed`` (per root: a row deeper than one step's
+    push-out clears, a jam, not an impact). separation, relative_velocity: (K,) m and
+    m/s at the start of the step; dt: s; soft_depth: m."""
     region = np.zeros(inv_mass.shape[0], np.bool_)
     for k in range(body_a.shape[0]):
         if max(separation[k], 0.0) + dt * relative_velocity[k] < -soft_depth:
             for i in (body_a[k], body_b[k]):
-                if (inv_mass[i] > 0.0 and round_body[i] and not pushing[root[i]]
+                if (inv_mass[i] > 0.0 and round_body[i] and not jammed[root[i]]
                         and 1 < size[root[i]] <= rest_limit):
                     region[i] = True
     for _ in range(IMPACT_HOPS):
@@ -226,7 +235,8 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
                          up, weight_impulse, omega, zeta, h, base_bias_rate, base_mass_scale,
                          base_impulse_scale, stiffen, limit, large_cap, bias_rate, mass_scale,
                          impulse_scale, loaded_pairs, passes, separation, soft_depth,
-                         rest_limit, moving, relative_velocity, dt, extra_passes, round_body):
+                         rest_limit, moving, relative_velocity, dt, extra_passes, round_body,
+                         jam_depth):
     """Fill the per-row coefficients (K,) and the loaded pairs; returns their count.
 
     weight_impulse: |g| h, the impulse per substep that carries 1 kg (0: no gravity, no
@@ -238,10 +248,11 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
     passes: (P,) int64, filled per loaded pair: its extra passes per phase, at most,
     extra_passes (stiff, impact, rest: islands of at most ``limit`` bodies, the pairs
     of an impact's region (``_impact_region``; relative_velocity (K,) m/s, dt s,
-    round_body (B,) bool) and the static rows of the other bodies its circles touch,
-    the islands at rest up to rest_limit); the largest that
-    applies. moving: (B,) bool, bodies faster than REST_SPEED (their islands are not at
-    rest).
+    round_body (B,) bool) and the static rows of the other bodies its circles touch and
+    of the bodies of an impact not between circles, the islands at rest up to
+    rest_limit); the largest that applies. moving: (B,) bool, bodies faster than
+    REST_SPEED (their islands are not at rest). jam_depth: m, a row deeper marks its
+    island jammed (no impact passes).
     """
     nb = inv_mass.shape[0]
     n_pairs = pair_start.shape[0] - 1
@@ -267,12 +278,16 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
                 hot[root[i]] = True
     # An island pushing out overlap deeper than soft_depth (split rows), or with a body
     # faster than REST_SPEED, is not at rest.
+    # One deeper than jam_depth, more than a step's capped push-out clears, is jammed.
     pushing = np.zeros(nb, np.bool_)
+    jammed = np.zeros(nb, np.bool_)
     for k in range(body_a.shape[0]):
         if separation[k] < -soft_depth:
             for i in (body_a[k], body_b[k]):
                 if inv_mass[i] > 0.0:
                     pushing[root[i]] = True
+                    if separation[k] < -jam_depth:
+                        jammed[root[i]] = True
     largest = np.full(nb, max(limit, rest_limit), np.int64)
     for i in range(nb):
         if inv_mass[i] > 0.0 and (moving[i] or pushing[root[i]]):
@@ -285,14 +300,21 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
         if ma > 0.0 and mb > 0.0 and (ma >= MASS_RATIO * mb or mb >= MASS_RATIO * ma):
             hot[root[a]] = True
     region = _impact_region(inv_mass, body_a, body_b, separation, relative_velocity, dt,
-                            soft_depth, root, size, rest_limit, round_body, pushing)
+                            soft_depth, root, size, rest_limit, round_body, jammed)
     stiff_passes, impact_passes, rest_passes = extra_passes
-    # The other bodies a region's circle touches: their rows against static bodies too
-    # (the blow goes through them into the ground), not their rows with each other.
+    # The other bodies a region's circle touches, and the two bodies of an impact not
+    # between two circles: their rows against static bodies too (the blow goes through
+    # them into the ground), not their rows with each other.
     touched = np.zeros(nb, np.bool_)
     for k in range(body_a.shape[0]):
         a = body_a[k]
         b = body_b[k]
+        if (max(separation[k], 0.0) + dt * relative_velocity[k] < -soft_depth
+                and inv_mass[a] > 0.0 and inv_mass[b] > 0.0
+                and not (round_body[a] and round_body[b]) and not jammed[root[a]]
+                and 1 < size[root[a]] <= rest_limit):
+            touched[a] = True
+            touched[b] = True
         if region[a] and inv_mass[b] > 0.0 and not round_body[b]:
             touched[b] = True
         if region[b] and inv_mass[a] > 0.0 and not round_body[a]:
@@ -378,7 +400,8 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
         impulse_scale, loaded_pairs, passes, c.separation, settings.soft_depth,
         settings.rest_island_limit, np.zeros(len(inv_mass), np.bool_) if moving is None
         else moving, c.relative_velocity, settings.dt, extra,
-        np.zeros(len(inv_mass), np.bool_) if round_body is None else round_body)
+        np.zeros(len(inv_mass), np.bool_) if round_body is None else round_body,
+        settings.soft_depth + settings.max_push_out * settings.dt)
     return bias_rate, mass_scale, impulse_scale, loaded_pairs[:count], passes[:count]
 
 
