@@ -80,6 +80,7 @@ get none.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 
 import numpy as np
@@ -247,7 +248,13 @@ def _end_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: np.nda
     if len(pairs) == 0:
         return Contacts.empty(), end
     return _narrowphase(shapes, body_shape, pairs, end, settings.speculative_distance,
-                        reach, settings.with_values(field_tangent_samples=0)), end
+                        reach, _without_tangent_samples(settings)), end
+
+
+@functools.lru_cache(maxsize=4)
+def _without_tangent_samples(settings: Settings) -> Settings:
+    """``settings`` with no tangent samples (end-pose queries), made once per Settings."""
+    return settings.with_values(field_tangent_samples=0)
 
 
 def _carried_back(c: Contacts, position: np.ndarray, end: np.ndarray,
