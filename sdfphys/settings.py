@@ -20,6 +20,8 @@ from .errors import SpecError, check_int, check_number
 from .limits import MIN_DT
 from .sdf.gradient import METHODS
 
+__all__ = ["FIELD_REPRESENTATIONS", "GRADIENT_METHODS", "PRESETS", "Settings", "preset"]
+
 
 @cache
 def _knobs(cls: type) -> dict[str, Field]:
@@ -27,7 +29,6 @@ def _knobs(cls: type) -> dict[str, Field]:
     and every derived Settings checks each of its ~40 knobs)."""
     return {f.name: f for f in fields(cls)}
 
-__all__ = ["FIELD_REPRESENTATIONS", "GRADIENT_METHODS", "PRESETS", "Settings", "preset"]
 
 #: Values of ``Settings.gradient``: the fields' own analytic gradients, or a numeric
 #: scheme of ``sdfphys.sdf.gradient`` (NumericGradientField) for SDF shapes.

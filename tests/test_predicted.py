@@ -263,3 +263,30 @@ def test_no_end_pose_row_for_a_slow_slide_a_face_already_held_or_a_convex_floor(
     wall = {"type": "polygon", "points": [[-2, -1], [2, -1], [2, 1], [-2, 1]]}   # x >= -2
     got, rows = _mesh_rows(wall, -2.12, 3.0)
     assert len(got) > 0 and len(rows) == 0
+
+
+def test_an_unbounded_still_body_still_gets_end_pose_rows():
+    """A concave L sliding at 3 m/s on unbounded ground (a half-plane y < 0 united with
+    a wall x in [0, 2]) toward the wall, 2 cm from it: the row on the wall (its bounding
+    radius is infinite, its spin zero: it sweeps nothing). Along the wall's normal
+    (-1, 0) (ground -> L), separation 2 cm."""
+    from sdfphys.collide import find_contacts
+    from sdfphys.collide.predicted import FIELD_PAIR
+    from sdfphys.settings import Settings
+
+    ground = {"type": "sdf", "field": {"op": "union", "of": [
+        {"type": "half_plane", "normal": [0.0, 1.0]},
+        {"type": "box", "size": [2.0, 2.0], "offset": [1.0, 0.0]}]}}
+    ell = {"type": "polygon", "points": [[-0.3, -0.1], [0.1, -0.1], [0.1, 0.0],
+                                         [-0.2, 0.0], [-0.2, 0.3], [-0.3, 0.3]]}
+    shapes = [shape_from_spec(ground), shape_from_spec(ell)]
+    # The L's user origin 1 mm over the ground, its right end (x = 0.1) 2 cm from the wall.
+    user = np.array([-0.12, 0.101])
+    got = find_contacts(shapes, np.arange(2), np.array([[0.0, 0.0], user - shapes[1].origin]),
+                        np.zeros(2), np.array([False, True]), Settings(),
+                        np.array([[0.0, 0.0], [3.0, 0.0]]), np.zeros(2))
+    rows = got.take(((got.feature >> 56) == SOURCE_PREDICTED)
+                    & ((got.feature & FIELD_PAIR) != 0))
+    wall = np.abs(rows.normal[:, 0] + 1.0) < 1e-9
+    assert np.any(wall)
+    np.testing.assert_allclose(-rows.depth[wall], 0.02, atol=1e-9)

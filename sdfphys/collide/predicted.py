@@ -214,11 +214,12 @@ def predicted_mesh_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
     slop this step, where an element meets a face its contact now is not on (module
     docstring, "Mesh pairs"). Other arguments as ``predicted_field_contacts``."""
     dt = float(settings.dt)
+    # |w| R, 0 for a body that does not turn (an unbounded one has R = inf).
     with np.errstate(invalid="ignore"):
-        relative = velocity[pairs[:, 0]] - velocity[pairs[:, 1]]
-        travel = (np.sqrt(relative[:, 0] ** 2 + relative[:, 1] ** 2)
-                  + np.abs(angular_velocity[pairs[:, 0]]) * radius[pairs[:, 0]]
-                  + np.abs(angular_velocity[pairs[:, 1]]) * radius[pairs[:, 1]]) * dt
+        sweep = np.where(angular_velocity == 0.0, 0.0, np.abs(angular_velocity) * radius)
+    relative = velocity[pairs[:, 0]] - velocity[pairs[:, 1]]
+    travel = (np.sqrt(relative[:, 0] ** 2 + relative[:, 1] ** 2) + sweep[pairs[:, 0]]
+              + sweep[pairs[:, 1]]) * dt
     c, end = _end_contacts(shapes, body_shape, pairs[travel > settings.linear_slop],
                            position, angle, velocity, angular_velocity, reach, settings)
     if len(c) == 0:

@@ -186,11 +186,11 @@ IMPACT_HOPS = 4
 # that as the rule one such row anywhere in the box of scenes/circles_in_box.toml
 # turned the passes off for all its circles (deepest contact over five runs of the
 # scene, start poses moved by 1e-6 m: 5.0-11.4 mm; 5.0-5.4 mm with the jam depth).
-# Circles only: their contacts are
-# exact, one normal each; with polygons and fields in the region too, the concave
-# polygons' scene went from 13.1 mm deepest to 14, 17, 32 and 160 mm (2, 3, 4 and 8
-# passes): converging their per-feature rows turns a landing into a spin whose far
-# vertices no row sees (with them in the region now: 43 mm). A body that is not a
+# Circles only: their contacts are exact, one normal each; with polygons and fields in
+# the region too, the concave polygons' scene went from 13.1 mm deepest to 14, 17, 32
+# and 160 mm (2, 3, 4 and 8 passes): converging their per-feature rows turns a landing
+# into a spin whose far vertices no row sees (with them in the region now: 43 mm;
+# 23 and 17 mm at 2 and 3 passes). A body that is not a
 # circle but touches a region's circle gets its rows against static bodies into the
 # passes (a circle landing at 10 m/s on a triangle drove its tip 1.06 cm into the
 # terrain, scenes/grid_terrain.toml; 6.2 mm with them), and so do the two bodies of an
