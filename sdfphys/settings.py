@@ -106,11 +106,12 @@ class Settings:
         "its top 4.08 mm in 5 s at 15.7 extra passes a step, 64 4.09 mm at 29.2.",
         low=1, high=1024)
     impact_iterations: int = _knob(
-        4, "", "Solver passes per substep, at most, over the circles within 4 contacts "
-        "of an impact (a pair that would close more than soft_depth beyond its gap this "
-        "step) and the static rows of the bodies they touch, in islands up to "
-        "rest_island_limit; they stop once converged. 150 circles poured into a box: "
-        "deepest contact 23 mm at 1, 5.1 mm at 4.",
+        4, "", "Solver passes per substep, at most, over the exact pairs (circles, "
+        "clipped convex polygons) within 4 exact contacts of an impact (a pair that "
+        "would close more than soft_depth beyond its gap this step) and the static rows "
+        "of the bodies they touch, in islands up to rest_island_limit; they stop once "
+        "converged. 150 circles poured into a box: deepest contact 23 mm at 1, 5.1 mm at "
+        "4; three boxes struck at 8 m/s: 23.5 mm at 1, 4.9 mm at 4.",
         low=1, high=1024)
     stiff_island_limit: int = _knob(
         64, "", "Largest island (dynamic bodies in contact) that load stiffening and "

@@ -28,8 +28,9 @@ OPEN: dict[str, str] = {
                         "(an end-pose row on poly0's face) and poly10, 3 mm above it "
                         "and barely closing at the step's start, presses 10.3 mm "
                         "into it by the step's end: a column struck at once, which the "
-                        "impact passes solve for circles only (converged polygon rows "
-                        "spin: docs/solver.md, Impacts); nudged runs "
+                        "impact passes solve for exact pairs only (circles, convex "
+                        "polygons; converged concave polygon rows spin: "
+                        "docs/solver.md, Impacts); nudged runs "
                         "(tools/penetration_spread.py) 10.3 mm each",
 }
 

@@ -172,8 +172,8 @@ IMPACT_HOPS = 4
 # stiff_island_limit) a pair 2.1 mm apart at the start of a step ended it 23.4 mm deep
 # (t = 1.1 s); with converged passes over the whole island, 1.7 mm. So a row that would
 # close, at the relative normal speed vn the step began with, more than soft_depth
-# beyond its gap (max(s, 0) + dt vn < -soft_depth) marks an impact, and the pairs of
-# the circles within IMPACT_HOPS circle-circle contacts of it (dynamic circles, in
+# beyond its gap (max(s, 0) + dt vn < -soft_depth) marks an impact, and the exact pairs
+# (below) of the bodies within IMPACT_HOPS exact contacts of it (dynamic bodies, in
 # islands of 2 to rest_island_limit bodies) get up to ``Settings.impact_iterations``
 # passes per phase, stopping once converged as the loaded islands' do. Their rows keep
 # their softness (an impact is no load). Piles over rest_island_limit (thousands of
@@ -186,48 +186,75 @@ IMPACT_HOPS = 4
 # that as the rule one such row anywhere in the box of scenes/circles_in_box.toml
 # turned the passes off for all its circles (deepest contact over five runs of the
 # scene, start poses moved by 1e-6 m: 5.0-11.4 mm; 5.0-5.4 mm with the jam depth).
-# Circles only: their contacts are exact, one normal each; with polygons and fields in
-# the region too, the concave polygons' scene went from 13.1 mm deepest to 14, 17, 32
-# and 160 mm (2, 3, 4 and 8 passes): converging their per-feature rows turns a landing
-# into a spin whose far vertices no row sees (with them in the region now: 43 mm;
-# 23 and 17 mm at 2 and 3 passes). A body that is not a
-# circle but touches a region's circle gets its rows against static bodies into the
-# passes (a circle landing at 10 m/s on a triangle drove its tip 1.06 cm into the
-# terrain, scenes/grid_terrain.toml; 6.2 mm with them), and so do the two bodies of an
-# impact that is not between two circles (a U-shaped polygon struck an L resting on
-# the ground, whose row against it, the last one solved, drove the L's corner 12.2 mm
-# into the ground in one step, scenes/concave_polygons.toml). Figures: docs/solver.md,
-# "Impacts".
+# Exact pairs only: pairs whose rows all come from closed forms (a circle's contacts and
+# predicted rows, each through its centre; a clipped manifold of two convex polygons,
+# one normal: ``_exact_rows``). A concave polygon's or an sdf body's rows are per
+# feature, each along its own face, from a descent;
+# with them in the region the concave polygons' scene went from 13.1 mm deepest to 14,
+# 17, 32 and 160 mm (2, 3, 4 and 8 passes; 43 mm with its end-pose rows): converging
+# them turns a landing into a spin whose far vertices no row sees, and packs bodies
+# into configurations the descent misreads (a contact read 198 mm deep where the bodies
+# had moved millimetres). Boxes were left out with them until 2026-11-27: a column of three
+# boxes struck at 8 m/s pressed 23.5 mm deep with one pass, 4.9 mm with the passes, and
+# the ragdoll's limbs, struck through its joints, 5.6-12.1 mm over five nearby runs,
+# 7.6-8.0 mm with them. A body that a region's body touches through a pair that is not
+# exact gets its rows against static bodies into the passes, as the region's bodies
+# do (a circle landing at 10 m/s on a triangle drove its tip 1.06 cm into the terrain,
+# scenes/grid_terrain.toml; 6.2 mm with them), and so do the two bodies of an impact
+# in such a pair (a U-shaped polygon struck an L resting on the ground, whose row
+# against it, the last one solved, drove the L's corner 12.2 mm into the ground in one
+# step, scenes/concave_polygons.toml). Figures: docs/solver.md, "Impacts".
 # --------------------------------------------------------------------------------------
 
 
 @njit(cache=True)
 def _impact_region(inv_mass, body_a, body_b, separation, relative_velocity, dt, soft_depth,
-                   root, size, rest_limit, round_body, jammed):
-    """(B,) bool: the dynamic circles (``round_body`` (B,) bool) within IMPACT_HOPS
-    circle-circle contacts of an impact's circle (section above), in islands (``root``,
-    ``size`` (B,): dynamic bodies per root) of 2 to ``rest_limit`` bodies (a body alone
-    has no column to stop) not ``jammed`` (per root: a row deeper than one step's
-    push-out clears, a jam, not an impact). separation, relative_velocity: (K,) m and
-    m/s at the start of the step; dt: s; soft_depth: m."""
+                   root, size, rest_limit, exact, jammed):
+    """(B,) bool: the dynamic bodies within IMPACT_HOPS exact contacts (``exact`` (K,)
+    bool: the row's pair is exact, ``_exact_rows``) of an impact in an exact pair
+    (section above), in islands (``root``, ``size`` (B,): dynamic bodies per root) of 2
+    to ``rest_limit`` bodies (a body alone has no column to stop) not ``jammed`` (per
+    root: a row deeper than one step's push-out clears, a jam, not an impact).
+    separation, relative_velocity: (K,) m and m/s at the start of the step; dt: s;
+    soft_depth: m."""
     region = np.zeros(inv_mass.shape[0], np.bool_)
     for k in range(body_a.shape[0]):
-        if max(separation[k], 0.0) + dt * relative_velocity[k] < -soft_depth:
+        if exact[k] and max(separation[k], 0.0) + dt * relative_velocity[k] < -soft_depth:
             for i in (body_a[k], body_b[k]):
-                if (inv_mass[i] > 0.0 and round_body[i] and not jammed[root[i]]
+                if (inv_mass[i] > 0.0 and not jammed[root[i]]
                         and 1 < size[root[i]] <= rest_limit):
                     region[i] = True
     for _ in range(IMPACT_HOPS):
         grown = region.copy()
         for k in range(body_a.shape[0]):
+            if not exact[k]:
+                continue
             a = body_a[k]
             b = body_b[k]
-            if region[a] and inv_mass[b] > 0.0 and round_body[b]:
+            if region[a] and inv_mass[b] > 0.0:
                 grown[b] = True
-            if region[b] and inv_mass[a] > 0.0 and round_body[a]:
+            if region[b] and inv_mass[a] > 0.0:
                 grown[a] = True
         region = grown
     return region
+
+
+@njit(cache=True)
+def _exact_rows(pair_start, feature):
+    """(K,) bool: whether each row's pair is exact: all its rows closed forms (feature
+    sources 0, a circle's contact; 5, a clipped manifold of two convex polygons; 6
+    without FIELD_PAIR, a circle's predicted row), none from a descent."""
+    exact = np.zeros(feature.shape[0], np.bool_)
+    for p in range(pair_start.shape[0] - 1):
+        same = True
+        for k in range(pair_start[p], pair_start[p + 1]):
+            source = feature[k] >> 52          # the source (3 bits) and FIELD_PAIR's bit
+            if source != 0 and source != 5 << 4 and source != 6 << 4:
+                same = False
+                break
+        for k in range(pair_start[p], pair_start[p + 1]):
+            exact[k] = same
+    return exact
 
 
 @njit(cache=True)
@@ -235,8 +262,8 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
                          up, weight_impulse, omega, zeta, h, base_bias_rate, base_mass_scale,
                          base_impulse_scale, stiffen, limit, large_cap, bias_rate, mass_scale,
                          impulse_scale, loaded_pairs, passes, separation, soft_depth,
-                         rest_limit, moving, relative_velocity, dt, extra_passes, round_body,
-                         jam_depth):
+                         rest_limit, moving, relative_velocity, dt, extra_passes, jam_depth,
+                         feature):
     """Fill the per-row coefficients (K,) and the loaded pairs; returns their count.
 
     weight_impulse: |g| h, the impulse per substep that carries 1 kg (0: no gravity, no
@@ -247,12 +274,12 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
     large_cap: the most weights counted in larger islands, which get no extra pass.
     passes: (P,) int64, filled per loaded pair: its extra passes per phase, at most,
     extra_passes (stiff, impact, rest: islands of at most ``limit`` bodies, the pairs
-    of an impact's region (``_impact_region``; relative_velocity (K,) m/s, dt s,
-    round_body (B,) bool) and the static rows of the other bodies its circles touch and
-    of the bodies of an impact not between circles, the islands at rest up to
-    rest_limit); the largest that applies. moving: (B,) bool, bodies faster than
-    REST_SPEED (their islands are not at rest). jam_depth: m, a row deeper marks its
-    island jammed (no impact passes).
+    of an impact's region (``_impact_region``; relative_velocity (K,) m/s, dt s) and
+    the static rows of its bodies and of the bodies they touch through pairs that are
+    not exact, or of an impact in such a pair, the islands at rest up to rest_limit);
+    the largest that applies. moving: (B,) bool, bodies faster than REST_SPEED (their
+    islands are not at rest). jam_depth: m, a row deeper marks its island jammed (no
+    impact passes). feature: (K,) int64, the rows' feature keys (``_exact_rows``).
     """
     nb = inv_mass.shape[0]
     n_pairs = pair_start.shape[0] - 1
@@ -299,25 +326,27 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
         mb = inv_mass[b]
         if ma > 0.0 and mb > 0.0 and (ma >= MASS_RATIO * mb or mb >= MASS_RATIO * ma):
             hot[root[a]] = True
+    exact = _exact_rows(pair_start, feature)
     region = _impact_region(inv_mass, body_a, body_b, separation, relative_velocity, dt,
-                            soft_depth, root, size, rest_limit, round_body, jammed)
+                            soft_depth, root, size, rest_limit, exact, jammed)
     stiff_passes, impact_passes, rest_passes = extra_passes
-    # The other bodies a region's circle touches, and the two bodies of an impact not
-    # between two circles: their rows against static bodies too (the blow goes through
-    # them into the ground), not their rows with each other.
+    # The other bodies a region's body touches through a pair that is not exact, and
+    # the two bodies of an impact in such a pair: their rows against static bodies too
+    # (the blow goes through them into the ground), not their rows with each other.
     touched = np.zeros(nb, np.bool_)
     for k in range(body_a.shape[0]):
+        if exact[k]:
+            continue
         a = body_a[k]
         b = body_b[k]
         if (max(separation[k], 0.0) + dt * relative_velocity[k] < -soft_depth
-                and inv_mass[a] > 0.0 and inv_mass[b] > 0.0
-                and not (round_body[a] and round_body[b]) and not jammed[root[a]]
+                and inv_mass[a] > 0.0 and inv_mass[b] > 0.0 and not jammed[root[a]]
                 and 1 < size[root[a]] <= rest_limit):
             touched[a] = True
             touched[b] = True
-        if region[a] and inv_mass[b] > 0.0 and not round_body[b]:
+        if region[a] and inv_mass[b] > 0.0:
             touched[b] = True
-        if region[b] and inv_mass[a] > 0.0 and not round_body[a]:
+        if region[b] and inv_mass[a] > 0.0:
             touched[a] = True
     count = 0
     for p in range(n_pairs):
@@ -332,8 +361,9 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
         if inv_mass[b] > 0.0:
             r = max(r, ratio[b] if hot_b else min(ratio[b], large_cap))
         cap = 0
-        if (region[a] or region[b] or (touched[a] and inv_mass[b] == 0.0)
-                or (touched[b] and inv_mass[a] == 0.0)):
+        if (((region[a] or region[b]) and exact[first])
+                or ((region[a] or touched[a]) and inv_mass[b] == 0.0)
+                or ((region[b] or touched[b]) and inv_mass[a] == 0.0)):
             cap = impact_passes
         if hot_a or hot_b:
             small = ((not hot_a or size[root[a]] <= limit)
@@ -362,8 +392,7 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
 
 
 def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity: np.ndarray,
-                 settings: Settings, moving: np.ndarray | None = None,
-                 round_body: np.ndarray | None = None
+                 settings: Settings, moving: np.ndarray | None = None
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per-row soft coefficients and the pairs that get extra passes: the loaded
     islands' and the impacts' (the sections above).
@@ -375,8 +404,7 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
     ``rest_iterations - 1`` (a larger one at rest, up to ``rest_island_limit``) or
     ``impact_iterations - 1`` (near an impact), the largest that applies, each at most
     ``stiff_iterations - 1``. moving: (B,) bool, the bodies faster than REST_SPEED at the
-    start of the step (None: none); round_body: (B,) bool, the circles, which impacts
-    concern (None: none).
+    start of the step (None: none).
     """
     c = constraints
     k = len(c.feature)
@@ -400,8 +428,7 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
         impulse_scale, loaded_pairs, passes, c.separation, settings.soft_depth,
         settings.rest_island_limit, np.zeros(len(inv_mass), np.bool_) if moving is None
         else moving, c.relative_velocity, settings.dt, extra,
-        np.zeros(len(inv_mass), np.bool_) if round_body is None else round_body,
-        settings.soft_depth + settings.max_push_out * settings.dt)
+        settings.soft_depth + settings.max_push_out * settings.dt, c.feature)
     return bias_rate, mass_scale, impulse_scale, loaded_pairs[:count], passes[:count]
 
 

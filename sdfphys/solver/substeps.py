@@ -622,7 +622,7 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
                                                           bodies.radius, 0.0)
     moving = v[:, 0] ** 2 + v[:, 1] ** 2 + spin * spin > REST_SPEED ** 2
     bias_rate, mass_scale, impulse_scale, loaded_pairs, caps = row_softness(
-        bodies.inv_mass, c, gravity, settings, moving, bodies.round_body)
+        bodies.inv_mass, c, gravity, settings, moving)
     measured = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
     measured[loaded_pairs] = True
     start_tangent = c.tangent_impulse.copy()
