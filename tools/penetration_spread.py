@@ -6,17 +6,19 @@ solver moves it either way, and one run cannot tell a fix from luck. Per scene (
 ``scenes/*.toml`` unless ``--scenes``), this runs the scene as written and ``--runs``
 times more with every dynamic body's start pose moved by a normal random 1e-6 m (x, y)
 and 1e-6 rad (``--nudge``; seed = the run's number, so the runs repeat), over the
-scene's ``sim.duration``, and prints the deepest contact of each run in mm and their
-largest. ``--json FILE`` also writes {scene: [mm, ...]}. Compare two trees by running
-it with ``PYTHONPATH=TREE`` for each.
+scene's ``sim.duration``, and prints the deepest contact of each run in mm, their
+largest, and each run's mean ms per step (after the first, which may compile): a
+chaotic scene's cost moves with its landings as its depth does. ``--json FILE`` also
+writes {scene: [mm, ...]}. Compare two trees by running it with ``PYTHONPATH=TREE``
+for each.
 
 ``--box2d``: also Box2D v3's figure for the scene as written, where Box2D can model it
 (circles and polygons, static and dynamic bodies, no joints, blasts, carves, collision
-filters, sensors or gravity scales):
-``pyb2d3`` at its defaults with 4 substeps, single thread, sleeping on; a polygon is its
-triangles (Box2D's polygons are convex) on one body, densities set so each body has
-sdfphys' mass; its deepest overlap is measured as the benchmark measures it
-(``bench_vs_peers.deepest``: sdfphys' narrowphase at Box2D's poses after each step).
+filters, sensors or gravity scales): ``pyb2d3`` at its defaults with 4 substeps,
+single thread, sleeping on; a polygon is its triangles (Box2D's polygons are convex)
+on one body, densities set so each body has sdfphys' mass; its deepest overlap is
+measured as the benchmark measures it (``bench_vs_peers.deepest``: sdfphys'
+narrowphase at Box2D's poses after each step).
 
     python tools/penetration_spread.py --scenes showcase circles_in_box --runs 4
 """
@@ -30,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from sdfphys.scene import read_scene
-from sdfphys.summary import simulate, steps_for
+from sdfphys.summary import RunSummary, simulate, steps_for
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -39,6 +41,13 @@ def deepest(path: Path, run: int, nudge: float) -> float:
     """The largest contact depth (m) over ``sim.duration`` of the scene at ``path`` (the
     ``run`` summary's max penetration), its dynamic bodies' start poses moved by
     ``nudge`` (seed ``run``; run 0: as written)."""
+    return nudged_run(path, run, nudge).max_penetration
+
+
+def nudged_run(path: Path, run: int, nudge: float) -> RunSummary:
+    """The ``run`` summary (``sdfphys.summary.simulate``) of the scene at ``path`` over
+    ``sim.duration``, its dynamic bodies' start poses moved by ``nudge`` (seed ``run``;
+    run 0: as written)."""
     scene = read_scene(path)
     world = scene.build()
     if run:
@@ -48,7 +57,7 @@ def deepest(path: Path, run: int, nudge: float) -> float:
             if world.kind[i] == "dynamic":
                 world.set_state(i, position=position[i] + nudge * rng.normal(size=2),
                                 angle=float(angle[i] + nudge * rng.normal()))
-    return simulate(world, steps_for(scene.duration, world.settings.dt)).max_penetration
+    return simulate(world, steps_for(scene.duration, world.settings.dt))
 
 
 def box2d_deepest(path: Path) -> float | None:
@@ -110,14 +119,17 @@ def main() -> None:
     names = args.scenes or sorted(p.stem for p in (ROOT / "scenes").glob("*.toml"))
     out = {}
     for name in names:
-        mm = [round(1000.0 * deepest(ROOT / "scenes" / f"{name}.toml", run, args.nudge), 2)
-              for run in range(args.runs + 1)]
+        runs = [nudged_run(ROOT / "scenes" / f"{name}.toml", run, args.nudge)
+                for run in range(args.runs + 1)]
+        mm = [round(1000.0 * r.max_penetration, 2) for r in runs]
         out[name] = mm
         peer = ""
         if args.box2d:
             figure = box2d_deepest(ROOT / "scenes" / f"{name}.toml")
             peer = "   Box2D -" if figure is None else f"   Box2D {1000.0 * figure:.2f} mm"
-        print(f"{name:24s} largest {max(mm):7.2f} mm   runs {mm}{peer}", flush=True)
+        cost = [round(r.ms_per_step, 2) for r in runs]
+        print(f"{name:24s} largest {max(mm):7.2f} mm   runs {mm}   ms per step {cost}{peer}",
+              flush=True)
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=1) + "\n")
 
