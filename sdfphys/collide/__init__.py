@@ -121,13 +121,16 @@ class _ShapeTables:
 
     bounds (S, 4) body-frame AABBs; radius (S,); shape_class (S,) int64; half (S, 2)
     box half-extents; polygons: ``polygons.polygon_table`` of the boxes and convex
-    meshes.
+    meshes; sdf, concave (S,) bool: sdf shapes, triangulated meshes that are not convex.
     """
 
     def __init__(self, shapes: Sequence[Shape]):
         self.bounds = np.array([s.bounds() for s in shapes], np.float64).reshape(-1, 4)
         self.radius = np.array([s.radius for s in shapes], np.float64)
         self.shape_class = np.array([_shape_class(s) for s in shapes], np.int64)
+        self.sdf = np.array([s.kind == "sdf" for s in shapes], bool)
+        self.concave = (np.array([s.kind == "mesh" for s in shapes], bool)
+                        & (self.shape_class == OTHER))
         self.half = np.array([s.field.half if c == BOX else (0.0, 0.0)
                               for s, c in zip(shapes, self.shape_class)],
                              np.float64).reshape(-1, 2)
@@ -321,9 +324,8 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         order = merge_order(plain.body_a * np.int64(n) + plain.body_b,
                             other.body_a * np.int64(n) + other.body_b)
         return _with_predicted(Contacts.concatenate([plain, other]).take(order), distinct,
-                               body_shape, pairs, shape_class == CIRCLE, radius[body_shape],
-                               position, angle, velocity, angular_velocity, reach, settings,
-                               pair_filter)
+                               tables, body_shape, pairs, radius[body_shape], position, angle,
+                               velocity, angular_velocity, reach, settings, pair_filter)
 
     reach, boxes = np.empty(n), np.empty((n, 4))
     reach_and_boxes(local_bounds, radius, body_shape, position, angle, velocity,
@@ -355,13 +357,13 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                              ran, cache, radius[body_shape], shape_class[body_shape] == CIRCLE)
         order = merge_order(a * np.int64(n) + b, other.body_a * np.int64(n) + other.body_b)
         contacts = Contacts.concatenate([contacts, other]).take(order)
-    return _with_predicted(contacts, distinct, body_shape, pairs,
-                           shape_class[body_shape] == CIRCLE, radius[body_shape], position,
-                           angle, velocity, angular_velocity, reach, settings, pair_filter)
+    return _with_predicted(contacts, distinct, tables, body_shape, pairs, radius[body_shape],
+                           position, angle, velocity, angular_velocity, reach, settings,
+                           pair_filter)
 
 
-def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndarray,
-                    pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray,
+def _with_predicted(contacts: Contacts, shapes: list[Shape], tables: _ShapeTables,
+                    body_shape: np.ndarray, pairs: np.ndarray, radius: np.ndarray,
                     position: np.ndarray, angle: np.ndarray, velocity: np.ndarray,
                     angular_velocity: np.ndarray, reach: np.ndarray, settings: Settings,
                     pair_filter: PairFilter | None) -> Contacts:
@@ -371,9 +373,10 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
     contact (sensor pairs left out: a prediction is not a touch), in the same order;
     none without ``settings.predicted_contacts``. An sdf pair's row is another material
     point than its contact's, so no contact implies it; a mesh pair's is on a face no
-    contact of its element has."""
+    contact of its element has. tables: the distinct ``shapes``' ``_ShapeTables``."""
     if not settings.predicted_contacts:
         return contacts
+    is_circle = tables.shape_class[body_shape] == CIRCLE
     pairs = _without_sensors(pairs, pair_filter)
     extra = predicted_contacts(shapes, body_shape, pairs, is_circle, radius, position, angle,
                                velocity, angular_velocity, float(settings.dt),
@@ -387,22 +390,24 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], body_shape: np.ndar
     # holds every point's travel in the step, so they cannot meet); contacts are sorted
     # by pair. Sdf pairs, and pairs of a concave (triangulated) mesh with a body that is
     # not a circle.
-    sdf = np.array([shape.kind == "sdf" for shape in shapes])[body_shape]
-    concave = np.array([shape.kind == "mesh" and _shape_class(shape) == OTHER
-                        for shape in shapes])[body_shape]
+    sdf, concave = tables.sdf[body_shape], tables.concave[body_shape]
     a, b = contacts.body_a, contacts.body_b
     fields = sdf[a] & sdf[b]
     meshes = (concave[a] | concave[b]) & ~is_circle[a] & ~is_circle[b]
-    for chosen, is_mesh in ((fields, False), (meshes, True)):
-        if not np.any(chosen):
-            continue
+    state = (radius, position, angle, velocity, angular_velocity, reach, settings)
+
+    def touching(chosen: np.ndarray) -> np.ndarray:
+        """The distinct pairs (P, 2) of the ``chosen`` contacts, sensors left out."""
         key = a[chosen] * n + b[chosen]
         key = key[np.concatenate([[True], key[1:] != key[:-1]])]
-        touching = _without_sensors(np.column_stack([key // n, key % n]), pair_filter)
-        state = (radius, position, angle, velocity, angular_velocity, reach, settings)
+        return _without_sensors(np.column_stack([key // n, key % n]), pair_filter)
+
+    if np.any(fields):
+        extra = Contacts.concatenate([extra, predicted_field_contacts(
+            shapes, body_shape, touching(fields), *state)])
+    if np.any(meshes):
         extra = Contacts.concatenate([extra, predicted_mesh_contacts(
-            shapes, body_shape, contacts, touching, *state) if is_mesh else
-            predicted_field_contacts(shapes, body_shape, touching, *state)])
+            shapes, body_shape, contacts, touching(meshes), *state)])
     if len(extra) == 0:
         return contacts
     c = Contacts.concatenate([contacts, extra])
