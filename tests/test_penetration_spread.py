@@ -24,12 +24,16 @@ spread = _load_tool()
 HEAD_ON = ROOT / "scenes" / "head_on.toml"
 
 
-def test_a_nudged_run_repeats_and_moves_the_figure_by_little():
-    """Run 2 twice: the same figure (seeded); head_on's two circles meet exactly in
-    every run (time of impact), nudged by 1e-6 m or not: within 1e-5 m of each other."""
-    first = spread.deepest(HEAD_ON, 2, 1e-6)
-    assert spread.deepest(HEAD_ON, 2, 1e-6) == first
-    assert abs(first - spread.deepest(HEAD_ON, 0, 1e-6)) < 1e-5
+def test_a_nudged_run_repeats_and_differs_from_the_scene_as_written():
+    """Run 2 twice: the same final state (seeded); run 0 (as written) ends elsewhere, so
+    the nudge acts; head_on's two circles meet exactly in every run (time of impact):
+    their deepest contacts within 1e-5 m of each other."""
+    first = spread.nudged_run(HEAD_ON, 2, 1e-6)
+    again = spread.nudged_run(HEAD_ON, 2, 1e-6)
+    written = spread.nudged_run(HEAD_ON, 0, 1e-6)
+    assert again.state_hash == first.state_hash != written.state_hash
+    assert abs(first.max_penetration - written.max_penetration) < 1e-5
+    assert spread.deepest(HEAD_ON, 2, 1e-6) == first.max_penetration
 
 
 def test_box2d_figure_where_box2d_can_model_the_scene():
