@@ -5,7 +5,7 @@ import time
 import numpy as np
 import pytest
 
-from sdfphys.collide.broadphase import candidate_pairs, world_bounds
+from sdfphys.collide.broadphase import _dense_pairs, candidate_pairs, world_bounds
 
 
 def brute_force(bounds: np.ndarray, movable: np.ndarray) -> np.ndarray:
@@ -128,3 +128,53 @@ def test_grid_with_crowded_cells_and_nan_boxes_equals_brute_force(rng):
     movable = rng.random(len(bounds)) < 0.8
     np.testing.assert_array_equal(candidate_pairs(bounds, movable),
                                   brute_force(bounds, movable))
+
+
+def lattice(rng, rows, columns, side=1.0, origin=(0.0, 0.0), jitter=0.0):
+    """Boxes of one side on a lattice of that pitch: neighbours touch along edges and
+    at corners (closed boxes pair), as a settled pile's boxes nearly do."""
+    y, x = np.mgrid[0:rows, 0:columns].astype(float)
+    lo = np.stack([x.ravel(), y.ravel()], axis=1) * side + np.asarray(origin)
+    lo += rng.uniform(-jitter, jitter, lo.shape)
+    return np.concatenate([lo, lo + side], axis=1)
+
+
+@pytest.mark.parametrize("origin", [(0.0, 0.0), (-3.7e5, 2.2e6)])
+def test_dense_grid_finds_touching_lattice_pairs(rng, origin):
+    """Boxes whose sides equal the largest side, touching at edges and corners on cell
+    boundaries, near the origin and 10^6 m from it (the rounding of x / h): the dense
+    grid takes them and finds every pair, including the walls and NaN boxes."""
+    bounds = lattice(rng, 20, 30, origin=origin)
+    inf = np.inf
+    walls = np.array([[-inf, -inf, inf, origin[1] + 0.5], [np.nan] * 4,
+                      [origin[0] + 29.5, -inf, inf, inf]])
+    bounds = np.concatenate([bounds[:100], walls, bounds[100:]])
+    movable = rng.random(len(bounds)) < 0.8
+    dense, pairs = _dense_pairs(bounds, movable)
+    assert dense
+    np.testing.assert_array_equal(pairs, brute_force(bounds, movable))
+    np.testing.assert_array_equal(candidate_pairs(bounds, movable), pairs)
+
+
+def test_dense_grid_of_a_jittered_pile_equals_brute_force(rng):
+    bounds = lattice(rng, 40, 25, side=1.04, jitter=0.3)
+    bounds[:, 2:] -= rng.uniform(0.0, 0.1, (len(bounds), 2))
+    movable = np.ones(len(bounds), bool)
+    movable[:25] = False
+    dense, pairs = _dense_pairs(bounds, movable)
+    assert dense
+    np.testing.assert_array_equal(pairs, brute_force(bounds, movable))
+
+
+def test_sparse_or_mixed_boxes_take_the_hashed_grid(rng):
+    """Boxes strewn over a world much larger than their cells, or many boxes far
+    larger than the mean: the dense grid declines and the hashed grid gives the pairs."""
+    sparse = random_boxes(rng, 400, world=5000.0, size=1.0)
+    sparse[:100] = random_boxes(rng, 100, world=5.0, size=1.0)
+    mixed = np.concatenate([random_boxes(rng, 300, world=20.0, size=0.5),
+                            random_boxes(rng, 60, world=20.0, size=5.0)])
+    for bounds in (sparse, mixed):
+        movable = rng.random(len(bounds)) < 0.7
+        assert not _dense_pairs(bounds, movable)[0]
+        np.testing.assert_array_equal(candidate_pairs(bounds, movable),
+                                      brute_force(bounds, movable))
