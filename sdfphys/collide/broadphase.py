@@ -102,7 +102,16 @@ def body_box(bounds: np.ndarray, radius: float, x: float, y: float, angle: float
 
     bounds: (4,) body-frame AABB (may be infinite); radius: bounding radius about the
     centre of mass (inf if unbounded); (x, y), angle: the pose; grow: m added all round.
+    Where the bounds hold the disc's box (a circle's), the disc's box is the answer at
+    every angle (the turned bounds hold the disc), so no rotation is computed.
     """
+    if (bounds[0] <= -radius and bounds[1] <= -radius and bounds[2] >= radius
+            and bounds[3] >= radius):
+        out[0] = -radius + x - grow
+        out[1] = -radius + y - grow
+        out[2] = radius + x + grow
+        out[3] = radius + y + grow
+        return
     c = math.cos(angle)
     s = math.sin(angle)
     ax_lo, ax_hi = _scaled(c, bounds[0], bounds[2])
