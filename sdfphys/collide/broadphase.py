@@ -207,17 +207,27 @@ def _cell_size(box: np.ndarray) -> float:
 
 
 @njit(cache=True)
+def _cursors(start: np.ndarray) -> np.ndarray:
+    """A counting sort's bucket starts, in place: ``start`` (N + 1,) holding bucket b's
+    count at b + 1 becomes each bucket's first slot (a prefix sum); returns a copy of
+    its first N entries, the buckets' fill cursors."""
+    n = start.shape[0] - 1
+    for b in range(n):
+        start[b + 1] += start[b]
+    fill = np.empty(n, np.int64)
+    for b in range(n):
+        fill[b] = start[b]
+    return fill
+
+
+@njit(cache=True)
 def _sorted_pairs(first: np.ndarray, second: np.ndarray, count: int, n: int) -> np.ndarray:
     """Pairs (count, 2) sorted by (first, second): counting sort on first, then an
     insertion sort of each first's few partners."""
     start = np.zeros(n + 1, np.int64)
     for k in range(count):
         start[first[k] + 1] += 1
-    for i in range(n):
-        start[i + 1] += start[i]
-    fill = np.empty(n, np.int64)
-    for i in range(n):
-        fill[i] = start[i]
+    fill = _cursors(start)
     out = np.empty((count, 2), np.int64)
     for k in range(count):
         p = fill[first[k]]
@@ -274,11 +284,7 @@ def _grid_pairs(box: np.ndarray, movable: np.ndarray) -> np.ndarray:
             for cx in range(cx0[i], cx1[i] + 1):
                 for cy in range(cy0[i], cy1[i] + 1):
                     start[_hash(cx, cy, mask) + 1] += 1
-    for b in range(table):
-        start[b + 1] += start[b]
-    fill = np.empty(table, np.int64)
-    for b in range(table):
-        fill[b] = start[b]
+    fill = _cursors(start)
     entry_box = np.empty(n_entries, np.int64)
     entry_cell = np.empty(n_entries, np.int64)
     entry_home = np.empty(n_entries, np.int64)
@@ -402,11 +408,7 @@ def _dense_pairs(box: np.ndarray, movable: np.ndarray):
         if not big[i]:
             cell[i] = (cy[i] - gy0) * width + (cx[i] - gx0 + 1)
             start[cell[i] + 1] += 1
-    for c in range(cells):
-        start[c + 1] += start[c]
-    fill = np.empty(cells, np.int64)
-    for c in range(cells):
-        fill[c] = start[c]
+    fill = _cursors(start)
     entry = np.empty(n - n_big, np.int64)
     for i in range(n):
         if not big[i]:
