@@ -29,6 +29,7 @@ import pytest
 from fieldcheck import FAR_POINTS, boundary_and_sides, bounds_and_axes
 
 from sdfphys.sdf import compiled, field
+from sdfphys.sdf.edit import GRID_HEADER
 from sdfphys.sdf.gradient import NumericGradientField
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -361,7 +362,9 @@ def test_big_grid_consts_are_the_node_values():
     i = int(np.flatnonzero(program.code[:, 0] == compiled.GRID)[0])
     _, o, a, b = program.code[i]
     assert (a, b) == f.shape
-    np.testing.assert_array_equal(program.consts[o + 5:o + 5 + a * b], f.values.ravel())
+    start = o + GRID_HEADER                 # origin, cell, four margins, band
+    np.testing.assert_array_equal(program.consts[start:start + a * b], f.values.ravel())
+    np.testing.assert_array_equal(program.consts[o + 3:o + 7], np.full(4, f.margin))
 
 
 @pytest.mark.parametrize("name", ["ellipse", "heart", "moon", "egg", "arc", "vesica", "star",

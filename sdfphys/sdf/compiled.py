@@ -241,7 +241,7 @@ def _emit(f: Field, out: _Builder) -> None:
         out.emit(ROUNDED_CROSS, [f.h, f._k, f.radius, f._k - f.h], push=1)
     elif kind is grid.GridField:
         band = math.inf if f.band is None else f.band
-        out.emit(GRID, np.concatenate([[f.origin[0], f.origin[1], f.cell, f.margin, band],
+        out.emit(GRID, np.concatenate([[f.origin[0], f.origin[1], f.cell], f.margins, [band],
                                        np.asarray(f.values, dtype=np.float64).ravel()]),
                  a=f.shape[0], b=f.shape[1], push=1)
     elif kind is conics.QuadraticBezier:

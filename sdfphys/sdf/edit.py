@@ -57,9 +57,9 @@ __all__ = ["GRID_HEADER", "REDISTANCE_CELLS", "edit_grid", "redistance", "write_
 #: Reach R of the re-distancing, in cells (see the module docstring).
 REDISTANCE_CELLS = 8
 
-#: A GRID instruction's constants before the node values: origin x, y, cell, margin,
-#: band (``compiled._emit``).
-GRID_HEADER = 5
+#: A GRID instruction's constants before the node values: origin x, y, cell, the four
+#: side margins, band (``compiled._emit``).
+GRID_HEADER = 8
 
 
 def write_window(code: np.ndarray, consts: np.ndarray, row: int, grid: GridField,

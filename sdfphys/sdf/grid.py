@@ -43,13 +43,18 @@ gradient is zero (the band carries no direction, callers must treat |f| = b as
 "far"); in a partly clamped cell the gradient still points from inside to outside.
 
 Outside the grid (q: the nearest point of the grid box, delta = |p - q|, m = the
-margin, v = the interpolant at q):
+margin of the side p lies beyond, the lesser of two beyond a corner; v = the
+interpolant at q):
     f(p) = sqrt(max(v, 0)^2 + delta^2 + 2 m delta) + min(v, 0).
 This is continuous with the inside and grows like delta + m far away. It stays a
 lower bound of the source's distance when v is: the shape lies in the source's
-bounds, at least m inside the grid box, so for every shape point s,
+bounds, at least m inside that side of the grid box, so for every shape point s,
 |p - s|^2 = |q - s|^2 + delta^2 + 2 (p - q).(q - s) >= |q - s|^2 + delta^2 + 2 m delta
-(per axis, q - s has the sign of p - q and magnitude >= m where p - q != 0).
+(per axis, q - s has the sign of p - q and magnitude >= m where p - q != 0). It is
+exact off a flat side of the shape parallel to the grid's side when v at q is the
+true distance and m that side's margin. A baked field has one margin all round; a
+carved dynamic body's piece (``sdfphys.pieces``) one per side, [x low, y low, x high,
+y high] (``margins``).
 With a band the result is clamped to b as inside.
 """
 
@@ -57,6 +62,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -114,6 +120,7 @@ class GridField(Field):
         source = build_field(of, "of")
         self.cell = h = check_number(cell, "cell", low=0.0, low_open=True)
         self.margin = 2.0 * h if margin is None else check_number(margin, "margin", low=0.0)
+        self.margins = np.full(4, self.margin)
         self.band = None if band is None else check_number(band, "band", low=0.0,
                                                             low_open=True)
         if quantize not in ("none", "uint8"):
@@ -148,16 +155,20 @@ class GridField(Field):
         self._bounds = self.level_bounds(0.0)
 
     @classmethod
-    def from_values(cls, values: np.ndarray, origin, cell: float, margin: float = 0.0,
+    def from_values(cls, values: np.ndarray, origin, cell: float, margin: Any = 0.0,
                     band: float | None = None) -> GridField:
         """A float64 grid holding ``values`` (nx, ny), m, node (i, j) at ``origin +
         cell * (i, j)`` (m), with no source field (``spec`` None): terrain from an image
-        (``sdf.image``) and the editable grids of ``sdfphys.terrain``. ``margin`` (m)
-        enters the extrapolation outside the grid (see the module docstring: 0 keeps it
-        a lower bound whatever the values); ``band`` clamps as in ``bake``."""
+        (``sdf.image``) and the editable grids of ``sdfphys.terrain``. ``margin`` (m, one
+        for all sides or (4,) [x low, y low, x high, y high]) enters the extrapolation
+        outside the grid (see the module docstring: 0 keeps it a lower bound whatever
+        the values); ``band`` clamps as in ``bake``."""
         grid = cls.__new__(cls)
         grid.cell = check_number(cell, "cell", low=0.0, low_open=True)
-        grid.margin = check_number(margin, "margin", low=0.0)
+        sides = np.broadcast_to(np.asarray(margin, dtype=np.float64), (4,))
+        grid.margins = np.array([check_number(float(m), f"margin[{k}]", low=0.0)
+                                 for k, m in enumerate(sides)])
+        grid.margin = float(grid.margins.min())
         grid.band = band
         grid.quantize = "none"
         grid.scale = None
@@ -211,7 +222,7 @@ class GridField(Field):
 
     def evaluate(self, points):
         p = as_points(points)
-        h, m = self.cell, self.margin
+        h, sides = self.cell, self.margins
         top = np.array(self.shape) - 1
         u = (p - self.origin) / h                       # node coordinates
         uc = np.clip(u, 0.0, top)                       # the nearest point of the grid box
@@ -232,6 +243,10 @@ class GridField(Field):
         if np.any(out):
             v, gq = value[out], grad[out] * (u[out] == uc[out])   # clamped axes: no slope
             dq, dd = delta[out], dist[out]
+            m = np.minimum(np.where(dq[:, 0] < 0.0, sides[0],
+                                    np.where(dq[:, 0] > 0.0, sides[2], np.inf)),
+                           np.where(dq[:, 1] < 0.0, sides[1],
+                                    np.where(dq[:, 1] > 0.0, sides[3], np.inf)))
             pos = np.maximum(v, 0.0)
             root = np.sqrt(pos * pos + dd * dd + 2.0 * m * dd)
             value[out] = root + np.minimum(v, 0.0)

@@ -49,7 +49,7 @@ SYM_TRIANGLE = 31   # consts: y base, eps, side ax, ay, nx, ny, then 2 edges (ba
 MIRRORED = 32       # a = K mirrors, b = 1: fold y too; consts: radius, eps, K (nx, ny), one edge
 CROSS = 33          # a = M edges; consts: bx, by, rounding, eps, then M edges
 ROUNDED_CROSS = 34  # consts: h, k, radius, k - h
-GRID = 35           # a, b = node counts nx, ny; consts: origin x, y, cell, margin, band
+GRID = 35           # a, b = node counts nx, ny; consts: origin x, y, cell, margins (4), band
                     # (inf: none), then the nx * ny node values (row i = x index)
 QUADRATIC_BEZIER = 36  # consts: a, A = b - a, B = a - 2b + c (2 each), B.B, 3 A.B, 2 A.A,
                        # radius, |A x B|, 1 if the cubic term is used

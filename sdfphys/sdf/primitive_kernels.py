@@ -472,8 +472,9 @@ def _mirrored(consts: np.ndarray, o: int, k: int, abs_y: int, px: float, py: flo
 @njit(cache=True, error_model="numpy")
 def _grid(consts: np.ndarray, o: int, nx: int, ny: int, px: float, py: float
           ) -> tuple[float, float, float]:
-    """grid.GridField.evaluate: bilinear inside the grid, the extension outside, the band."""
-    h, margin, band = consts[o + 2], consts[o + 3], consts[o + 4]
+    """grid.GridField.evaluate: bilinear inside the grid, the extension outside (with the
+    margin of the side beyond which the point lies), the band."""
+    h, band = consts[o + 2], consts[o + 7]
     ux = (px - consts[o]) / h
     uy = (py - consts[o + 1]) / h
     cx = min(max(ux, 0.0), float(nx - 1))
@@ -481,7 +482,7 @@ def _grid(consts: np.ndarray, o: int, nx: int, ny: int, px: float, py: float
     i = int(min(math.floor(cx), float(nx - 2)))
     j = int(min(math.floor(cy), float(ny - 2)))
     tx, ty = cx - i, cy - j
-    base = o + 5 + i * ny + j
+    base = o + 8 + i * ny + j
     v00, v01 = consts[base], consts[base + 1]
     v10, v11 = consts[base + ny], consts[base + ny + 1]
     value = ((1.0 - tx) * (1.0 - ty) * v00 + tx * (1.0 - ty) * v10
@@ -491,6 +492,9 @@ def _grid(consts: np.ndarray, o: int, nx: int, ny: int, px: float, py: float
     dqx, dqy = (ux - cx) * h, (uy - cy) * h
     dd = math.hypot(dqx, dqy)
     if dd > 0.0:
+        mx = consts[o + 3] if dqx < 0.0 else (consts[o + 5] if dqx > 0.0 else math.inf)
+        my = consts[o + 4] if dqy < 0.0 else (consts[o + 6] if dqy > 0.0 else math.inf)
+        margin = min(mx, my)
         gqx = gx * (1.0 if ux == cx else 0.0)          # clamped axes: no slope
         gqy = gy * (1.0 if uy == cy else 0.0)
         v = value
