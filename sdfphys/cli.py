@@ -304,7 +304,7 @@ def _check(args) -> int:
                          f"(digest {meta['scene_digest'][:12]}), not {args.scene} (digest "
                          f"{scene.digest[:12]})")
     try:
-        match_bodies(reference.name, [b.name for b in scene.bodies])
+        match_bodies(reference.name, [b.name for b in scene.bodies], appended=True)
     except SpecError as err:
         raise err.in_file(args.trajectory) from None
     changed = [key for key, value in dataclasses.asdict(scene.settings).items()

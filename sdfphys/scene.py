@@ -357,8 +357,9 @@ def _image_paths(spec: Any, base: Path | None) -> Any:
 def _parse_carves(carves: Any, bodies: list[BodySpec], index: dict[str, int],
                   base: Path | None) -> list[Edit]:
     """The ``[[carve]]`` tables (``terrain.Edit``): time (s, >= 0), body (a name or an
-    index of a static or kinematic bounded body), field (FIELD), position (world, m),
-    optional angle (rad) and deposit (bool); a blast there is an ``[[explode]]`` table."""
+    index of a bounded body; static or kinematic for a deposit), field (FIELD),
+    position (world, m), optional angle (rad) and deposit (bool); a blast there is an
+    ``[[explode]]`` table."""
     edits = []
     for path, table in _event_tables(carves, "carve", CARVE_KEYS,
                                      ("time", "body", "field", "position")):
@@ -372,17 +373,17 @@ def _parse_carves(carves: Any, bodies: list[BodySpec], index: dict[str, int],
         else:
             number = check_int(body, f"{path}.body", low=0, high=len(bodies) - 1)
         target = bodies[number]
-        if target.kind == "dynamic":
+        deposit = _flag(table, "deposit", path)
+        if target.kind == "dynamic" and deposit:
             raise SpecError(f"{path}.body", f"body {target.name!r} is dynamic: only static "
-                                            "and kinematic bodies can be carved")
+                                            "and kinematic bodies take deposits")
         if not math.isfinite(target.shape.radius):
             raise SpecError(f"{path}.body", f"body {target.name!r} is unbounded (e.g. a "
                                             "half-plane): only a bounded field can be carved")
         carved = build_field(_image_paths(table["field"], base), f"{path}.field")
         position = check_position(table["position"], f"{path}.position")
         angle = check_angle(table.get("angle", 0.0), f"{path}.angle")
-        edits.append(Edit(time, number, carved, position, angle,
-                          _flag(table, "deposit", path)))
+        edits.append(Edit(time, number, carved, position, angle, deposit))
     return edits
 
 

@@ -1,4 +1,4 @@
-"""Editable terrain: carving fields out of static and kinematic bodies, depositing them.
+"""Editable terrain: carving fields out of bodies, depositing them on static ones.
 
 ``World.carve(body, field, position, angle)`` removes a FIELD placed at a world pose
 from a body, ``World.deposit`` adds one (docs/terrain.md). The body's field becomes a
@@ -13,7 +13,12 @@ First edit of a body:
   its nodes, cell, margin and band, decoded to float64 if quantized;
 - any other bounded field (an analytic SDF, a box, a polygon, a circle) is baked at
   ``Settings.carve_cell`` over its bounds plus ``MARGIN_CELLS`` cells, with no band;
-- unbounded fields (a half-plane) and dynamic bodies are refused (SpecError).
+- unbounded fields (a half-plane), and deposits on dynamic bodies, are refused
+  (SpecError).
+
+A carved dynamic body then takes the mass, centre of mass and inertia of what is left,
+and each further piece the carve cut off becomes a new body (``pieces.split``): its
+grid moves with its centre of mass, so each of its edits gives it a new shape.
 
 The edited body gets its own shape (bodies that shared its shape keep theirs). What is
 refreshed, for that body only: its contacts and warm-start impulses (dropped: the next
@@ -41,6 +46,7 @@ import numpy as np
 
 from .errors import SpecError
 from .limits import check_angle, check_position
+from .pieces import grid_mass, split
 from .scheduled import add, due
 from .sdf.base import Field
 from .sdf.build import field as build_field
@@ -49,7 +55,7 @@ from .sdf.edit import edit_grid, write_window
 from .sdf.grid import GridField
 from .shapes import SdfShape, Shape
 from .vec2 import rotate
-from .world_bodies import shape_number
+from .world_bodies import Body, shape_number
 
 __all__ = ["MARGIN_CELLS", "Edit", "TerrainShape", "apply_due", "edit", "schedule",
            "user_field"]
@@ -65,18 +71,22 @@ _DYNAMIC = 0
 class TerrainShape(Shape):
     """An edited body's shape: ``field`` is a float64 ``GridField`` in the body frame.
 
-    ``origin`` is the body's (unchanged by edits); ``bounds()`` the grid's box, grown by
-    the depth of its most negative rim node (edits never lower a rim node below
-    min(value, 0)); ``revision`` counts the edits (the renderer redraws the body's
-    sprite when it changes). ``area`` and ``second_moment`` are inf (not tracked):
-    only static and kinematic bodies are edited.
+    ``origin`` is the body's (unchanged by edits of static and kinematic bodies);
+    ``bounds()`` the grid's box, grown by the depth of its most negative rim node (edits
+    never lower a rim node below min(value, 0)); ``revision`` counts the edits (the
+    renderer redraws the body's sprite when it changes). ``area`` (m^2) and
+    ``second_moment`` (m^4, about the frame's origin, the centroid) are a carved dynamic
+    body's (``pieces``); inf, not tracked, for static and kinematic bodies.
     """
 
     kind = "sdf"
 
-    def __init__(self, grid: GridField, origin: np.ndarray):
+    def __init__(self, grid: GridField, origin: np.ndarray, area: float = math.inf,
+                 second_moment: float = math.inf):
         self.grid = grid
         self._origin = np.array(origin, dtype=np.float64)
+        self._area = float(area)
+        self._second_moment = float(second_moment)
         v = grid.values
         rim = min(v[0].min(), v[-1].min(), v[:, 0].min(), v[:, -1].min())
         grow = max(0.0, -float(rim))
@@ -102,11 +112,14 @@ class TerrainShape(Shape):
 
     @property
     def area(self) -> float:
-        """inf: not tracked (only static and kinematic bodies, of infinite mass, are
-        edited; as for unbounded shapes, the renderer's density is then 0)."""
-        return math.inf
+        """m^2: a carved dynamic body's; inf for static and kinematic bodies (infinite
+        mass; as for unbounded shapes, the renderer's density is then 0)."""
+        return self._area
 
-    second_moment = area
+    @property
+    def second_moment(self) -> float:
+        """m^4 about the centroid: a carved dynamic body's; inf otherwise."""
+        return self._second_moment
 
     def bounds(self) -> np.ndarray:
         return self._box.copy()
@@ -142,15 +155,15 @@ def body_index(world: Any, body: Any, path: str = "body") -> int:
     return index % len(world)
 
 
-def _terrain(world: Any, i: int, path: str) -> TerrainShape:
+def _terrain(world: Any, i: int, path: str, deposit: bool) -> TerrainShape:
     """Body ``i``'s TerrainShape, made at its first edit (module docstring)."""
     shape = world._shapes[int(world._data["shape_id"][i])]
+    name = world._names[i]
+    if deposit and int(world._data["kind"][i]) == _DYNAMIC:
+        raise SpecError(path, f"body {name!r} is dynamic: only static and kinematic "
+                              "bodies take deposits (dynamic ones can be carved)")
     if isinstance(shape, TerrainShape):
         return shape
-    name = world._names[i]
-    if int(world._data["kind"][i]) == _DYNAMIC:
-        raise SpecError(path, f"body {name!r} is dynamic: only static and kinematic "
-                              "bodies can be carved or deposited on")
     if not math.isfinite(shape.radius):
         raise SpecError(path, f"body {name!r} is unbounded (e.g. a half-plane): only a "
                               "bounded field can be carved (use a box)")
@@ -158,7 +171,7 @@ def _terrain(world: Any, i: int, path: str) -> TerrainShape:
     if type(user) is GridField:
         # Keep the nodes; the body frame is the user frame moved by ``origin``.
         grid = GridField.from_values(user.values, user.origin + shape.origin, user.cell,
-                                     user.margin, user.band)
+                                     user.margins, user.band)
     else:
         cell = world.settings.carve_cell
         try:
@@ -181,8 +194,11 @@ def edit(world: Any, body: Any, spec: Any, position: Any, angle: float = 0.0,
     shape = build_field(spec, "field")
     position = np.array(check_position(position, "position"))
     angle = check_angle(angle, "angle")
-    terrain = _terrain(world, i, "body")
+    terrain = _terrain(world, i, "body", deposit)
     d = world._data
+    dynamic = int(d["kind"][i]) == _DYNAMIC
+    grid = terrain.grid
+    before = grid_mass(grid.values, grid.origin, grid.cell) if dynamic else None
     com, turn = d["com"][i], float(d["angle"][i])
     c, s = math.cos(turn), math.sin(turn)
     dx, dy = position - com
@@ -207,6 +223,8 @@ def edit(world: Any, body: Any, spec: Any, position: Any, angle: float = 0.0,
     contacts = world._contacts
     world._contacts = contacts.take((contacts.body_a != i) & (contacts.body_b != i))
     world._contact_cache.forget(i)
+    if dynamic:
+        split(world, i, grid, before)
 
 
 def _clear_of_bodies(world: Any, i: int, shape: Field, position: np.ndarray,
@@ -256,12 +274,21 @@ def user_field(world: Any, body: Any) -> Field:
 
 def schedule(world: Any, edits: list[Edit]) -> None:
     """Queue ``edits`` (applied by ``apply_due`` at the start of each step; equal times
-    in the order given: scene order)."""
-    add(world._scheduled, edits)
+    in the order given: scene order). Their bodies are held by handle: a carve may
+    remove a body (carved to nothing) and move the later ones' indices."""
+    handles = []
+    for e in edits:
+        i = body_index(world, e.body)
+        handles.append(e._replace(body=Body(world, int(world._data["uid"][i]))))
+    add(world._scheduled, handles)
 
 
 def apply_due(world: Any) -> None:
     """Apply the queued edits due at the step about to begin at ``world.time``
-    (``scheduled.due``)."""
+    (``scheduled.due``); an edit of a body removed since is dropped."""
     for e in due(world._scheduled, world.time, world.settings.dt):
-        edit(world, e.body, e.field, e.position, e.angle, e.deposit)
+        try:
+            body = e.body.index
+        except IndexError:
+            continue
+        edit(world, body, e.field, e.position, e.angle, e.deposit)

@@ -1,7 +1,10 @@
 """Trajectories: record a scene's body states step by step, save, load, compare.
 
 A trajectory file is an ``.npz`` (DESIGN.md contract), one frame per step, frame 0
-the initial state, bodies in scene order:
+the initial state, bodies in scene order, then the bodies added during the run (the
+pieces a carve cuts off a dynamic body, ``sdfphys.pieces``) in the order they appeared,
+their values NaN in the frames before; a body removed during the run (carved to
+nothing) is NaN in the frames after:
 
     t                 (F,)      s, frame k at k * dt
     position          (F, B, 2) m, each body's user frame origin
@@ -153,21 +156,29 @@ def record(scene: str | os.PathLike | Mapping, seconds: float | None = None,
     steps = max(1, round(seconds / parsed.settings.dt))
     check_steps(steps, "steps", max_steps)
     world = parsed.build()
-    count = len(world)
-    position = np.empty((steps + 1, count, 2))
-    angle = np.empty((steps + 1, count))
-    velocity = np.empty((steps + 1, count, 2))
-    angular_velocity = np.empty((steps + 1, count))
+    # A column per body ever seen, by creation number (uid): the scene's bodies, then
+    # those added during the run (a carved body's pieces), NaN while a body is absent.
+    seen = world._view("uid").copy()
+    names = list(world.names)
+    arrays = {key: np.full((steps + 1, len(seen), *tail), np.nan)
+              for key, (_, tail) in QUANTITIES.items()}
     for k in range(steps + 1):
         if k:
             world.step()
             check_interrupt()
             if progress is not None:
                 progress(k)
-        position[k] = world.position
-        angle[k] = world.angle
-        velocity[k] = world.velocity
-        angular_velocity[k] = world.angular_velocity
+        uid = world._view("uid")
+        new = np.flatnonzero(uid > seen[-1]) if len(seen) else np.arange(len(uid))
+        if len(new):
+            seen = np.concatenate([seen, uid[new]])
+            names += [world.names[i] for i in new]
+            for key, array in arrays.items():
+                grown = np.full((steps + 1, len(new), *array.shape[2:]), np.nan)
+                arrays[key] = np.concatenate([array, grown], axis=1)
+        column = np.searchsorted(seen, uid)
+        for key in arrays:
+            arrays[key][k, column] = getattr(world, key)
     meta = {
         "scene": parsed.source,
         "scene_digest": parsed.digest,
@@ -179,8 +190,9 @@ def record(scene: str | os.PathLike | Mapping, seconds: float | None = None,
         "seconds": float(seconds),
         "steps": steps,
     }
-    return Trajectory(np.arange(steps + 1) * parsed.settings.dt, position, angle, velocity,
-                      angular_velocity, np.array(world.names, dtype=str), meta)
+    return Trajectory(np.arange(steps + 1) * parsed.settings.dt, arrays["position"],
+                      arrays["angle"], arrays["velocity"], arrays["angular_velocity"],
+                      np.array(names, dtype=str), meta)
 
 
 def load(path: str | os.PathLike) -> Trajectory:
@@ -347,12 +359,15 @@ def compare(reference: Trajectory, replay: Trajectory,
     return worst
 
 
-def match_bodies(recorded: Sequence[str], replayed: Sequence[str]) -> None:
-    """Raise SpecError unless the two body name lists are equal (count, names, order)."""
-    if len(recorded) != len(replayed):
+def match_bodies(recorded: Sequence[str], replayed: Sequence[str],
+                 appended: bool = False) -> None:
+    """Raise SpecError unless the two body name lists are equal (count, names, order).
+    appended: ``replayed`` are a scene's bodies, which ``recorded`` may follow with the
+    bodies added during its run (the pieces of a carve)."""
+    if len(recorded) != len(replayed) and not (appended and len(recorded) > len(replayed)):
         raise SpecError("name", f"{len(recorded)} bodies recorded, the scene has "
                         f"{len(replayed)}")
-    for index, (a, b) in enumerate(zip(recorded, replayed, strict=True)):
+    for index, (a, b) in enumerate(zip(recorded, replayed)):
         if a != b:
             raise SpecError(f"name[{index}]", f"body {str(a)!r} recorded, the scene has "
                             f"{str(b)!r}")

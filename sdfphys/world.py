@@ -391,20 +391,24 @@ class World(WorldJoints):
     def carve(self, body: Any, field: Any, position: Any, angle: float = 0.0) -> None:
         """Remove ``field`` (a FIELD dict such as ``{"type": "circle", "radius": 0.3}``,
         or a Field), its origin placed at world ``position`` (2,) m and turned by
-        ``angle`` rad, from static or kinematic ``body`` (an index, name or Body).
+        ``angle`` rad, from ``body`` (an index, name or Body; bounded).
 
         The body's field becomes a baked grid at its first edit (an analytic field at
         ``settings.carve_cell``, m) and is edited in place: max(v, -c) on the nodes the
         field's bounds cover, then re-distanced (``sdf.edit``); the part beyond the grid
         is clipped. Bodies resting on it wake; its contacts and warm starts are dropped.
-        Bad input (unknown body, dynamic or unbounded body, NaN position, bad FIELD)
-        raises SpecError naming it.
+        A dynamic body takes the mass, centre of mass and inertia of what is left, and
+        each further piece cut off becomes a new body named ``<name>.<k>``, appended
+        (``sdfphys.pieces``); a body carved to nothing is removed.
+        Bad input (unknown or unbounded body, NaN position, bad FIELD) raises SpecError
+        naming it.
         """
         terrain.edit(self, body, field, position, angle, deposit=False)
 
     def deposit(self, body: Any, field: Any, position: Any, angle: float = 0.0) -> None:
-        """Add ``field`` to ``body``: min(v, c) instead of ``carve``'s max(v, -c); the
-        rest as ``carve`` (a deposit reaching beyond the grid is clipped at its edge)."""
+        """Add ``field`` to static or kinematic ``body``: min(v, c) instead of
+        ``carve``'s max(v, -c); the rest as ``carve`` (a deposit reaching beyond the grid
+        is clipped at its edge; a dynamic body raises SpecError)."""
         terrain.edit(self, body, field, position, angle, deposit=True)
 
     def field(self, body: Any) -> Any:

@@ -50,6 +50,8 @@ HORIZONS: dict[str, tuple[int, str]] = {
     "circles_in_box": (50, "first circles reach the floor at step 36 and start piling"),
     "concave_polygons": (35, "first triangle-field contacts at step 25"),
     "csg_bodies": (35, "first CSG bodies land at step 25"),
+    "fracture": (75, "the beam is sawn through at step 60 and splits in two (a body "
+                 "appears); the halves tip off the piers"),
     "filtered_crowd": (65, "teams pass through each other at steps 28-50, land at 59, pile"),
     "grid_terrain": (55, "bodies reach the baked terrain at step 43"),
     "head_on": (75, "the balls meet at step 64 and separate"),

@@ -131,7 +131,7 @@ def test_carving_a_moved_and_turned_body_uses_world_coordinates():
 @pytest.mark.parametrize("call, match", [
     (lambda w: w.carve("grund", HOLE, (0, 0)), "body: no body named 'grund'.*'ground'"),
     (lambda w: w.carve(7, HOLE, (0, 0)), "body: body index 7 out of range"),
-    (lambda w: w.carve("crate", HOLE, (0, 0)), "body: body 'crate' is dynamic"),
+    (lambda w: w.deposit("crate", HOLE, (0, 0)), "body: body 'crate' is dynamic"),
     (lambda w: w.carve("plane", HOLE, (0, 0)), "body: body 'plane' is unbounded"),
     (lambda w: w.carve("ground", HOLE, (np.nan, 0)), r"position\[0\]: must be finite"),
     (lambda w: w.carve("ground", {"type": "circle", "radius": -1}, (0, 0)),
@@ -215,7 +215,7 @@ def test_a_scheduled_carve_applies_at_the_first_step_at_or_after_its_time():
 
 @pytest.mark.parametrize("change, message", [
     ({"body": "grond"}, "carve[0].body: no body named 'grond' (did you mean 'ground'?)"),
-    ({"body": 1}, "carve[0].body: body 'crate' is dynamic"),
+    ({"body": 1, "deposit": True}, "carve[0].body: body 'crate' is dynamic"),
     ({"body": 3}, "carve[0].body: must be <= 2, got 3"),
     ({"time": -1.0}, "carve[0].time: must be >= 0, got -1"),
     ({"position": [0.0, float("nan")]}, "carve[0].position[1]: must be finite, got nan"),
