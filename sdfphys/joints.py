@@ -323,6 +323,14 @@ class JointTable:
                       for s, k in zip(self.specs, keep) if k]
         self.rows = self.rows.take(keep).renumbered(index)
 
+    def moved_frame(self, index: int, shift: np.ndarray) -> None:
+        """Body ``index``'s centre of mass moved by ``shift`` (2,) m in its own frame (a
+        carve, ``sdfphys.pieces``): its joints' anchors, held relative to it, move by
+        -shift, so they stay at the same material points."""
+        r = self.rows
+        r.local_a[r.body_a == index] -= shift
+        r.local_b[r.body_b == index] -= shift
+
     def excluded_pairs(self, count: int) -> np.ndarray | None:
         """Sorted int64 keys lo * count + hi of the body pairs whose contacts a joint
         turns off (collide_connected false, two bodies), or None if there are none."""

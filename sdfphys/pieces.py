@@ -29,7 +29,8 @@ Pieces. The parts of the material are the 4-connected components of the nodes wi
 phi > 0 (v < h / 2): parts less than about a cell apart stay one body (the grid cannot
 tell them apart; neither can its level set). The largest part stays the body; each
 further part becomes a new dynamic body with the body's material, filter and damping,
-moving as that part moved (v + w x d, the same w), named ``<name>.<k>``. A part with
+moving as that part moved (v + w x d, the same w), named ``<name>.<k>``; the body's
+joints stay with it, at the same material points. A part with
 less than ``DUST_CELLS`` cells of area is dropped with the carved material; a body left
 with none is removed. Each part's grid is its own: the nodes of its bounding box grown by
 ``_PAD`` nodes (within the old grid), the other parts' nodes set outside and the window
@@ -226,6 +227,8 @@ def split(world: Any, i: int, grid: GridField, before: GridMass) -> None:
             d["origin"][i] = origin
             d["com"][i] = com + arm
             d["velocity"][i] = moving
+            d["round"][i] = False                # a carved circle is a field now
+            world._joints.moved_frame(i, part.centroid)
             j = i
         else:
             j = add(world, shape, check_body(

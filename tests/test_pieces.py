@@ -205,3 +205,26 @@ def test_a_piece_reads_true_distances_beyond_its_own_grid():
         local = np.stack([np.full(4, w.center_of_mass[k, 0] - w.position[k, 0]), top + heights],
                          axis=1)
         np.testing.assert_allclose(w.field(k).distance(local), heights, atol=2e-3)
+
+
+def test_a_carved_body_keeps_its_joints_at_the_same_material_points():
+    """A bar hinged to the world at its left end, carved near its right end: its centre
+    of mass moves, the hinge does not (both anchors where they were, to 1e-12 m), and it
+    swings from there; a carved circle is no longer a round body."""
+    w = _bar(position=(0.0, 2.0), angle=0.4)
+    w.add_joint({"type": "revolute", "bodies": ["bar", "world"], "anchor": [-0.9, 1.64]})
+    before = w.joint_anchors()
+    com0 = w.center_of_mass[0].copy()
+    w.carve("bar", {"type": "circle", "radius": 0.2}, com0 + 0.6 * np.array(
+        [math.cos(0.4), math.sin(0.4)]))
+    assert np.hypot(*(w.center_of_mass[0] - com0)) > 0.03
+    for old, new in zip(before, w.joint_anchors()):
+        np.testing.assert_allclose(new, old, rtol=0, atol=1e-12)
+    for _ in range(30):
+        w.step()
+    first, second = w.joint_anchors()
+    assert np.hypot(*(first - second)[0]) < 1e-3
+    ball = World(settings=Settings(carve_cell=0.02))
+    ball.add_body({"type": "circle", "radius": 0.5}, name="ball")
+    ball.carve("ball", {"type": "circle", "radius": 0.2}, (0.4, 0.0))
+    assert not ball._data["round"][0]
