@@ -12,9 +12,10 @@ pointer next to it (``hover_readout``: name, index, kind, mass, velocity and the
 pointer's signed distance to it).
 
 Carve tool (K toggles it, docs/terrain.md): a left click carves a disc of the tool's
-radius out of the static or kinematic body the disc reaches (``pick_terrain``: the one
-whose field is smallest at the pointer), shift + left click deposits one; the wheel
-sets the radius (x 1.25 per notch, ``CARVE_RADII``). The pointer shows the disc.
+radius out of the body the disc reaches (``pick_terrain``: the one whose field is
+smallest at the pointer; a dynamic body takes the mass left and splits into pieces),
+shift + left click deposits one on a static or kinematic body; the wheel sets the
+radius (x 1.25 per notch, ``CARVE_RADII``). The pointer shows the disc.
 
 The top line shows frames per second, simulation steps per second, the simulated
 time and the state (paused, overlays).
@@ -172,14 +173,16 @@ def hover_readout(world: Any, point: np.ndarray, max_distance: float) -> list[st
             f"distance {float(near.distance[0]):+.4f} m"]
 
 
-def pick_terrain(world: Any, point: np.ndarray, reach: float) -> int | None:
-    """The static or kinematic bounded body whose field is smallest at world ``point``
-    (2,) m, if that value is <= ``reach`` m (a disc of that radius there reaches it);
-    None if there is none (the carve tool's target)."""
+def pick_terrain(world: Any, point: np.ndarray, reach: float,
+                 dynamic: bool = False) -> int | None:
+    """The bounded body whose field is smallest at world ``point`` (2,) m, static or
+    kinematic (or dynamic too, with ``dynamic``: a carve, not a deposit), if that value
+    is <= ``reach`` m (a disc of that radius there reaches it); None if there is none
+    (the carve tool's target)."""
     frames = body_frames(world)
     radius = np.array([float(s.radius) for s in frames.shapes])[frames.shape_id]
-    return _smallest_field(frames, point, (frames.motion != DYNAMIC) & np.isfinite(radius),
-                           reach)
+    return _smallest_field(frames, point, (dynamic | (frames.motion != DYNAMIC))
+                           & np.isfinite(radius), reach)
 
 
 class RateMeter:
@@ -268,7 +271,7 @@ class _Session:
         """Carve (or deposit) the tool's disc at screen ``pos`` in the terrain it reaches;
         an edit the body refuses is one line on stderr."""
         point = self.pointer = self.camera.screen_to_world([pos])[0]
-        body = pick_terrain(self.world, point, self.carve_radius)
+        body = pick_terrain(self.world, point, self.carve_radius, dynamic=not deposit)
         if body is None:
             return
         disc = {"type": "circle", "radius": self.carve_radius}

@@ -301,9 +301,12 @@ def test_the_carve_tool_carves_deposits_and_sizes_its_disc(capsys):
         yield [pygame.event.Event(pygame.MOUSEWHEEL, x=0, y=1, flipped=False)]
         pygame.key.set_mods(pygame.KMOD_SHIFT)
         yield [mouse(pygame.MOUSEBUTTONDOWN, (-1.0, 1.2))]       # deposit r = 0.375
+        yield [mouse(pygame.MOUSEBUTTONDOWN, (2.5, 3.0))]        # no deposit on the ball
         pygame.key.set_mods(0)
-        yield [mouse(pygame.MOUSEBUTTONDOWN, (2.5, 3.0))]        # only the ball: nothing
         yield [mouse(pygame.MOUSEBUTTONDOWN, (0.0, 4.0))]        # empty space: nothing
+        assert worlds[0].names == ["ground", "ball"]
+        assert worlds[0].shapes[worlds[0].shape_id[1]].kind == "circle"
+        yield [mouse(pygame.MOUSEBUTTONDOWN, (2.5, 3.0))]        # carves the ball away
         yield [mouse(pygame.MOUSEMOTION, (0.0, 2.0))]
 
     assert play(factory, SETTINGS, allow_headless=True, events=script()) == 0
@@ -313,5 +316,5 @@ def test_the_carve_tool_carves_deposits_and_sizes_its_disc(capsys):
     assert d[0] > 0.0 and d[1] < 0.0                             # a 0.3 m hole from y = 1.0
     assert d[2] < 0.0 and d[3] > 0.0                             # a 0.375 m mound at y = 1.2
     assert d[4] < 0.0
-    assert world.shapes[world.shape_id[1]].kind == "circle"
+    assert world.names == ["ground"]                            # the whole ball carved
     assert capsys.readouterr().err == ""
