@@ -137,12 +137,16 @@ def test_find_contacts_contract(rng):
     np.testing.assert_allclose(c.depth[circles], -gap[near], atol=1e-12)
 
 
+#: Normals of candidates on one horizontal plane.
+UP = np.tile([[0.0, 1.0]], (64, 1))
+
+
 def test_reduction_keeps_the_ends_of_a_flat_patch():
     x = np.linspace(-1.0, 1.0, 21)
     point = np.stack([x, np.zeros(21)], axis=1)
     depth = np.full(21, 0.01)
     order = np.argsort(np.abs(x), kind="stable")           # a middle point comes first
-    keep = reduce_contacts(np.array([0, 21]), point[order], depth[order], 4, 0.005)
+    keep = reduce_contacts(np.array([0, 21]), point[order], depth[order], UP[:21], 4, 0.005)
     np.testing.assert_array_equal(np.sort(x[order][keep]), [-1.0, 1.0])
 
 
@@ -150,14 +154,15 @@ def test_reduction_keeps_a_deeper_middle_and_two_faces():
     # a flat patch whose middle is deeper than its ends: the middle stays
     point = np.array([[0.0, 0.0], [-1.0, 0.0], [1.0, 0.0], [0.5, 0.0]])
     depth = np.array([0.03, 0.01, 0.01, 0.01])
-    keep = reduce_contacts(np.array([0, 4]), point, depth, 4, 0.005)
+    keep = reduce_contacts(np.array([0, 4]), point, depth, UP[:4], 4, 0.005)
     np.testing.assert_array_equal(keep, [True, True, True, False])
     # a box in a V groove: two points on each wall, budget 4, then budget 2
     point = np.array([[-1.0, 1.0], [-0.5, 0.5], [0.5, 0.5], [1.0, 1.0], [-0.75, 0.75]])
     depth = np.array([0.02, 0.02, 0.02, 0.02, 0.02])
-    keep = reduce_contacts(np.array([0, 5]), point, depth, 4, 0.005)
+    walls = np.array([[1.0, 1.0], [1.0, 1.0], [-1.0, 1.0], [-1.0, 1.0], [1.0, 1.0]]) / np.sqrt(2)
+    keep = reduce_contacts(np.array([0, 5]), point, depth, walls, 4, 0.005)
     np.testing.assert_array_equal(keep, [True, True, True, True, False])
-    keep = reduce_contacts(np.array([0, 5]), point, depth, 2, 0.005)
+    keep = reduce_contacts(np.array([0, 5]), point, depth, walls, 2, 0.005)
     assert keep.sum() == 2 and keep[0] and keep[3]
 
 
@@ -176,9 +181,27 @@ def test_reduction_spends_its_budget_on_touching_points_before_far_gaps():
                       [2.32032988, 0.90298658]])
     depth = np.array([0.011642, 0.008232, 0.008232, 0.003805, 0.003805, -0.08694,
                       -0.13060, -0.15520, -0.15520, -0.19809, -0.20205])
-    keep = reduce_contacts(np.array([0, len(depth)]), point, depth, 4, 0.005)
+    keep = reduce_contacts(np.array([0, len(depth)]), point, depth, UP[:len(depth)], 4,
+                           0.005)
     assert keep.sum() == 4 and keep[0]
     assert keep[3] or keep[4]                                  # the spike tip
+
+
+def test_a_segment_covers_only_candidates_on_its_plane():
+    """scenes/fracture.toml's beam cut by a round hole instead, a nudged run at 1.75 s: a
+    sharp corner of the piece 21.9 mm above the ground, seen from the piece (normal the
+    ground's), 22.6 mm seen from the ground (normal the corner's blunted side, tilted 34
+    degrees), and the piece's far end. The corner's vertical row lies between the other
+    two, 2.4 mm deeper than their interpolation, and they are on no common plane: it is
+    kept (dropped, the tilted row let the corner sink 44 mm in the step)."""
+    point = np.array([[1.3458, 0.0110], [1.3516, 0.0093], [1.0138, 0.0595]])
+    depth = np.array([-0.02192, -0.02263, -0.11908])
+    normal = np.array([[0.0, 1.0], [0.566, 0.824], [0.0, 1.0]])
+    keep = reduce_contacts(np.array([0, 3]), point, depth, normal, 4, 0.005)
+    assert keep[0] and keep[2]
+    # On one plane the segment covers the corner's row, as before.
+    keep = reduce_contacts(np.array([0, 3]), point, depth, UP[:3], 4, 0.005)
+    assert not keep[0] and keep[1] and keep[2]
 
 
 def test_reduction_per_pair_and_budget(rng):
@@ -189,11 +212,12 @@ def test_reduction_per_pair_and_budget(rng):
     for s, e in itertools.pairwise(start):
         order = np.argsort(-depth[s:e], kind="stable") + s
         depth[s:e], point[s:e] = depth[order], point[order]
-    keep = reduce_contacts(start, point, depth, 4, 0.005)
+    normal = np.tile(UP[:1], (start[-1], 1))
+    keep = reduce_contacts(start, point, depth, normal, 4, 0.005)
     kept_per_pair = np.add.reduceat(keep.astype(int), start[:-1])
     assert np.all(kept_per_pair >= 1) and np.all(kept_per_pair <= 4)
     assert np.all(keep[start[:-1]] | (kept_per_pair > 1))
-    np.testing.assert_array_equal(keep, reduce_contacts(start, point, depth, 4, 0.005))
+    np.testing.assert_array_equal(keep, reduce_contacts(start, point, depth, normal, 4, 0.005))
 
 
 def test_two_thousand_circles_in_a_box_in_a_few_ms(rng):
@@ -230,7 +254,7 @@ def test_reduction_drops_points_shadowed_by_a_deeper_one():
     # a corner 0.02 deep, and the other direction's view of it (shallower, 7 mm away)
     point = np.array([[0.0, -0.01], [0.006, -0.005], [0.03, -0.004]])
     depth = np.array([0.02, 0.014, 0.001])
-    keep = reduce_contacts(np.array([0, 3]), point, depth, 4, 0.005)
+    keep = reduce_contacts(np.array([0, 3]), point, depth, UP[:3], 4, 0.005)
     np.testing.assert_array_equal(keep, [True, False, True])
 
 

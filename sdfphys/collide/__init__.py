@@ -241,7 +241,7 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
     order = np.lexsort((c.feature, -c.depth, pair_key))
     c, pair_key = c.take(order), pair_key[order]
     starts = np.flatnonzero(np.diff(pair_key)) + 1
-    keep = reduce_contacts(np.r_[0, starts, len(c)], c.point, c.depth,
+    keep = reduce_contacts(np.r_[0, starts, len(c)], c.point, c.depth, c.normal,
                            settings.contacts_per_pair, settings.linear_slop)
     if settings.contacts_per_pair >= 2:
         # Clipped polygon manifolds (two points at most) are kept whole.

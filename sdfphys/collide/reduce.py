@@ -24,9 +24,18 @@ to p and d_q the depth interpolated linearly there. A point lying on the segment
 between two kept points (within ``tolerance``), no deeper than the interpolation
 of their depths, adds nothing: for a straight edge against a flat surface the
 separation is an affine function along the edge, so constraints that hold at the
-two end points hold in between. Step 3 lets the end points of a flat patch
-replace a deepest point that happened to lie in its middle (equal depths), so a
-box resting flat on a box keeps exactly its two corners.
+two end points hold in between. That holds on one plane: where the three normals
+do not agree within 0.1 rad (``SAME_PLANE``), a segment covers only a candidate no
+deeper than its interpolated depth (the slop's latitude is for one plane). A sharp
+corner of a baked piece falling end-on onto the ground had its vertical row (the
+corner over the ground's face, 21.9 mm above it, 2.4 mm deeper than the segment)
+dropped as lying between a row on the corner's blunted side (tilted 34 degrees,
+22.6 mm) and the piece's far end; the tilted row let the corner sink 44 mm within
+the step.
+
+Step 3 lets the end points of a flat patch replace a deepest point that happened to
+lie in its middle (equal depths), so a box resting flat on a box keeps exactly its
+two corners.
 
 Shadowing: a candidate within distance d_q of a kept point q of depth d_q (and
 not deeper than it) has novelty 0. Such points describe the same feature seen at
@@ -45,16 +54,22 @@ import numpy as np
 
 from .._jit import njit
 
-__all__ = ["reduce_contacts"]
+__all__ = ["SAME_PLANE", "reduce_contacts"]
+
+#: Cosine of the largest angle (0.1 rad) between the normals of a segment's two kept
+#: points and a candidate for the segment to cover it (module docstring).
+SAME_PLANE = float(np.cos(0.1))
 
 
 @njit(cache=True)
 def _element_novelty(px: float, py: float, d: float, ax: float, ay: float, da: float,
-                     bx: float, by: float, db: float) -> float:
+                     bx: float, by: float, db: float, strict: bool) -> float:
     """max(distance, depth excess) of (p, d) to the segment a-b (a point if a == b).
 
     A point element a (a == b) shadows (p, d) within its depth: 0 when
-    |p - a| <= da and d <= da.
+    |p - a| <= da and d <= da. ``strict`` (a segment whose ends' normals and p's are
+    on no common plane): a p deeper than the segment's interpolated depth is not
+    covered (inf).
     """
     ex = bx - ax
     ey = by - ay
@@ -69,15 +84,20 @@ def _element_novelty(px: float, py: float, d: float, ax: float, ay: float, da: f
     excess = d - (da + t * (db - da))
     if length2 == 0.0 and distance <= da and excess <= 0.0:
         return 0.0
+    if strict and excess > 0.0:
+        return np.inf
     return max(distance, excess)
 
 
 @njit(cache=True)
 def _novelty(c: int, kept: np.ndarray, n_kept: int, skip: int, point: np.ndarray,
-             depth: np.ndarray) -> float:
-    """Novelty of candidate ``c`` against ``kept[:n_kept]`` except ``kept[skip]``."""
+             depth: np.ndarray, normal: np.ndarray) -> float:
+    """Novelty of candidate ``c`` against ``kept[:n_kept]`` except ``kept[skip]``; a
+    segment whose ends' normals do not both agree with c's (``SAME_PLANE``) covers c
+    only where c is no deeper than the segment's interpolated depth."""
     best = np.inf
     px, py, d = point[c, 0], point[c, 1], depth[c]
+    nx, ny = normal[c, 0], normal[c, 1]
     for u in range(n_kept):
         if u == skip:
             continue
@@ -86,14 +106,16 @@ def _novelty(c: int, kept: np.ndarray, n_kept: int, skip: int, point: np.ndarray
             if v == skip:
                 continue
             b = kept[v]
+            strict = b != a and (nx * normal[a, 0] + ny * normal[a, 1] < SAME_PLANE
+                                 or nx * normal[b, 0] + ny * normal[b, 1] < SAME_PLANE)
             best = min(best, _element_novelty(px, py, d, point[a, 0], point[a, 1], depth[a],
-                                              point[b, 0], point[b, 1], depth[b]))
+                                              point[b, 0], point[b, 1], depth[b], strict))
     return best
 
 
 @njit(cache=True)
-def _reduce(start: np.ndarray, point: np.ndarray, depth: np.ndarray, budget: int,
-            tolerance: float, keep: np.ndarray) -> None:
+def _reduce(start: np.ndarray, point: np.ndarray, depth: np.ndarray, normal: np.ndarray,
+            budget: int, tolerance: float, keep: np.ndarray) -> None:
     kept = np.empty(budget, np.int64)
     for g in range(start.shape[0] - 1):
         s, e = start[g], start[g + 1]
@@ -109,7 +131,7 @@ def _reduce(start: np.ndarray, point: np.ndarray, depth: np.ndarray, budget: int
                     is_kept = is_kept or kept[u] == c
                 if is_kept:
                     continue
-                novelty = _novelty(c, kept, n_kept, -1, point, depth)
+                novelty = _novelty(c, kept, n_kept, -1, point, depth, normal)
                 if not novelty > tolerance:
                     continue
                 score = novelty + min(depth[c], 0.0)
@@ -121,7 +143,7 @@ def _reduce(start: np.ndarray, point: np.ndarray, depth: np.ndarray, budget: int
             n_kept += 1
             u = 0
             while u < n_kept - 1:
-                if _novelty(kept[u], kept, n_kept, u, point, depth) <= tolerance:
+                if _novelty(kept[u], kept, n_kept, u, point, depth, normal) <= tolerance:
                     # A loop, not kept[u:n - 1] = kept[u + 1:n]: the slice assignment
                     # costs seconds of compilation on a cold start.
                     for v in range(u, n_kept - 1):
@@ -134,19 +156,21 @@ def _reduce(start: np.ndarray, point: np.ndarray, depth: np.ndarray, budget: int
 
 
 def reduce_contacts(pair_start: np.ndarray, point: np.ndarray, depth: np.ndarray,
-                    budget: int, tolerance: float) -> np.ndarray:
+                    normal: np.ndarray, budget: int, tolerance: float) -> np.ndarray:
     """Mask (K,) bool of the candidates kept, at most ``budget`` per pair.
 
     pair_start: (G + 1,) int64 offsets: pair g owns candidates
         ``pair_start[g]:pair_start[g + 1]``, sorted by depth (deepest first), then
         by feature key. point: (K, 2) contact points (m, any common frame).
-    depth: (K,) penetration (m, > 0 overlapping). budget: >= 1 points per pair.
+    depth: (K,) penetration (m, > 0 overlapping). normal: (K, 2) unit contact normals.
+    budget: >= 1 points per pair.
     tolerance: m, novelty at or below which a point adds nothing (the solver's
         linear slop is a natural choice).
     """
     keep = np.zeros(len(depth), np.bool_)
     _reduce(np.ascontiguousarray(pair_start, dtype=np.int64),
             np.ascontiguousarray(point, dtype=np.float64),
-            np.ascontiguousarray(depth, dtype=np.float64), int(max(budget, 1)),
+            np.ascontiguousarray(depth, dtype=np.float64),
+            np.ascontiguousarray(normal, dtype=np.float64), int(max(budget, 1)),
             float(tolerance), keep)
     return keep
