@@ -1,4 +1,4 @@
-"""Editable terrain: carving fields out of bodies, depositing them on static ones.
+"""Editable terrain: carving fields out of bodies; deposits on static and kinematic ones.
 
 ``World.carve(body, field, position, angle)`` removes a FIELD placed at a world pose
 from a body, ``World.deposit`` adds one (docs/terrain.md). The body's field becomes a
