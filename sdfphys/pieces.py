@@ -146,9 +146,10 @@ def _material_box(values: np.ndarray, cell: float) -> np.ndarray:
     along cell edges: within a cell the region's extremes lie on its edges, the
     interpolant being linear along each). No inside node: an empty box (inf, -inf)."""
     box = np.array([np.inf, np.inf, -np.inf, -np.inf])
+    inside = values <= 0.0
+    indices = np.indices(values.shape).astype(float)
     for axis in (0, 1):
-        inside = values <= 0.0
-        index = np.indices(values.shape)[axis].astype(float)
+        index = indices[axis]
         a = np.take(values, np.arange(values.shape[axis] - 1), axis=axis)
         b = np.take(values, np.arange(1, values.shape[axis]), axis=axis)
         cut = (a <= 0.0) != (b <= 0.0)
