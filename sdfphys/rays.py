@@ -58,7 +58,7 @@ from ._jit import njit
 from .collide.broadphase import world_bounds
 from .errors import check_number
 from .queries import _CIRCLE, _MESH, _SDF, RayHits, _bodies, _grid, _packed, _rays
-from .sdf.compiled import run
+from .sdf.compiled import run_shared
 
 __all__ = ["COARSE", "MAX_STEPS", "OMEGA", "ROOT_TOLERANCE", "TOUCH", "cast"]
 
@@ -85,7 +85,7 @@ _ROOT_STEPS = 100
 def _field(code, consts, x, y, pt, stack, frames, cur, value, grad):
     """(f, df/dx, df/dy) of a program at (x, y), body frame."""
     pt[0, 0], pt[0, 1] = x, y
-    run(code, consts, pt, 1, stack, frames, cur, value, grad)
+    run_shared(code, consts, pt, 1, stack, frames, cur, value, grad)
     return value[0], grad[0, 0], grad[0, 1]
 
 

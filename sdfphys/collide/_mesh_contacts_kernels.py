@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from .._jit import njit
-from ..sdf.compiled import run, scratch
+from ..sdf.compiled import run_shared, scratch
 from ..sorting import stable_argsort
 from ..vec2 import unit_or
 from ._compiled_descent import enclosing_circles
@@ -48,7 +48,7 @@ def _evaluate(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int,
     """Value (n,) and gradient (n, 2) of a program (``sdf.compiled``) at points[:n]."""
     stack, frames, cur = scratch(depth, nesting, n)
     value, grad = np.empty(n), np.empty((n, 2))
-    run(code, consts, points, n, stack, frames, cur, value, grad)
+    run_shared(code, consts, points, n, stack, frames, cur, value, grad)
     return value, grad
 
 

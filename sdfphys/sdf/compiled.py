@@ -66,8 +66,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import types
 
 from .._jit import njit
+from .._shared_kernel import shared
 from ..vec2 import TINY
 from . import conics, curved, folded, grid, operators, polygonal
 from .base import Field, safe_normalize
@@ -114,7 +116,8 @@ from .opcodes import (
 )
 from .primitive_kernels import _box, _ellipse, _polygon, _segment, _shape
 
-__all__ = ["Program", "compile_field", "distance", "evaluate", "run", "scratch"]
+__all__ = ["RUN_TYPES", "Program", "compile_field", "distance", "evaluate", "run", "run_shared",
+           "scratch"]
 
 @dataclass(frozen=True)
 class Program:
@@ -505,6 +508,16 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
     result = stack[0]
     for j in range(n):
         value[j], grad[j, 0], grad[j, 1] = result[j, 0], result[j, 1], result[j, 2]
+
+
+#: ``run``'s argument types: the one signature every kernel calls it with.
+RUN_TYPES = (types.int64[:, ::1], types.float64[::1], types.float64[:, ::1], types.int64,
+             types.float64[:, :, ::1], types.float64[:, :, ::1], types.float64[:, ::1],
+             types.float64[::1], types.float64[:, ::1])
+
+#: ``run`` for njit callers: one machine code per process, called by name
+#: (``sdfphys._shared_kernel``), not built into each caller.
+run_shared = shared(run, RUN_TYPES, "sdfphys_sdf_compiled_run")
 
 
 def evaluate(f: Field, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
