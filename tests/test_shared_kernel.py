@@ -1,10 +1,10 @@
 """sdfphys._shared_kernel: callers call the field evaluator by name, not a copy of it.
 
 The field program's evaluator ``sdf.compiled.run`` is called from the collision, ray
-and rendering kernels through ``run_shared``: each caller declares the symbol and
-calls it; the machine code of ``run`` exists once per process. A caller loaded from
-the on-disk cache in a fresh process, before anything has compiled or loaded ``run``,
-must find the symbol published (LLVM aborts the process on an unresolved symbol).
+and rendering kernels through ``run_shared``: each caller calls the entry point held
+in the cell the symbol names; the machine code of ``run`` exists once per process. A
+caller loaded from the on-disk cache in a fresh process, before anything has compiled
+or loaded ``run``, must find it published when it runs.
 """
 
 import os
@@ -40,12 +40,14 @@ def test_a_caller_computes_run_s_own_bits_and_holds_no_copy_of_it():
     run(program.code, program.consts, points, len(points), stack, frames, cur,
         ref_value, ref_grad)
     assert value.tobytes() == ref_value.tobytes() and grad.tobytes() == ref_grad.tobytes()
-    assert _REGISTRY[SYMBOL].address != 0
+    record = _REGISTRY[SYMBOL]
+    compiled = run.overloads[RUN_TYPES]
+    assert record.published and record.cell.value == \
+        compiled.library.get_pointer_to_function(compiled.fndesc.mangled_name)
     library = next(iter(mck._evaluate.overloads.values())).library
     module = library._get_module_for_linking()
     defined = [f.name for f in module.functions if not f.is_declaration]
-    declared = [f.name for f in module.functions if f.is_declaration]
-    assert SYMBOL in declared
+    assert module.get_global_variable(SYMBOL).is_declaration
     assert not [name for name in defined if "8compiled3run" in name]
 
 
@@ -72,7 +74,7 @@ from sdfphys.collide import _mesh_contacts_kernels as mck
 from sdfphys.sdf.compiled import compile_field, run
 p = compile_field(sdf.field(%r))
 points = np.random.default_rng(3).uniform(-1.0, 1.0, (50, 2))
-assert not _REGISTRY["sdfphys_sdf_compiled_run"].address and not run.overloads
+assert not _REGISTRY["sdfphys_sdf_compiled_run"].published and not run.overloads
 value, grad = mck._evaluate(p.code, p.consts, p.depth, p.nesting, points, len(points))
 k = mck._evaluate
 print(sum(k.stats.cache_hits.values()), sum(k.stats.cache_misses.values()))
@@ -82,8 +84,9 @@ print(value.tobytes().hex()[:64], grad.tobytes().hex()[:64], float(value.sum()))
 
 def test_a_cached_caller_in_a_fresh_process_finds_the_kernel_published(tmp_path):
     """Two processes on one fresh cache, each calling the caller before anything else:
-    the first compiles it, the second loads its machine code, whose call of the symbol
-    must resolve (``run`` published before the caller is handed to the JIT)."""
+    the first compiles it, the second loads its machine code, whose call through the
+    cell must reach ``run`` (published before the caller runs; before it, a call
+    raises numba's unresolved-symbol error)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
 
     def once():
