@@ -25,7 +25,8 @@ A caller's cache stamp covers the kernel's module, which it imports (``_numba_ca
 an edit of the kernel recompiles its callers as before.
 
 The call is an ordinary call (the arguments' types must be the signature's, constants
-of its types are accepted), the results are the kernel's own bits. Only njit code
+of its types are accepted; the kernel's result is returned as numba returns it, a new
+reference), the results are the kernel's own bits. Only njit code
 calls it; Python calls the kernel.
 """
 
@@ -61,9 +62,10 @@ class _Shared:
     """One shared kernel: its dispatcher, argument types, symbol and the cell the
     symbol names (the address of the kernel's native entry once published)."""
 
-    def __init__(self, kernel: Any, argtypes: tuple, symbol: str):
+    def __init__(self, kernel: Any, argtypes: tuple, restype: Any, symbol: str):
         self.kernel = kernel
         self.argtypes = argtypes
+        self.restype = restype
         self.symbol = symbol
         self.cell = ctypes.c_void_p(0)
         ll.add_symbol(symbol, ctypes.addressof(self.cell))
@@ -79,6 +81,9 @@ class _Shared:
         try:
             self.kernel.compile(self.argtypes)
             result = self.kernel.overloads[self.argtypes]
+            if result.signature.return_type != self.restype:
+                raise TypeError(f"{self.symbol}: returns {result.signature.return_type}, "
+                                f"not {self.restype}")
             address = result.library.get_pointer_to_function(result.fndesc.mangled_name)
             if not address:
                 raise RuntimeError(f"{self.symbol}: no native entry compiled")
@@ -88,13 +93,13 @@ class _Shared:
         self.cell.value = address
 
 
-def shared(kernel: Any, argtypes: tuple, symbol: str):
-    """A function that njit code calls in place of ``kernel`` (a dispatcher returning
-    None), through the cell named ``symbol`` (unique in the process) with the argument
-    types ``argtypes`` (numba types)."""
+def shared(kernel: Any, argtypes: tuple, symbol: str, restype: Any = types.none):
+    """A function that njit code calls in place of ``kernel`` (a dispatcher), through
+    the cell named ``symbol`` (unique in the process) with the argument types
+    ``argtypes`` and the return type ``restype`` (numba types)."""
     if symbol in _REGISTRY:
         raise ValueError(f"shared kernel symbol {symbol!r} registered twice")
-    record = _REGISTRY[symbol] = _Shared(kernel, tuple(argtypes), symbol)
+    record = _REGISTRY[symbol] = _Shared(kernel, tuple(argtypes), restype, symbol)
 
     @intrinsic
     def call(typingctx, *args):
@@ -107,21 +112,21 @@ def shared(kernel: Any, argtypes: tuple, symbol: str):
             values = cgutils.unpack_tuple(builder, packed[0], len(args))
             values = [context.cast(builder, v, a, t)
                       for v, a, t in zip(values, args, record.argtypes)]
-            fnty = context.call_conv.get_function_type(types.none, record.argtypes)
+            fnty = context.call_conv.get_function_type(record.restype, record.argtypes)
             try:
                 cell = builder.module.get_global(symbol)
             except KeyError:
                 cell = ir.GlobalVariable(builder.module, ir.IntType(8).as_pointer(), symbol)
                 cell.linkage = "external"
             entry = builder.bitcast(builder.load(cell), fnty.as_pointer())
-            status, _ = context.call_conv.call_function(
-                builder, entry, types.none, record.argtypes, values)
+            status, result = context.call_conv.call_function(
+                builder, entry, record.restype, record.argtypes, values)
             with cgutils.if_unlikely(builder, status.is_error):
                 context.call_conv.return_status_propagate(builder, status)
-            return context.get_dummy_value()
+            return result                       # a new reference, as the kernel returns it
 
         # numba hands an intrinsic's *args to the lowering as one tuple
-        return make_signature(types.none, types.StarArgTuple.from_types(args)), lower
+        return make_signature(record.restype, types.StarArgTuple.from_types(args)), lower
 
     return call
 

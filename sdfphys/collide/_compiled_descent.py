@@ -36,9 +36,9 @@ import numpy as np
 from .._jit import njit
 from ..sdf.compiled import run_shared, scratch
 from ._descent_kernels import (
-    accept,
+    accept_shared,
     bound,
-    propose,
+    propose_shared,
 )
 from ._descent_paths import (
     AT_BEST,
@@ -226,9 +226,9 @@ def _rounds(kind: int, barzilai_borwein: bool, kd: int,
             cand = _grown(cand, size)
             cand_i = _grown(cand_i, size)
             candidates = _grown(candidates, size)
-            n, n_eval, n_running = propose(kind, tri, owner, corner, shape, state, flags, data,
-                                           barzilai_borwein, running[:n_running], cand[:size],
-                                           cand_i[:size], candidates[:size])
+            n, n_eval, n_running = propose_shared(
+                kind, tri, owner, corner, shape, state, flags, data, barzilai_borwein,
+                running[:n_running], cand[:size], cand_i[:size], candidates[:size])
             if n == 0:
                 break
             if value.shape[0] < n_eval:
@@ -255,10 +255,10 @@ def _rounds(kind: int, barzilai_borwein: bool, kd: int,
                 for r in range(n_running):
                     i = running[r]
                     before[i, 0], before[i, 1] = state[i, BEST], state[i, BEST + 1]
-            n_running, size = accept(kind, tri, owner, corner, state, flags, data, cand[:size],
-                                     cand_i[:size], value[:n_eval], gradient[:n_eval],
-                                     cand_data[:n_eval], least, running[:n_running], shape,
-                                     shape_tol)
+            n_running, size = accept_shared(
+                kind, tri, owner, corner, state, flags, data, cand[:size], cand_i[:size],
+                value[:n_eval], gradient[:n_eval], cand_data[:n_eval], least,
+                running[:n_running], shape, shape_tol)
             if uneven:
                 kept = 0
                 for r in range(n_running):

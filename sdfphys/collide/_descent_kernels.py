@@ -44,8 +44,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import types
 
 from .._jit import njit
+from .._shared_kernel import shared
 from ._descent_paths import (
     ALT,
     AT_BEST,
@@ -610,3 +612,17 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 kept += 1
                 total += _most_candidates(kind, owner, shape, state, flags, i)
     return kept, total
+
+
+# ``propose`` and ``accept`` for the compiled descent (``_compiled_descent._rounds``): one
+# machine code of each per process (``sdfphys._shared_kernel``), not a copy built into
+# every kernel that runs the rounds. Their one signature there:
+_F1, _F2, _F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
+_I1, _I2 = types.int64[::1], types.int64[:, ::1]
+propose_shared = shared(
+    propose, (types.int64, _F3, _I1, _F3, _F2, _F2, _I2, _F2, types.boolean, _I1, _F2, _I2, _F2),
+    "sdfphys_collide_descent_propose", types.UniTuple(types.int64, 3))
+accept_shared = shared(
+    accept, (types.int64, _F3, _I1, _F3, _F2, _I2, _F2, _F2, _I2, _F1, _F2, _F2, types.float64,
+             _I1, _F2, types.float64),
+    "sdfphys_collide_descent_accept", types.UniTuple(types.int64, 2))
