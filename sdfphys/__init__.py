@@ -16,7 +16,7 @@ except _metadata.PackageNotFoundError:              # a source tree that was nev
 _numba_cache.install()      # before any kernel is defined: caches follow the whole package
 _numba_literals.install()   # one compilation per kernel and types, constants or not
 _compile_lock.install()     # processes on one cache compile each kernel once
-_shared_kernel.install()    # kernels called by name are published before their callers
+_shared_kernel.install()    # kernels called by name are published before their callers run
 
 from . import sdf  # noqa: E402
 from . import collide  # noqa: E402  (the subpackage, callable: collide.collide)

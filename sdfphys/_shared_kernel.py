@@ -26,8 +26,8 @@ an edit of the kernel recompiles its callers as before.
 
 The call is an ordinary call (the arguments' types must be the signature's, constants
 of its types are accepted; the kernel's result is returned as numba returns it, a new
-reference), the results are the kernel's own bits. Only njit code
-calls it; Python calls the kernel.
+reference), the results are the kernel's own bits. Only njit code calls it; Python
+calls the kernel.
 """
 
 from __future__ import annotations
@@ -154,13 +154,14 @@ def _compile(self, sig):
     global _depth
     _depth += 1
     try:
-        return _NUMBA_COMPILE(self, sig)
+        result = _NUMBA_COMPILE(self, sig)
     finally:
         _depth -= 1
-        if _depth == 0:
-            for record in _REGISTRY.values():
-                if record.wanted and not record.published:
-                    record.publish()
+    if _depth == 0:
+        for record in _REGISTRY.values():
+            if record.wanted and not record.published:
+                record.publish()
+    return result
 
 
 def install() -> None:

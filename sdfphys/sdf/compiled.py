@@ -5,9 +5,12 @@ hundred points; a numpy ``field.evaluate`` costs ~30 us of fixed overhead per ca
 (per node of the tree), which dominates small batches. ``compile_field(f)`` turns
 the tree of ``f`` into a :class:`Program` (an int64 instruction table and a
 float64 constant table) that :func:`run` evaluates on a batch of points inside
-njit code (one instruction at a time over the batch), with no Python in the loop: value and analytic gradient, the same numbers as
-``f.evaluate`` (the same operations in the same order, so the same bits, except
-where numpy rounds in ways the compiled code cannot follow: see "Rounding" below).
+njit code (one instruction at a time over the batch), with no Python in the loop:
+value and analytic gradient, the same numbers as ``f.evaluate`` (the same operations
+in the same order, so the same bits, except where numpy rounds in ways the compiled
+code cannot follow: see "Rounding" below). Kernels call it as ``run_shared``, by name
+(``sdfphys._shared_kernel``): one machine code of ``run`` per process, not a copy
+built into every caller.
 
 Program (postfix). ``code`` (I, 4) int64 rows ``(opcode, offset, a, b)``:
 ``offset`` indexes ``consts`` (F,) float64 where the instruction's parameters
