@@ -32,8 +32,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import types
 
 from .._jit import njit
+from .._shared_kernel import shared
 from ..sdf.compiled import run_shared, scratch
 from ._descent_kernels import (
     accept_shared,
@@ -177,10 +179,11 @@ def descend(kind: int, barzilai_borwein: bool, kd: int,
                                        convex, shape_tol)
     else:
         corner, shape = np.full((1, 3, 3), np.nan), np.zeros((1, 4))
-    return _rounds(kind, barzilai_borwein, kd, code_a, consts_a, depth_a, nesting_a, code_b,
-                   consts_b, depth_b, nesting_b, rotation, offset, pair_of, tri, owner, n_start,
-                   points, phi, grad, data, corner, shape, sigma, iterations, tol, shape_tol,
-                   state, flags, running, cand, cand_i, candidates)
+    return rounds_shared(kind, barzilai_borwein, kd, code_a, consts_a, depth_a, nesting_a,
+                         code_b, consts_b, depth_b, nesting_b, rotation, offset, pair_of, tri,
+                         owner, n_start, points, phi, grad, data, corner, shape, sigma,
+                         iterations, tol, shape_tol, state, flags, running, cand, cand_i,
+                         candidates)
 
 
 @njit(cache=True, error_model="numpy")
@@ -275,6 +278,18 @@ def _rounds(kind: int, barzilai_borwein: bool, kd: int,
     return best, phi, data, rounds, evaluated, cand, cand_i, candidates
 
 
+# ``_rounds`` for ``descend`` and ``descend_sampled``: one machine code per process
+# (``sdfphys._shared_kernel``), not a copy built into each. Its one signature:
+_F1, _F2, _F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
+_I1, _I2, _INT = types.int64[::1], types.int64[:, ::1], types.int64
+rounds_shared = shared(
+    _rounds, (_INT, types.boolean, _INT, _I2, _F1, _INT, _INT, _I2, _F1, _INT, _INT, _F3, _F2,
+              _I1, _F3, _I1, _INT, _F2, _F1, _F2, _F2, _F3, _F2, _F1, _INT, _F1, types.float64,
+              _F2, _I2, _I1, _F2, _I2, _F2),
+    "sdfphys_collide_descent_rounds",
+    types.Tuple((_F2, _F1, _F2, _I1, _INT, _F2, _I2, _F2)))
+
+
 @njit(cache=True, error_model="numpy")
 def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
                     tri: np.ndarray, weights: np.ndarray, neighbours: np.ndarray,
@@ -339,7 +354,7 @@ def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nest
         sigma[lo * k:hi * k], owner[lo * k:hi * k] = sg, ow + lo
     data = grad.copy()
     tols = np.full(points.shape[0], tol)
-    best, phi, data, rounds, evaluated, cand, cand_i, candidates = _rounds(
+    best, phi, data, rounds, evaluated, cand, cand_i, candidates = rounds_shared(
         TRIANGLE, False, 2, code_a, consts_a, depth_a, nesting_a, code_a, consts_a, depth_a,
         nesting_a, no_rotation, no_offset, owner, tri, owner, k, points, phi, grad, data,
         corner, shape, sigma, iterations, tols, shape_tol, state, flags, running, cand, cand_i,
