@@ -13,11 +13,12 @@ import sys
 
 import numpy as np
 import pytest
-from numba import errors, njit, types
+from numba import errors, njit
 
 from sdfphys import sdf
 from sdfphys._shared_kernel import _REGISTRY, shared
 from sdfphys.collide import _mesh_contacts_kernels as mck
+from sdfphys.collide import descent
 from sdfphys.sdf.compiled import RUN_TYPES, compile_field, run, run_shared, scratch
 
 SYMBOL = "sdfphys_sdf_compiled_run"
@@ -63,7 +64,23 @@ def test_the_shared_call_takes_only_its_signature():
         wrong(program.code, program.consts, np.zeros((1, 2), np.float32))
     with pytest.raises(ValueError, match="registered twice"):
         shared(run, RUN_TYPES, SYMBOL)
-    assert RUN_TYPES[3] == types.int64
+
+
+def test_the_descent_s_shared_kernels_are_published_for_their_declared_types():
+    """A compiled triangle descent runs the rounds, propose and accept through their
+    cells: each is published, compiled for its declared argument types and returning
+    its declared type (a mismatch would be a TypeError at publication)."""
+    f = sdf.field(FIELD)
+    tri = np.array([[[-1.0, -1.0], [1.0, -1.0], [0.0, 1.0]]])
+    point, value = descent.triangle_deepest(f, tri)
+    assert value.shape[0] == 1 and np.isfinite(value).all()
+    for symbol in ("sdfphys_collide_descent_rounds", "sdfphys_collide_descent_propose",
+                   "sdfphys_collide_descent_accept"):
+        record = _REGISTRY[symbol]
+        compiled = record.kernel.overloads[record.argtypes]
+        assert record.published and compiled.signature.return_type == record.restype
+        assert record.cell.value == compiled.library.get_pointer_to_function(
+            compiled.fndesc.mangled_name)
 
 
 SCRIPT = """
