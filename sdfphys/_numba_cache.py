@@ -2,8 +2,9 @@
 
 Numba keys a cached kernel on its own source file only (``numba.core.caching``: the
 index stores a hash of the file the function is defined in). Kernels here call njit
-functions of other files, which numba compiles into them: the collision kernels of
-``sdfphys.collide`` run ``sdf.compiled.run``'s field programs, so after an edit of
+functions of other files, which numba compiles into them, or call a shared kernel by
+name with the signature its file declares (``_shared_kernel``): the collision kernels
+of ``sdfphys.collide`` run ``sdf.compiled``'s field programs, so after an edit of
 ``sdf/compiled.py`` a kernel of ``collide/`` would load machine code built from the old
 one and compute wrong contacts without an error (it happened during development).
 

@@ -43,7 +43,12 @@ from numba.core.runtime import rtsys
 from numba.core.typing import signature as make_signature
 from numba.extending import intrinsic
 
-__all__ = ["install", "shared"]
+__all__ = ["F1", "F2", "F3", "I1", "I2", "install", "shared"]
+
+#: Shorthands for shared signatures: C-contiguous float64 arrays of 1, 2, 3 dimensions
+#: and int64 arrays of 1, 2.
+F1, F2, F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
+I1, I2 = types.int64[::1], types.int64[:, ::1]
 
 #: Symbol -> the shared kernel's record, for every ``shared`` call in the package.
 _REGISTRY: dict[str, _Shared] = {}

@@ -35,7 +35,7 @@ import numpy as np
 from numba import types
 
 from .._jit import njit
-from .._shared_kernel import shared
+from .._shared_kernel import F1, F2, F3, I1, I2, shared
 from ..sdf.compiled import run_shared, scratch
 from ._descent_kernels import (
     accept_shared,
@@ -280,14 +280,12 @@ def _rounds(kind: int, barzilai_borwein: bool, kd: int,
 
 # ``_rounds`` for ``descend`` and ``descend_sampled``: one machine code per process
 # (``sdfphys._shared_kernel``), not a copy built into each. Its one signature:
-_F1, _F2, _F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
-_I1, _I2, _INT = types.int64[::1], types.int64[:, ::1], types.int64
+_INT = types.int64
 rounds_shared = shared(
-    _rounds, (_INT, types.boolean, _INT, _I2, _F1, _INT, _INT, _I2, _F1, _INT, _INT, _F3, _F2,
-              _I1, _F3, _I1, _INT, _F2, _F1, _F2, _F2, _F3, _F2, _F1, _INT, _F1, types.float64,
-              _F2, _I2, _I1, _F2, _I2, _F2),
-    "sdfphys_collide_descent_rounds",
-    types.Tuple((_F2, _F1, _F2, _I1, _INT, _F2, _I2, _F2)))
+    _rounds, (_INT, types.boolean, _INT, I2, F1, _INT, _INT, I2, F1, _INT, _INT, F3, F2, I1, F3,
+              I1, _INT, F2, F1, F2, F2, F3, F2, F1, _INT, F1, types.float64, F2, I2, I1, F2, I2,
+              F2),
+    "sdfphys_collide_descent_rounds", types.Tuple((F2, F1, F2, I1, _INT, F2, I2, F2)))
 
 
 @njit(cache=True, error_model="numpy")

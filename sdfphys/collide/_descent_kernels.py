@@ -47,7 +47,7 @@ import numpy as np
 from numba import types
 
 from .._jit import njit
-from .._shared_kernel import shared
+from .._shared_kernel import F1, F2, F3, I1, I2, shared
 from ._descent_paths import (
     ALT,
     AT_BEST,
@@ -617,12 +617,10 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
 # ``propose`` and ``accept`` for the compiled descent (``_compiled_descent._rounds``): one
 # machine code of each per process (``sdfphys._shared_kernel``), not a copy built into
 # every kernel that runs the rounds. Their one signature there:
-_F1, _F2, _F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
-_I1, _I2 = types.int64[::1], types.int64[:, ::1]
 propose_shared = shared(
-    propose, (types.int64, _F3, _I1, _F3, _F2, _F2, _I2, _F2, types.boolean, _I1, _F2, _I2, _F2),
+    propose, (types.int64, F3, I1, F3, F2, F2, I2, F2, types.boolean, I1, F2, I2, F2),
     "sdfphys_collide_descent_propose", types.UniTuple(types.int64, 3))
 accept_shared = shared(
-    accept, (types.int64, _F3, _I1, _F3, _F2, _I2, _F2, _F2, _I2, _F1, _F2, _F2, types.float64,
-             _I1, _F2, types.float64),
+    accept, (types.int64, F3, I1, F3, F2, I2, F2, F2, I2, F1, F2, F2, types.float64, I1, F2,
+             types.float64),
     "sdfphys_collide_descent_accept", types.UniTuple(types.int64, 2))

@@ -37,7 +37,7 @@ hashed grid below. h carries a relative slack of ``_DENSE_SLACK``, and cells are
 only computed for coordinates under ``_DENSE_REACH`` cells from the origin, so that
 the rounding of x / h cannot put the lower corners of two overlapping boxes two
 cells apart. For a pile it replaces a hashed table of 64 k buckets for 20 k entries
-with 6,400 cells for 5,000 boxes (figures: docs/performance.md, 2026-11-28).
+with 6,400 cells for 5,000 boxes (figures: docs/performance.md, 2026-11-27).
 
 Hashed grid (``_grid_pairs``; Teschner et al. 2003, "Optimized spatial hashing"),
 for the rest (mixed sizes, sparse worlds):

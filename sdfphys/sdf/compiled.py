@@ -72,7 +72,7 @@ import numpy as np
 from numba import types
 
 from .._jit import njit
-from .._shared_kernel import shared
+from .._shared_kernel import F1, F2, F3, I2, shared
 from ..vec2 import TINY
 from . import conics, curved, folded, grid, operators, polygonal
 from .base import Field, safe_normalize
@@ -514,9 +514,7 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
 
 
 #: ``run``'s argument types: the one signature every kernel calls it with.
-RUN_TYPES = (types.int64[:, ::1], types.float64[::1], types.float64[:, ::1], types.int64,
-             types.float64[:, :, ::1], types.float64[:, :, ::1], types.float64[:, ::1],
-             types.float64[::1], types.float64[:, ::1])
+RUN_TYPES = (I2, F1, F2, types.int64, F3, F3, F2, F1, F2)
 
 #: ``run`` for njit callers: one machine code per process, called by name
 #: (``sdfphys._shared_kernel``), not built into each caller.
