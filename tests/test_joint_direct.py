@@ -131,3 +131,60 @@ def test_the_kernel_references_hold_every_field_in_order():
     before = float(rows.angular_impulse[0])
     direct._add_impulse(ref, 0, direct._ANGLE, 0.25)
     assert rows.angular_impulse[0] == before + 0.25
+
+
+#: One joint of each kind and option on its own pair of boxes, and whether the direct
+#: solve takes all its rows (``joints._all_direct``: SOLVE and RELAX passes skip it).
+#: Limits start at their lower end, where random velocities engage them.
+_ALONE = [
+    ({"type": "revolute"}, True),
+    ({"type": "revolute", "motor": {"speed": 2.0, "max_torque": 50.0}}, False),
+    ({"type": "revolute", "limits": [0.0, 0.5]}, False),
+    ({"type": "weld"}, True),
+    ({"type": "weld", "spring": {"hertz": 4.0, "damping_ratio": 0.5}}, False),
+    ({"type": "prismatic", "axis": [1.0, 0.0]}, True),
+    ({"type": "prismatic", "axis": [1.0, 0.0], "limits": [0.0, 0.2]}, False),
+    ({"type": "wheel", "axis": [0.0, 1.0]}, True),
+    ({"type": "wheel", "axis": [0.0, 1.0], "spring": {"hertz": 4.0, "damping_ratio": 0.7}},
+     False),
+    ({"type": "distance", "anchors": [[0.0, 0.0], [1.0, 0.0]]}, True),
+    ({"type": "distance", "anchors": [[0.0, 0.0], [1.0, 0.0]], "min_length": 1.0,
+      "max_length": 1.5}, False),
+]
+
+
+@pytest.mark.parametrize("spec, all_direct", _ALONE)
+def test_a_joint_all_of_whose_rows_are_direct_is_skipped_and_left_unchanged(spec, all_direct):
+    """``_all_direct`` is true exactly for the joints with no row left to Gauss-Seidel, and
+    for those ``_joint`` leaves any velocities and the progress as they were (so skipping
+    them changes no number)."""
+    from sdfphys.solver import joints
+
+    spec = {**spec, "bodies": ["a", "b"]}
+    if spec["type"] != "distance":
+        spec.setdefault("anchor", [0.5, 0.0])
+    world = sdfphys.load_scene({"version": 1, "world": {"gravity": [0.0, 0.0]}, "body": [
+        {"name": "a", "shape": {"type": "box", "size": [0.4, 0.4]}, "position": [0.0, 0.0]},
+        {"name": "b", "shape": {"type": "box", "size": [0.4, 0.4]}, "position": [1.0, 0.0]}],
+        "joint": [spec]})
+    bodies, rows = body_state(world), world._joints.rows
+    ref = kernel_rows(rows)
+    mask = direct.plan(ref, bodies.inv_mass, bodies.inv_inertia).mask
+    assert joints._all_direct(ref, 0, mask[0]) == all_direct
+    soft, _ = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows, world.settings,
+                                 world._gravity, 4.0)
+    spring = joints.spring_softness(rows, world.settings.dt / world.settings.substeps)
+    rng = np.random.default_rng(5)
+    changed = False
+    for phase in (SOLVE, RELAX):
+        for _ in range(5):
+            v = tuple(rng.normal(scale=3.0, size=6))
+            g = joints.joint_geometry(*bodies.com[0], bodies.angle[0], *bodies.com[1],
+                                      bodies.angle[1], ref, 0)
+            out = Output(np.zeros((0, 2)), np.zeros(0), np.zeros(2))
+            masses = (bodies.inv_mass[0], bodies.inv_inertia[0], bodies.inv_mass[1],
+                      bodies.inv_inertia[1])
+            after = joints._joint(v, masses, g, ref, 0, phase, soft, spring, 240.0, out,
+                                  mask[0])
+            changed |= tuple(after) != v or out.progress.any()
+    assert changed != all_direct

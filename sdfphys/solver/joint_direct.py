@@ -87,7 +87,10 @@ class DirectPlan(NamedTuple):
     Per phase (``factor``): jac (R, 4) (ux, uy, a1, a2) of each row (``joints._row``);
     error: (R,) C (m or rad); rate: (R,) the bias rate b (1/s; 0 relaxing); scale: (R,)
     is / ms (0 relaxing); first: (R,) int64, each row's first nonzero column in its
-    island; matrix: the Cholesky factors L (row-major, lower); ok: (C,) bool.
+    island; matrix: the Cholesky factors L (row-major, lower); ok: (C,) bool;
+    soft_diag, soft_off: (R,) g_i A_ii and, for a point's x row, g_i A_i,i+1 (its coupling
+    to the y row), the terms of G that ``island_pass`` multiplies by the impulses (0 where
+    g_i = 0).
     """
 
     mask: np.ndarray
@@ -102,6 +105,8 @@ class DirectPlan(NamedTuple):
     first: np.ndarray
     matrix: np.ndarray
     ok: np.ndarray
+    soft_diag: np.ndarray
+    soft_off: np.ndarray
 
 
 @structref.register
@@ -119,9 +124,9 @@ structref.define_proxy(DirectPlanRef, _DirectPlanType, list(DirectPlan._fields))
 
 @njit(cache=True)
 def _direct_plan_ref(mask, row_joint, row_code, start, offset, jac, error, rate, scale,
-                     first, matrix, ok):
+                     first, matrix, ok, soft_diag, soft_off):
     return DirectPlanRef(mask, row_joint, row_code, start, offset, jac, error, rate, scale,
-                         first, matrix, ok)
+                         first, matrix, ok, soft_diag, soft_off)
 
 
 def kernel_plan(p: DirectPlan) -> DirectPlanRef:
@@ -230,7 +235,7 @@ def plan(rows, inv_mass, inv_inertia):
     return DirectPlan(mask, row_joint, row_code, start, offset, np.zeros((total, 4)),
                       np.zeros(total), np.zeros(total), np.zeros(total),
                       np.zeros(total, np.int64), np.zeros(offset[-1]),
-                      np.zeros(kept_count, np.bool_))
+                      np.zeros(kept_count, np.bool_), np.zeros(total), np.zeros(total))
 
 
 @njit(cache=True)
@@ -314,6 +319,13 @@ def _coupling(p, i, k, rows, inv_mass, inv_inertia):
 
 
 @njit(cache=True)
+def _point_pair(p, i):
+    """Whether row i of plan p is a point's x row followed by its y row (one island)."""
+    return (p.row_code[i] == _X and i + 1 < p.row_code.shape[0] and p.row_code[i + 1] == _Y
+            and p.row_joint[i + 1] == p.row_joint[i])
+
+
+@njit(cache=True)
 def factor(p, com, angle, inv_mass, inv_inertia, rows, soft, phase):
     """Fill p's per-phase arrays for ``phase`` (SOLVE: soft rows, soft (J, 2, 3) the
     joints' linear [:, 0] and angular [:, 1] (bias_rate, mass_scale, impulse_scale);
@@ -332,6 +344,15 @@ def factor(p, com, angle, inv_mass, inv_inertia, rows, soft, phase):
         else:
             p.rate[i] = 0.0
             p.scale[i] = 0.0
+    for i in range(total):
+        g = p.scale[i]
+        p.soft_diag[i] = 0.0
+        p.soft_off[i] = 0.0
+        if g == 0.0:
+            continue
+        p.soft_diag[i] = g * _coupling(p, i, i, rows, inv_mass, inv_inertia)
+        if _point_pair(p, i):
+            p.soft_off[i] = g * _coupling(p, i, i + 1, rows, inv_mass, inv_inertia)
     for c in range(p.ok.shape[0]):
         s, e = p.start[c], p.start[c + 1]
         n = e - s
@@ -414,14 +435,12 @@ def island_pass(p, c, velocity, angular_velocity, inv_mass, inv_inertia, rows, p
     # - G l: the diagonal (or the point block) of A scaled by is / ms, times l.
     for i in range(n):
         r = s + i
-        g = p.scale[r]
-        if g == 0.0:
+        if p.scale[r] == 0.0:
             continue
         j, code = p.row_joint[r], p.row_code[r]
-        diag = _coupling(p, r, r, rows, inv_mass, inv_inertia)
-        x[i] -= g * diag * _impulse(rows, j, code)
-        if code == _X and i + 1 < n and p.row_code[r + 1] == _Y and p.row_joint[r + 1] == j:
-            off = g * _coupling(p, r, r + 1, rows, inv_mass, inv_inertia)
+        x[i] -= p.soft_diag[r] * _impulse(rows, j, code)
+        if _point_pair(p, r):
+            off = p.soft_off[r]
             x[i] -= off * _impulse(rows, j, _Y)
             x[i + 1] -= off * _impulse(rows, j, _X)
     # L y = x, then L^T d = y, over the envelopes.

@@ -613,6 +613,27 @@ def joint_geometry(cax, cay, qa, cbx, cby, qb, rows, j):
 
 
 @njit(cache=True)
+def _all_direct(r, j, direct):
+    """Whether ``_joint`` has no row of joint j to solve when the direct solve takes its
+    equality rows ``direct`` (bits): no motor, no limit, no spring row, every rigid row
+    direct. Such a joint is skipped by a SOLVE or RELAX pass (its velocities unchanged)."""
+    if r.has_motor[j] or r.has_limit[j]:
+        return False
+    kind = r.kind[j]
+    if kind == REVOLUTE:
+        return direct == POINT_ROWS
+    if kind == WELD:
+        return direct == POINT_ROWS | ANGLE_ROW
+    if kind == PRISMATIC:
+        return direct == PERP_ROW | ANGLE_ROW
+    if kind == WHEEL:
+        return direct == PERP_ROW | AXIAL_ROW
+    if kind == DISTANCE:
+        return direct == AXIAL_ROW
+    return False
+
+
+@njit(cache=True)
 def solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows, phase,
                  soft, spring, inv_h, out, direct):
     """One pass of ``phase`` (WARM, SOLVE, RELAX, REACTION) over every joint, in order.
@@ -625,6 +646,8 @@ def solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, 
     (bits; zeros: every row here).
     """
     for j in range(rows.kind.shape[0]):
+        if (phase == SOLVE or phase == RELAX) and _all_direct(rows, j, direct[j]):
+            continue
         a = rows.body_a[j]
         b = rows.body_b[j]
         cax = cay = qa = vax = vay = wa = ma = ia = 0.0
