@@ -133,6 +133,35 @@ def test_the_kernel_references_hold_every_field_in_order():
     assert rows.angular_impulse[0] == before + 0.25
 
 
+def test_the_substep_joints_hold_their_fields_in_order_and_share_the_arrays():
+    """``substep_joints``' compiled maker lists the fields by hand (the report's three
+    arrays last, made into its Output), and the bundle shares the bodies' arrays: a pass
+    run through it moves the caller's velocities and writes its progress."""
+    import inspect
+
+    from sdfphys.solver import joints
+
+    parameters = tuple(inspect.signature(direct._substep_joints.py_func).parameters)
+    assert parameters == direct.JOINT_FIELDS[:-1] + joints.Output._fields
+    world = chain_world(links=3)
+    bodies, rows = body_state(world), world._joints.rows
+    soft, stiffening = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows,
+                                          world.settings, world._gravity, 4.0)
+    ref = kernel_rows(rows)
+    progress = np.zeros(2)
+    bundle = direct._substep_joints(
+        bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
+        bodies.inv_inertia, ref, soft, joints.spring_softness(rows, 1.0 / 240.0), stiffening,
+        kernel_plan(direct.plan(ref, bodies.inv_mass, bodies.inv_inertia)), np.empty((0, 2)),
+        np.empty(0), progress)
+    bodies.velocity[:] = [[0.0, 5.0], [1.0, -2.0], [0.0, 0.0]]
+    before = bodies.velocity.copy()
+    direct.joint_passes(bundle, joints.WARM, 240.0, 1, False)
+    assert direct.joint_passes(bundle, SOLVE, 240.0, 50, False) >= 1
+    assert not np.array_equal(bodies.velocity, before)
+    assert progress[1] > 0.0
+
+
 #: One joint of each kind and option on its own pair of boxes, and whether the direct
 #: solve takes all its rows (``joints._all_direct``: SOLVE and RELAX passes skip it).
 #: Limits start at their lower end, where random velocities engage them.

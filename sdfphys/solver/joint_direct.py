@@ -67,8 +67,9 @@ from .joints import (
 )
 from .softness import CONVERGED
 
-__all__ = ["MAX_ROWS", "DirectPlan", "DirectPlanRef", "direct_pass", "equality_mask",
-           "factor", "joint_passes", "kernel_plan", "plan"]
+__all__ = ["JOINT_FIELDS", "MAX_ROWS", "DirectPlan", "DirectPlanRef", "SubstepJoints",
+           "direct_pass", "equality_mask", "factor", "joint_passes", "kernel_plan", "plan",
+           "substep_joints"]
 #: Row codes (``DirectPlan.row_code``): point x, point y, angle, perpendicular, axial.
 _X, _Y, _ANGLE, _PERP, _AXIAL = range(5)
 #: The largest island solved directly, in rows (dense storage R^2, work <= R^3 / 3).
@@ -472,8 +473,44 @@ def island_pass(p, c, velocity, angular_velocity, inv_mass, inv_inertia, rows, p
 
 
 
+@structref.register
+class _SubstepJointsType(PlainFields):
+    """Numba's type of ``SubstepJoints``."""
+
+
+class SubstepJoints(structref.StructRefProxy):
+    """The joints as the substep kernel takes them (``substep_joints``): the bodies'
+    arrays (B, 2) or (B,) the rows act on, the rows (``joints.kernel_rows``), their
+    softness soft (J, 2, 3) and spring (J, 3), the stiffening parameters (6,), the
+    islands' plan (``kernel_plan``) and what the passes report (``joints.Output``).
+    One reference: numba types a tuple holding references by its Python ``typeof`` at
+    every call (0.2 ms a step, a third of a pendulum's), a reference at once."""
+
+
+JOINT_FIELDS = ("com", "angle", "velocity", "angular_velocity", "inv_mass", "inv_inertia",
+                "rows", "soft", "spring", "stiffening", "plan", "out")
+structref.define_proxy(SubstepJoints, _SubstepJointsType, list(JOINT_FIELDS))
+
+
 @njit(cache=True)
-def joint_passes(bodies, joints, phase, inv_h, out, passes, moved):
+def _substep_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows, soft,
+                    spring, stiffening, plan, force, torque, progress):
+    return SubstepJoints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows,
+                         soft, spring, stiffening, plan, Output(force, torque, progress))
+
+
+def substep_joints(bodies, rows, soft: np.ndarray, spring: np.ndarray,
+                   stiffening: np.ndarray, islands: DirectPlanRef) -> SubstepJoints:
+    """The joints of one step by reference: ``bodies`` (a ``rows.BodyState``), the rows
+    (``joints.kernel_rows``), ``stiffened_softness``' soft and stiffening, the springs'
+    softness and the islands' plan (``kernel_plan``); an empty Output."""
+    return _substep_joints(bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity,
+                           bodies.inv_mass, bodies.inv_inertia, rows, soft, spring, stiffening,
+                           islands, np.empty((0, 2)), np.empty(0), np.zeros(2))
+
+
+@njit(cache=True)
+def joint_passes(joints, phase, inv_h, passes, moved):
     """Up to ``passes`` passes of ``phase`` (SOLVE or RELAX) over the joints, each a
     Gauss-Seidel pass over the rows the direct solve does not take (``solve_joints``)
     and a ``direct_pass``, stopping after one whose largest impulse change is at most
@@ -481,15 +518,17 @@ def joint_passes(bodies, joints, phase, inv_h, out, passes, moved):
     prepares the SOLVE phase's factor. moved: the positions moved since the last factor
     (a new phase): factor first. Returns the passes run.
 
-    bodies: (com, angle, velocity, angular_velocity, inv_mass, inv_inertia) as
-    ``solve_joints``'; joints: (JointRows, soft (J, 2, 3), spring (J, 3), params (6,),
-    DirectPlan), ``stiffened_softness``'s and ``plan``'s; WARM refills soft from the
-    impulses it applied. A SOLVE phase that does not converge halves the cap on r
-    (params[4]) for the next substeps, one that converges within a quarter of ``passes``
-    doubles it.
+    joints: ``SubstepJoints``; WARM refills its soft from the impulses it applied, the
+    passes report in its out. A SOLVE phase that does not converge halves the cap on r
+    (stiffening[4]) for the next substeps, one that converges within a quarter of
+    ``passes`` doubles it.
     """
-    com, angle, velocity, angular_velocity, inv_mass, inv_inertia = bodies
-    rows, soft, spring, params, p = joints
+    com, angle, velocity = joints.com, joints.angle, joints.velocity
+    angular_velocity, inv_mass, inv_inertia = (joints.angular_velocity, joints.inv_mass,
+                                               joints.inv_inertia)
+    rows, soft, spring, params, p = (joints.rows, joints.soft, joints.spring,
+                                     joints.stiffening, joints.plan)
+    out = joints.out
     if phase == WARM:
         solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows,
                      phase, soft, spring, inv_h, out, p.mask)

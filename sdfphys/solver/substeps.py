@@ -44,14 +44,13 @@ import numpy as np
 from .._jit import njit
 from ..settings import Settings
 from .bundles import substep_bodies, substep_rows
-from .joint_direct import joint_passes, kernel_plan, plan
+from .joint_direct import joint_passes, kernel_plan, plan, substep_joints
 from .joints import (
     JOINT_PASSES,
     RELAX,
     SOLVE,
     WARM,
     JointRows,
-    Output,
     kernel_rows,
     spring_softness,
     stiffened_softness,
@@ -442,7 +441,7 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_d
     extra passes (``row_softness``), (P,) bool: whether pair p is one of them).
     Returns the number of extra passes run.
 
-    joints: None, or (joint bodies, joint rows, Output) (``_substeps_kernel``): with
+    joints: None, or ``joint_direct.SubstepJoints`` (``_substeps_kernel``): with
     joints, each extra pass is followed by one pass over the joints, and convergence
     asks it of both (contacts converged alone push jointed bodies apart: a crate on a
     bridge of planks 25 times lighter opened its joints by 19 cm). None is a type, not
@@ -470,20 +469,12 @@ def _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out, soft_d
                                  soft_depth, split_rate, use_bias, use_friction)
         joints_converged = True
         if joints is not None:
-            _joint_phase(joints, SOLVE if use_bias else RELAX, inv_h, 1, False)
-            progress = joints[2].progress
+            joint_passes(joints, SOLVE if use_bias else RELAX, inv_h, 1, False)
+            progress = joints.out.progress
             joints_converged = progress[0] <= CONVERGED * progress[1]
         if change <= CONVERGED * impulse and joints_converged:
             return n + 1
     return highest
-
-
-@njit(cache=True)
-def _joint_phase(joints, phase, inv_h, passes, moved):
-    """``joint_passes`` with the kernel's joints tuple (joint bodies, joint arguments,
-    Output); returns the passes run."""
-    joint_bodies, rows, out = joints
-    return joint_passes(joint_bodies, rows, phase, inv_h, out, passes, moved)
 
 
 @njit(cache=True)
@@ -498,10 +489,8 @@ def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, m
     extra_passes: the most any pair takes (the joints' passes are bounded by it).
 
     joints: None (no joints: no joint code is compiled, numba prunes the branches on the
-    None type), or (the bodies' (com, angle, velocity, angular_velocity, inv_mass,
-    inv_inertia), (JointRows, stiffened softness (J, 2, 3), spring softness (J, 3),
-    stiffening parameters (6,), the joint islands' ``joint_direct.DirectPlan``), an
-    Output). The joint
+    None type), or the joints by reference (``joint_direct.SubstepJoints``: the rows,
+    their softness, the islands' plan, the bodies' arrays they act on). The joint
     rows are warm started, solved and relaxed before the contacts in each phase (Box2D
     v3's order), each phase in passes until converged (``joint_direct.joint_passes``), and
     once more after the contacts when there are both: a contact's single pass must not
@@ -556,13 +545,13 @@ def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, m
             _integrate_accelerations(velocity, angular_velocity, inv_mass, linear_damping,
                                      angular_damping, accel[0], accel[1], h)
         if joints is not None:
-            _joint_phase(joints, WARM, inv_h, 1, False)
+            joint_passes(joints, WARM, inv_h, 1, False)
         if has_contacts:
             _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_b,
                         pair_start, normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
                         total_normal_impulse, total_tangent_impulse)
         if joints is not None:
-            _joint_phase(joints, SOLVE, inv_h, joint_passes_max, False)
+            joint_passes(joints, SOLVE, inv_h, joint_passes_max, False)
         if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
                                   max_push_out, soft_depth, split_rate, True, use_friction, 1,
@@ -575,7 +564,7 @@ def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, m
                             body_a, body_b, normal, anchor_a0, anchor_b0, base_separation,
                             arm_a0, arm_b0, anchor_a, anchor_b, separation)
         if joints is not None and relax_passes > 0:
-            _joint_phase(joints, RELAX, inv_h, max(relax_passes, joint_passes_max), True)
+            joint_passes(joints, RELAX, inv_h, max(relax_passes, joint_passes_max), True)
         if has_contacts:
             passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
                                   max_push_out, soft_depth, split_rate, False, use_friction,
@@ -611,10 +600,8 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         joint_soft, stiffening = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows,
                                                     settings, gravity, float(cap[0]), ref)
         islands = kernel_plan(plan(ref, bodies.inv_mass, bodies.inv_inertia))
-        joint_args = ((bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity,
-                       bodies.inv_mass, bodies.inv_inertia),
-                      (ref, joint_soft, spring_softness(rows, h), stiffening, islands),
-                      Output(np.empty((0, 2)), np.empty(0), np.zeros(2)))
+        joint_args = substep_joints(bodies, ref, joint_soft, spring_softness(rows, h),
+                                    stiffening, islands)
     else:
         joint_args = None
     v, w = bodies.velocity, bodies.angular_velocity
