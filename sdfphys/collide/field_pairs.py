@@ -28,6 +28,7 @@ from ..vec2 import TINY
 from . import _descent_paths as paths
 from . import descent
 from ._compiled_field_contacts import field_contacts, patch_ends
+from ._compiled_samples import one_sided, tangent_points
 from ._placed_fields import overlap_regions, placed_starts
 
 __all__ = ["field_field_contacts", "field_field_contacts_single", "one_sided_depths",
@@ -488,6 +489,11 @@ def tangent_samples(field_a: Field, field_b: Field, offset: np.ndarray, angle: n
     element = np.zeros(k, np.int64)
     if k == 0 or per_side < 1 or not np.isfinite(extent):
         return pair, point, depth, normal, start, element
+    programs = _programs(field_a, field_b)
+    if programs is not None:
+        return tangent_points(*programs, np.cos(angle), np.sin(angle),
+                              np.ascontiguousarray(offset, np.float64), pair, point, depth,
+                              normal, start, float(margin), float(extent), int(per_side))
     steps = np.arange(1, per_side + 1) * (extent / per_side)
     t = np.concatenate([steps, -steps])                                    # (2 per_side,)
     tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
@@ -520,6 +526,18 @@ _RING = np.exp(2j * np.pi * np.arange(8) / 8)
 #: went in by 2.5 mm a step (17.5 mm at 10 %).
 _FEATURE_RELATIVE = 0.01
 _FEATURE_ABSOLUTE = 1e-4
+#: The samples' offsets from the contact point per unit radius (9, 2): the point itself,
+#: then _RING (``_compiled_samples.one_sided``).
+_RING_POINTS = np.column_stack([np.r_[0.0, _RING.real], np.r_[0.0, _RING.imag]])
+
+
+def _programs(field_a: Field, field_b: Field) -> tuple | None:
+    """The two fields' programs as the compiled kernels take them (code, consts, depth,
+    nesting of a, then of b), None when one does not compile."""
+    a, b = compile_field(field_a), compile_field(field_b)
+    if a is None or b is None:
+        return None
+    return a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth, b.nesting
 
 
 def one_sided_depths(field_a: Field, field_b: Field, offset: np.ndarray, angle: np.ndarray,
@@ -554,6 +572,11 @@ def one_sided_depths(field_a: Field, field_b: Field, offset: np.ndarray, angle: 
     rows = np.flatnonzero(depth > 0.0)
     if len(rows) == 0:
         return point, depth, normal
+    programs = _programs(field_a, field_b)
+    if programs is not None:
+        return one_sided(*programs, np.cos(angle), np.sin(angle),
+                         np.ascontiguousarray(offset, np.float64), pair, point, depth, normal,
+                         _RING_POINTS, _FEATURE_RELATIVE, _FEATURE_ABSOLUTE)
     m = len(_RING) + 1
     ring = np.concatenate([[0.0], _RING])
     owner = np.repeat(rows, m)
