@@ -108,6 +108,8 @@ def fall_asleep(world: World, bodies: BodyState, constraints: ContactConstraints
     kinematic = active & (world._view("kind") == KINEMATIC)
     sleep_time[c.body_b[kinematic[c.body_a]]] = 0.0
     sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
+    if not np.any(sleep_time[awake] >= s.time_to_sleep):
+        return                       # no body has rested long enough: no island can sleep
     root = island_roots(bodies.inv_mass, *world._joints.linked(c.body_a, c.body_b))
     falling = falling_asleep(root, awake, sleep_time, s.time_to_sleep)
     if not np.any(falling):
