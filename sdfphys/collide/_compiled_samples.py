@@ -14,22 +14,11 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..sdf.compiled import run_shared, scratch
 from ..sorting import stable_argsort
 from ._compiled_field_contacts import _safe_unit
+from ._mesh_contacts_kernels import _evaluate
 
 __all__ = ["one_sided", "tangent_points"]
-
-
-@njit(cache=True, error_model="numpy")
-def _in_a(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int, q: np.ndarray
-          ) -> tuple[np.ndarray, np.ndarray]:
-    """f_a and grad f_a at points q (N, 2) of a's frame."""
-    n = q.shape[0]
-    value, grad = np.empty(n), np.empty((n, 2))
-    stack, frames, cur = scratch(depth, nesting, n)
-    run_shared(code, consts, q, n, stack, frames, cur, value, grad)
-    return value, grad
 
 
 @njit(cache=True, error_model="numpy")
@@ -44,7 +33,7 @@ def _in_b(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int, cos: n
         c, s = cos[placed[i]], sin[placed[i]]
         rx, ry = q[i, 0] - offset[placed[i], 0], q[i, 1] - offset[placed[i], 1]
         local[i, 0], local[i, 1] = c * rx + s * ry, c * ry - s * rx
-    value, grad = _in_a(code, consts, depth, nesting, local)
+    value, grad = _evaluate(code, consts, depth, nesting, local, n)
     for i in range(n):
         c, s = cos[placed[i]], sin[placed[i]]
         gx, gy = grad[i, 0], grad[i, 1]
@@ -91,8 +80,8 @@ def one_sided(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a:
     on_b = np.empty_like(q)
     for i in range(q.shape[0]):
         on_b[i, 0], on_b[i, 1] = q[i, 0] - f_b[i] * g_b[i, 0], q[i, 1] - f_b[i] * g_b[i, 1]
-    f_a_on_b, g_a_on_b = _in_a(code_a, consts_a, depth_a, nesting_a, on_b)
-    f_a, g_a = _in_a(code_a, consts_a, depth_a, nesting_a, q)
+    f_a_on_b, g_a_on_b = _evaluate(code_a, consts_a, depth_a, nesting_a, on_b, q.shape[0])
+    f_a, g_a = _evaluate(code_a, consts_a, depth_a, nesting_a, q, q.shape[0])
     on_a = np.empty_like(q)
     for i in range(q.shape[0]):
         on_a[i, 0], on_a[i, 1] = q[i, 0] - f_a[i] * g_a[i, 0], q[i, 1] - f_a[i] * g_a[i, 1]
@@ -154,7 +143,7 @@ def tangent_points(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesti
             i = c * width + s
             q[i, 0], q[i, 1] = point[c, 0] + t[s] * tx, point[c, 1] + t[s] * ty
             placed[i] = pair[c]
-    f_a, g_a = _in_a(code_a, consts_a, depth_a, nesting_a, q)
+    f_a, g_a = _evaluate(code_a, consts_a, depth_a, nesting_a, q, n)
     f_b, g_b = _in_b(code_b, consts_b, depth_b, nesting_b, cos, sin, offset, placed, q)
     count = 0
     for i in range(n):

@@ -483,7 +483,8 @@ def tangent_samples(field_a: Field, field_b: Field, offset: np.ndarray, angle: n
     far along the tangent (the smaller body's bounding radius); per_side: samples per
     side. Returns (pair, point, depth, normal, start, element) with the samples after
     their pair's contacts, element 0 for a contact and 1 .. 2 per_side for its samples
-    (a key: with the contact's start id, unique within the pair).
+    (a key: with the contact's start id, unique within the pair). When both fields
+    compile, ``_compiled_samples.tangent_points`` does the same operations (same bits).
     """
     k = len(pair)
     element = np.zeros(k, np.int64)
@@ -567,7 +568,8 @@ def one_sided_depths(field_a: Field, field_b: Field, offset: np.ndarray, angle: 
     body has passed through, which pushes it the wrong way (scenes/sdf_primitives.toml:
     a vesica's tip in the rounded cross, its normal flipping from step to step, 10.0 mm
     deep; 9.6 mm without those readings). Contacts of smooth surfaces, where the three
-    agree, keep their bits.
+    agree, keep their bits. When both fields compile, ``_compiled_samples.one_sided``
+    does the same operations (same bits).
     """
     rows = np.flatnonzero(depth > 0.0)
     if len(rows) == 0:

@@ -472,7 +472,6 @@ def island_pass(p, c, velocity, angular_velocity, inv_mass, inv_inertia, rows, p
             angular_velocity[b] += inv_inertia[b] * d * p.jac[r, 3]
 
 
-
 @structref.register
 class _SubstepJointsType(PlainFields):
     """Numba's type of ``SubstepJoints``."""

@@ -218,12 +218,16 @@ def _impact_region(inv_mass, body_a, body_b, separation, relative_velocity, dt, 
     separation, relative_velocity: (K,) m and m/s at the start of the step; dt: s;
     soft_depth: m."""
     region = np.zeros(inv_mass.shape[0], np.bool_)
+    seeds = False
     for k in range(body_a.shape[0]):
         if exact[k] and max(separation[k], 0.0) + dt * relative_velocity[k] < -soft_depth:
             for i in (body_a[k], body_b[k]):
                 if (inv_mass[i] > 0.0 and not jammed[root[i]]
                         and 1 < size[root[i]] <= rest_limit):
                     region[i] = True
+                    seeds = True
+    if not seeds:
+        return region
     for _ in range(IMPACT_HOPS):
         grown = region.copy()
         for k in range(body_a.shape[0]):
@@ -349,6 +353,7 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
         if region[b] and inv_mass[a] > 0.0:
             touched[a] = True
     count = 0
+    loaded = np.empty((2, 3))
     for p in range(n_pairs):
         first = pair_start[p]
         a = body_a[first]
@@ -373,21 +378,29 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
             loaded_pairs[count] = p
             passes[count] = cap
             count += 1
+        # A loaded pair's coefficients for its plain and its stiff rows (base stiffness
+        # omega, doubled), each computed at its first row, not at every row.
+        known_plain = known_stiff = False
         for k in range(first, pair_start[p + 1]):
-            j = stiff[k]
+            j = 1 if stiff[k] else 0
             if r == 1.0:
                 bias_rate[k] = base_bias_rate[j]
                 mass_scale[k] = base_mass_scale[j]
                 impulse_scale[k] = base_impulse_scale[j]
-            else:
+                continue
+            if not (known_stiff if j else known_plain):
                 root_r = math.sqrt(r)
                 w = omega * (2.0 if j else 1.0) * root_r
                 a1 = 2.0 * zeta * root_r + h * w
                 a2 = h * w * a1
                 a3 = 1.0 / (1.0 + a2)
-                bias_rate[k] = w / a1
-                mass_scale[k] = a2 * a3
-                impulse_scale[k] = a3
+                loaded[j, 0], loaded[j, 1], loaded[j, 2] = w / a1, a2 * a3, a3
+                if j:
+                    known_stiff = True
+                else:
+                    known_plain = True
+            bias_rate[k], mass_scale[k], impulse_scale[k] = \
+                loaded[j, 0], loaded[j, 1], loaded[j, 2]
     return count
 
 
