@@ -49,7 +49,7 @@ PAIR_STAGES = tuple(f"{a}_{b}" for a, b in PAIR_FUNCTIONS)
 #: The stages of ``World.step``, as counted in ``World.stage_counts``.
 STAGES = ("collide",) + PAIR_STAGES + (
     "prepare", "integrate_velocities", "warm_start", "solve", "converge", "push_out",
-    "integrate_positions", "relax", "friction", "restitution", "time_of_impact",
+    "integrate_positions", "relax", "joints", "friction", "restitution", "time_of_impact",
     "store_impulses")
 
 
@@ -155,15 +155,18 @@ def substeps(world: World, constraints: ContactConstraints, bodies: BodyState) -
     islands (mass ratios, heavy loads: ``solver.row_softness``) get extra passes until
     converged, counted one by one as ``converge``; ``push_out`` counts the substeps
     with a row deeper than ``soft_depth`` (its overlap pushed out through
-    pseudo-velocities, solver "Split push-out")."""
+    pseudo-velocities, solver "Split push-out"); ``joints`` the solve and relax passes
+    over the joints (each a Gauss-Seidel pass over the rows the islands' direct solves
+    do not take, then those solves; ``solver.joint_direct``)."""
     s = world.settings
     use_friction = bool(np.any(constraints.friction > 0.0))
-    extra, push_outs = solve_substeps(bodies, constraints, world._gravity, s, use_friction,
-                                      (world._joints.rows, world._joints.stiffness_cap),
-                                      accelerations(world))
+    extra, push_outs, joint_runs = solve_substeps(
+        bodies, constraints, world._gravity, s, use_friction,
+        (world._joints.rows, world._joints.stiffness_cap), accelerations(world))
     counts = world.stage_counts
     counts["converge"] += extra
     counts["push_out"] += push_outs
+    counts["joints"] += joint_runs
     counts["integrate_velocities"] += s.substeps
     counts["integrate_positions"] += s.substeps
     if len(constraints):

@@ -524,3 +524,18 @@ print(len(substeps._substeps_kernel.signatures))
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                          check=True, timeout=300).stdout.split()
     assert out == ["['none']", "2"]
+
+
+def test_joint_passes_are_counted_in_the_stage_counts():
+    """``stage_counts["joints"]`` counts the solve and relax passes over the joints: at
+    least one of each per substep where a joint acts, none without joints."""
+    world = World(gravity=(0.0, -G))
+    world.add_body({"type": "circle", "radius": 0.1}, position=(1.0, 0.0), mass=1.0)
+    world.add_joint({"type": "revolute", "bodies": [0, "world"], "anchor": [0.0, 0.0]})
+    free = World(gravity=(0.0, -G))
+    free.add_body({"type": "circle", "radius": 0.1}, position=(1.0, 0.0), mass=1.0)
+    for _ in range(10):
+        world.step()
+        free.step()
+    assert world.stage_counts["joints"] >= 2 * world.settings.substeps * 10
+    assert free.stage_counts["joints"] == 0

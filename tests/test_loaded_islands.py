@@ -424,4 +424,4 @@ def test_stiff_iterations_one_runs_no_extra_pass(monkeypatch):
 
     monkeypatch.setattr(stages_module, "solve_substeps", spy)
     _, world = heavy_on_light(100.0, SETTINGS.with_values(stiff_iterations=1), seconds=0.5)
-    assert world.stage_counts["converge"] == 0 and {extra for extra, _ in calls} == {0}
+    assert world.stage_counts["converge"] == 0 and {extra for extra, _, _ in calls} == {0}

@@ -505,7 +505,7 @@ def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, m
     angular (B,) rad/s^2) that replace gravity in the velocity integration
     (``_integrate_accelerations``: gravity scales, applied forces and torques).
     Returns (the number of those extra passes run, the number of substeps that had a
-    split row).
+    split row, the number of solve and relax passes over the joints).
     """
     com, angle, velocity = bodies.com, bodies.angle, bodies.velocity
     angular_velocity, inv_mass, inv_inertia = (bodies.angular_velocity, bodies.inv_mass,
@@ -535,6 +535,7 @@ def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, m
     joint_passes_max = JOINT_PASSES * (extra_passes + 1)
     passes_run = 0
     push_outs = 0
+    joint_runs = 0
     for _ in range(substeps):
         split = has_contacts and _any_below(separation, -soft_depth)
         push_outs += split
@@ -551,11 +552,13 @@ def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, m
                         pair_start, normal, anchor_a, anchor_b, normal_impulse, tangent_impulse,
                         total_normal_impulse, total_tangent_impulse)
         if joints is not None:
-            joint_passes(joints, SOLVE, inv_h, joint_passes_max, False)
+            joint_runs += joint_passes(joints, SOLVE, inv_h, joint_passes_max, False)
         if has_contacts:
-            passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
-                                  max_push_out, soft_depth, split_rate, True, use_friction, 1,
-                                  joints)
+            extra = _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out,
+                            soft_depth, split_rate, True, use_friction, 1, joints)
+            passes_run += extra
+            if joints is not None:
+                joint_runs += extra          # each extra pass ends with one joint pass
         _integrate_positions(com, angle, velocity, angular_velocity, max_speed, h)
         if split:
             _integrate_pseudo(com, angle, pseudo_velocity, pseudo_angular, pseudo_impulse, h)
@@ -564,18 +567,22 @@ def _substeps_kernel(bodies, rows, gravity, loaded, h, substeps, relax_passes, m
                             body_a, body_b, normal, anchor_a0, anchor_b0, base_separation,
                             arm_a0, arm_b0, anchor_a, anchor_b, separation)
         if joints is not None and relax_passes > 0:
-            joint_passes(joints, RELAX, inv_h, max(relax_passes, joint_passes_max), True)
+            joint_runs += joint_passes(joints, RELAX, inv_h, max(relax_passes,
+                                                                 joint_passes_max), True)
         if has_contacts:
-            passes_run += _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h,
-                                  max_push_out, soft_depth, split_rate, False, use_friction,
-                                  relax_passes, joints)
-    return passes_run, push_outs
+            extra = _sweeps(bodies, rows, pseudo, all_pairs, loaded, inv_h, max_push_out,
+                            soft_depth, split_rate, False, use_friction, relax_passes, joints)
+            passes_run += extra
+            if joints is not None:
+                joint_runs += extra
+    return passes_run, push_outs, joint_runs
 
 
 def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: np.ndarray,
                    settings: Settings, use_friction: bool,
                    joints: tuple[JointRows, np.ndarray] | None = None,
-                   accel: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[int, int]:
+                   accel: tuple[np.ndarray, np.ndarray] | None = None
+                   ) -> tuple[int, int, int]:
     """Run every substep of one step in place (one compiled call).
 
     accel: None, or (linear (B, 2) m/s^2, angular (B,) rad/s^2): each dynamic body's
@@ -589,7 +596,8 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     gravity: (2,) m/s^2, applied to dynamic bodies. ``use_friction`` False skips the
     friction rows (the caller passes False when every contact's friction is 0).
     Returns (the number of extra passes run over loaded islands, ``row_softness``; the
-    number of substeps with a row deeper than ``soft_depth``, "Split push-out").
+    number of substeps with a row deeper than ``soft_depth``, "Split push-out"; the
+    number of solve and relax passes over the joints, ``joint_direct.joint_passes``).
     """
     c = constraints
     h = settings.dt / settings.substeps
@@ -613,7 +621,7 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     measured = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
     measured[loaded_pairs] = True
     start_tangent = c.tangent_impulse.copy()
-    passes, push_outs = _substeps_kernel(
+    passes, push_outs, joint_runs = _substeps_kernel(
         substep_bodies(bodies), substep_rows(c, bias_rate, mass_scale, impulse_scale),
         gravity, (loaded_pairs, caps, measured),
         h, settings.substeps, settings.relax_passes, settings.max_push_out,
@@ -626,4 +634,4 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     # the warm starts added l_0 .. l_(S-1), and l_S - l_0 completes the sum l_1 .. l_S
     # (no extra work in the friction rows' passes).
     c.total_tangent_impulse += c.tangent_impulse - start_tangent
-    return int(passes), int(push_outs)
+    return int(passes), int(push_outs), int(joint_runs)
