@@ -121,11 +121,13 @@ class _ShapeTables:
 
     bounds (S, 4) body-frame AABBs; radius (S,); shape_class (S,) int64; half (S, 2)
     box half-extents; polygons: ``polygons.polygon_table`` of the boxes and convex
-    meshes; sdf, concave (S,) bool: sdf shapes, triangulated meshes that are not convex.
+    meshes; sdf, concave (S,) bool: sdf shapes, triangulated meshes that are not convex;
+    kind_rank (S,) int64: each shape's kind's place in KIND_ORDER.
     """
 
     def __init__(self, shapes: Sequence[Shape]):
         self.bounds = np.array([s.bounds() for s in shapes], np.float64).reshape(-1, 4)
+        self.kind_rank = np.array([KIND_ORDER.index(s.kind) for s in shapes], np.int64)
         self.radius = np.array([s.radius for s in shapes], np.float64)
         self.shape_class = np.array([_shape_class(s) for s in shapes], np.int64)
         self.sdf = np.array([s.kind == "sdf" for s in shapes], bool)
@@ -171,7 +173,7 @@ def _groups(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray
     """The pairs (P, 2) as (first, second) bodies, the lower kind first (KIND_ORDER, then
     the lower shape index), sorted stably by their two shapes, and the [lo, hi) rows of
     each group of pairs sharing two shapes (one pair-function call each)."""
-    kind_rank = np.array([KIND_ORDER.index(s.kind) for s in shapes], np.int64)
+    kind_rank = _tables(shapes).kind_rank
     sa, sb = body_shape[pairs[:, 0]], body_shape[pairs[:, 1]]
     ka, kb = kind_rank[sa], kind_rank[sb]
     swap = (ka > kb) | ((ka == kb) & (sa > sb))
@@ -214,14 +216,17 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
     first, second, groups = _groups(shapes, body_shape, pairs)
     found_margin = np.empty(len(first))
     parts = []
-    for lo, hi in groups:
+    # Each group's largest reach_a + reach_b, all groups at once.
+    largest = (np.maximum.reduceat(reach[first] + reach[second], [lo for lo, _ in groups])
+               if groups else [])
+    for (lo, hi), group_reach in zip(groups, largest, strict=True):
         shape_a = shapes[body_shape[first[lo]]]
         shape_b = shapes[body_shape[second[lo]]]
         fn = PAIR_FUNCTIONS[(shape_a.kind, shape_b.kind)]
         if ran is not None:
             ran.add((shape_a.kind, shape_b.kind))
         a, b = first[lo:hi], second[lo:hi]
-        group_margin = margin + float(np.max(reach[a] + reach[b])) + tau
+        group_margin = margin + float(group_reach) + tau
         found_margin[lo:hi] = group_margin
         parts.append(fn(shape_a, shape_b, a, b, pose[a], pose[b], group_margin, settings))
     c = Contacts.concatenate(parts)
