@@ -59,6 +59,7 @@ case is shallower and within its depth of it (shadowed, see ``reduce``).
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -333,7 +334,7 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     """
     from .field_pairs import one_sided_depths, placed_field_contacts, tangent_samples
 
-    if not np.all(np.isfinite(sdf_b.bounds())) and np.all(np.isfinite(sdf_a.bounds())):
+    if not math.isfinite(sdf_b.radius) and math.isfinite(sdf_a.radius):   # bounded: finite
         # The descent's region is b's bounds placed in a's frame: solve with the
         # unbounded shape (a ground) as a, then give the contacts back a -> b.
         c = collide_sdfs(sdf_b, sdf_a, body_b, body_a, pose_b, pose_a, margin, settings)
