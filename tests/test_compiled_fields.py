@@ -111,3 +111,45 @@ def test_empty_and_single_point():
     assert value.shape == (0,) and grad.shape == (0, 2)
     value, grad = compiled.evaluate(f, np.array([0.3, 0.1]))
     np.testing.assert_allclose(value, f.evaluate(np.array([0.3, 0.1]))[0], atol=1e-12)
+
+
+FAR = {
+    "inner": {"op": "smooth_union", "k": 0.2, "of": [CIRCLE, {"type": "box",
+                                                             "size": [1.6, 0.5]}]},
+    "terrain": {"op": "smooth_union", "k": 0.8, "of": [
+        {"type": "box", "size": [26.0, 1.0], "offset": [0.0, -0.5]},
+        {"type": "circle", "radius": 2.0, "offset": [-5.0, -1.0]},
+        {"type": "ellipse", "size": [5.0, 1.6], "offset": [5.0, 0.0]}]},
+    "placed": {"op": "smooth_union", "k": 0.3, "blend": "circular", "angle": 0.4,
+               "offset": [0.2, -0.1], "of": [BOX, dict(CIRCLE, offset=[2.5, 0.3]),
+                                             {"op": "scale", "factor": 0.5, "of": L_SHAPE}]},
+}
+
+
+@pytest.mark.parametrize("name", sorted(FAR))
+def test_far_operands_skipped_give_the_blend_point_by_point(name):
+    """A smooth union's exact operands with finite boxes are guarded by SKIP_FAR, which
+    skips them for a batch far enough outside their box; the value and gradient are the
+    numpy field's at every point evaluated alone (a batch of one: far or not, inside the
+    operand's box or not) and in batches of neighbours, near the operands and far from
+    them (the skip taken)."""
+    from sdfphys.sdf.opcodes import SKIP_FAR
+
+    f = field(FAR[name])
+    program = compiled.compile_field(f)
+    assert np.sum(program.code[:, 0] == SKIP_FAR) == len(FAR[name]["of"]) - 1
+    x0, y0, x1, y1 = f.bounds()
+    rng = np.random.default_rng(4)
+    points = np.column_stack([rng.uniform(x0 - 2.0, x1 + 2.0, 600),
+                              rng.uniform(y0 - 2.0, y1 + 2.0, 600)])
+    expected_value, expected_grad = f.evaluate(points)
+    for i in range(len(points)):
+        value, grad = compiled.evaluate(f, points[i:i + 1])
+        np.testing.assert_allclose(value, expected_value[i:i + 1], rtol=0.0, atol=1e-12)
+        np.testing.assert_allclose(grad, expected_grad[i:i + 1], rtol=0.0, atol=1e-12)
+    for centre in points[:60]:
+        batch = centre + rng.normal(scale=0.05, size=(16, 2))
+        value, grad = compiled.evaluate(f, batch)
+        expected = f.evaluate(batch)
+        np.testing.assert_allclose(value, expected[0], rtol=0.0, atol=1e-12)
+        np.testing.assert_allclose(grad, expected[1], rtol=0.0, atol=1e-12)

@@ -53,6 +53,9 @@ GRID = 35           # a, b = node counts nx, ny; consts: origin x, y, cell, marg
                     # (inf: none), then the nx * ny node values (row i = x index)
 QUADRATIC_BEZIER = 36  # consts: a, A = b - a, B = a - 2b + c (2 each), B.B, 3 A.B, 2 A.A,
                        # radius, |A x B|, 1 if the cubic term is used
+# Control (not a primitive; ``run`` takes it before ``_shape``):
+SKIP_FAR = 37       # a = rows to skip (the guarded operand and its blend); consts: the
+                    # operand's box xmin, ymin, xmax, ymax in this frame, blend width k
 
 #: Blend kernels by index (``SMOOTH``'s b), as in ``operators.BLENDS``.
 BLEND_INDEX = {"polynomial": 0, "cubic": 1, "circular": 2, "exponential": 3}
