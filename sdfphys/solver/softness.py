@@ -379,26 +379,23 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
             passes[count] = cap
             count += 1
         # A loaded pair's coefficients for its plain and its stiff rows (base stiffness
-        # omega, doubled), each computed at its first row, not at every row.
-        known_plain = known_stiff = False
+        # omega, doubled), each computed at its first row (bit j of known), not at every row.
+        known = 0
         for k in range(first, pair_start[p + 1]):
-            j = 1 if stiff[k] else 0
+            j = stiff[k]
             if r == 1.0:
                 bias_rate[k] = base_bias_rate[j]
                 mass_scale[k] = base_mass_scale[j]
                 impulse_scale[k] = base_impulse_scale[j]
                 continue
-            if not (known_stiff if j else known_plain):
+            if not known & (1 << j):
                 root_r = math.sqrt(r)
                 w = omega * (2.0 if j else 1.0) * root_r
                 a1 = 2.0 * zeta * root_r + h * w
                 a2 = h * w * a1
                 a3 = 1.0 / (1.0 + a2)
                 loaded[j, 0], loaded[j, 1], loaded[j, 2] = w / a1, a2 * a3, a3
-                if j:
-                    known_stiff = True
-                else:
-                    known_plain = True
+                known |= 1 << j
             bias_rate[k], mass_scale[k], impulse_scale[k] = \
                 loaded[j, 0], loaded[j, 1], loaded[j, 2]
     return count
