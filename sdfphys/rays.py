@@ -85,7 +85,7 @@ _ROOT_STEPS = 100
 def _field(code, consts, x, y, pt, stack, frames, cur, value, grad):
     """(f, df/dx, df/dy) of a program at (x, y), body frame."""
     pt[0, 0], pt[0, 1] = x, y
-    run_shared(code, consts, pt, 1, stack, frames, cur, value, grad)
+    run_shared(code, consts, pt, 1, stack, frames, cur, value, grad, 0, 0, 0)
     return value[0], grad[0, 0], grad[0, 1]
 
 

@@ -217,7 +217,7 @@ def _union_body(best: np.ndarray, tiles: np.ndarray, xs: np.ndarray, ys: np.ndar
 @njit(cache=True)
 def _merge(best, code, consts, points, n, stack, frames, cur, value, grad, ii, jj) -> None:
     """Evaluate the program at points[:n] and keep the minimum at (ii, jj) in best."""
-    run_shared(code, consts, points, n, stack, frames, cur, value, grad)
+    run_shared(code, consts, points, n, stack, frames, cur, value, grad, 0, 0, 0)
     for k in range(n):
         d = value[k]
         if d < best[ii[k], jj[k]] or math.isnan(d):

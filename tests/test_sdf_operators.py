@@ -179,7 +179,7 @@ def test_smooth_min_dip_weights_and_derivatives(blend, rng):
     a = rng.uniform(-1, 1, 5000)
     b = a + rng.uniform(-1.5 * k, 1.5 * k, 5000)
     value, w = smooth_min(a, b, k, blend)
-    dip = BLENDS[blend][1] * k
+    dip = BLENDS[blend] * k
     assert np.all(value <= np.minimum(a, b)) and np.all(value >= np.minimum(a, b) - dip - 1e-15)
     tie, wt = smooth_min(np.array([0.2]), np.array([0.2]), k, blend)
     np.testing.assert_allclose(tie, [0.2 - dip], rtol=0, atol=1e-15)
@@ -228,7 +228,7 @@ def test_smooth_operators_sit_on_the_right_side_of_the_hard_ones(blend, rng):
     parts = [circle(1.0), circle(0.7, 1.3, 0.2), box(0.6, 0.6, -0.4, 1.0)]
     k = 0.3
     p = sample_points(OPERATORS["union"](parts), 4000, rng)
-    dip = BLENDS[blend][1] * k
+    dip = BLENDS[blend] * k
     hard = OPERATORS["union"](parts).distance(p)
     soft = OPERATORS["smooth_union"](parts, k=k, blend=blend).distance(p)
     assert np.all(soft <= hard) and np.all(soft >= hard - 2 * dip - 1e-12)
@@ -374,7 +374,7 @@ def test_smooth_union_bounds_cover_the_bridge(blend, rng):
     # Two disks 0.2 apart with k = 1: the blend bridges the gap; the box must grow.
     f = OPERATORS["smooth_union"]([circle(0.5, -0.6), circle(0.5, 0.6)], k=1.0, blend=blend)
     assert f.distance([[0.0, 0.0]])[0] < 0
-    dip = BLENDS[blend][1]
+    dip = BLENDS[blend]
     np.testing.assert_allclose(f.bounds(), [-1.1 - dip, -0.5 - dip, 1.1 + dip, 0.5 + dip])
     assert_level_bounds_contain(f, rng)
 
@@ -494,7 +494,7 @@ def test_ties_take_the_first_operand_and_never_nan():
     np.testing.assert_array_equal(g, [[1.0, 0.0]])                  # the first circle's
     for blend in BLENDS:
         d, g = OPERATORS["smooth_union"](pair, k=0.2, blend=blend).evaluate(centre)
-        np.testing.assert_allclose(d, [-BLENDS[blend][1] * 0.2], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(d, [-BLENDS[blend] * 0.2], rtol=0, atol=1e-15)
         np.testing.assert_array_equal(g, [[0.0, 0.0]])             # a genuine saddle
 
 

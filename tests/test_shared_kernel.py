@@ -39,7 +39,7 @@ def test_a_caller_computes_run_s_own_bits_and_holds_no_copy_of_it():
     stack, frames, cur = scratch(program.depth, program.nesting, len(points))
     ref_value, ref_grad = np.empty(len(points)), np.empty((len(points), 2))
     run(program.code, program.consts, points, len(points), stack, frames, cur,
-        ref_value, ref_grad)
+        ref_value, ref_grad, 0, 0, 0)
     assert value.tobytes() == ref_value.tobytes() and grad.tobytes() == ref_grad.tobytes()
     record = _REGISTRY[SYMBOL]
     compiled = run.overloads[RUN_TYPES]
@@ -57,7 +57,7 @@ def test_the_shared_call_takes_only_its_signature():
     def wrong(code, consts, points):
         stack, frames, cur = scratch(1, 1, 1)
         run_shared(code, consts, points, 1, stack, frames, cur, np.empty(1),
-                   np.empty((1, 2)))
+                   np.empty((1, 2)), 0, 0, 0)
 
     program = _program()
     with pytest.raises(errors.TypingError, match=SYMBOL):

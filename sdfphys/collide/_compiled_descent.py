@@ -108,7 +108,8 @@ def _evaluate(kind: int, code_a: np.ndarray, consts_a: np.ndarray, depth_a: int,
     q, fb, gb = np.empty((size, 2)), np.empty(size), np.empty((size, 2))
     for lo in range(0, n, _CHUNK):
         m = min(n - lo, _CHUNK)
-        run_shared(code_a, consts_a, points[lo:lo + m], m, stack_a, frames_a, cur_a, fa, ga)
+        run_shared(code_a, consts_a, points[lo:lo + m], m, stack_a, frames_a, cur_a, fa, ga,
+                   0, 0, 0)
         if kind == TRIANGLE:
             for j in range(m):
                 phi[lo + j], grad[lo + j, 0], grad[lo + j, 1] = fa[j], ga[j, 0], ga[j, 1]
@@ -119,7 +120,7 @@ def _evaluate(kind: int, code_a: np.ndarray, consts_a: np.ndarray, depth_a: int,
             px, py = points[lo + j, 0] - offset[k, 0], points[lo + j, 1] - offset[k, 1]
             q[j, 0] = px * rotation[k, 0, 0] + py * rotation[k, 1, 0]
             q[j, 1] = px * rotation[k, 0, 1] + py * rotation[k, 1, 1]
-        run_shared(code_b, consts_b, q, m, stack_b, frames_b, cur_b, fb, gb)
+        run_shared(code_b, consts_b, q, m, stack_b, frames_b, cur_b, fb, gb, 0, 0, 0)
         for j in range(m):
             i = lo + j
             k = pair[i]

@@ -44,8 +44,8 @@ def _h(code_a: np.ndarray, consts_a: np.ndarray, work_a, code_b: np.ndarray,
         xa[j, 0], xa[j, 1] = x, y
         px, py = (x - sx) - offset[k, 0], (y - sy) - offset[k, 1]
         xb[j, 0], xb[j, 1] = px * r00 + py * r10, px * r01 + py * r11
-    run_shared(code_a, consts_a, xa, m, stack_a, frames_a, cur_a, fa, ga)
-    run_shared(code_b, consts_b, xb, m, stack_b, frames_b, cur_b, fb, gb)
+    run_shared(code_a, consts_a, xa, m, stack_a, frames_a, cur_a, fa, ga, 0, 0, 0)
+    run_shared(code_b, consts_b, xb, m, stack_b, frames_b, cur_b, fb, gb, 0, 0, 0)
     for j in range(m):
         if fa[j] >= fb[j]:
             value[j], slope[j] = fa[j], ga[j, 0] * dx + ga[j, 1] * dy

@@ -48,7 +48,7 @@ def _evaluate(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int,
     """Value (n,) and gradient (n, 2) of a program (``sdf.compiled``) at points[:n]."""
     stack, frames, cur = scratch(depth, nesting, n)
     value, grad = np.empty(n), np.empty((n, 2))
-    run_shared(code, consts, points, n, stack, frames, cur, value, grad)
+    run_shared(code, consts, points, n, stack, frames, cur, value, grad, 0, 0, 0)
     return value, grad
 
 

@@ -5,7 +5,17 @@
 shapes, exactness) are in ``sdfphys.sdf.base``.
 """
 
-from . import conics, curved, folded, gradient, grid, image, operators, polygonal  # noqa: F401  (they register fields)
+from . import (  # noqa: F401  (the primitives register; compiled registers the evaluator)
+    compiled,
+    conics,
+    curved,
+    folded,
+    gradient,
+    grid,
+    image,
+    operators,
+    polygonal,
+)
 from .base import FALLBACK_DIRECTION, OPERATORS, PRIMITIVES, Field, Param, safe_normalize
 from .build import field
 

@@ -45,6 +45,11 @@ __all__ = [
 #: Direction used wherever a gradient or normal is undefined (a zero vector).
 FALLBACK_DIRECTION = np.array([1.0, 0.0])
 
+#: ``compiled.evaluate``, which ``sdf.compiled`` registers when imported (``sdfphys.sdf``
+#: imports it with the primitives, before any field exists). Not imported here: the
+#: kernels' cache stamps follow import statements (``_numba_cache``), and every module
+#: importing this one would then recompile at each edit of the field compiler.
+_EVALUATOR: list[Callable[..., tuple[np.ndarray, np.ndarray]]] = []
 
 
 def as_points(points: Any) -> np.ndarray:
@@ -78,8 +83,12 @@ class Field:
     spec: dict | None = None
 
     def evaluate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Distance (N,) and gradient (N, 2) at ``points`` (N, 2), local frame."""
-        raise NotImplementedError
+        """Distance (N,) and gradient (N, 2) at ``points`` (N, 2), local frame.
+
+        Every primitive and operator of ``sdfphys.sdf`` runs its compiled program
+        (``compiled.evaluate``); a field of your own overrides this method.
+        """
+        return _EVALUATOR[0](self, as_points(points), inherited=True)
 
     def distance(self, points: np.ndarray) -> np.ndarray:
         """Distance (N,) at ``points`` (N, 2); cheaper than ``evaluate`` where overridden."""

@@ -1,8 +1,7 @@
 """The quadratic Bezier's exact distance for compiled field programs (``primitive_kernels._shape``).
 
-``conics.QuadraticBezier.evaluate`` operation for operation, so that both round alike:
-the nearest point's parameter is a root of a cubic (Cardano or Viete), each candidate
-polished by guarded Newton steps, then the ends.
+``conics.QuadraticBezier``'s field: the nearest point's parameter is a root of a cubic
+(Cardano or Viete), each candidate polished by guarded Newton steps, then the ends.
 """
 
 from __future__ import annotations
@@ -42,7 +41,7 @@ def _polish(t: float, k3: float, k2: float, k1: float, k0: float) -> float:
 
 @njit(cache=True, error_model="numpy")
 def _bezier(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
-    """conics.QuadraticBezier.evaluate: candidates (Cardano / Viete roots, the linear
+    """conics.QuadraticBezier: candidates (Cardano / Viete roots, the linear
     root, polished; the ends), the nearest wins (the first of a tie)."""
     ax, ay, cax, cay, cbx, cby = (consts[o], consts[o + 1], consts[o + 2], consts[o + 3],
                                   consts[o + 4], consts[o + 5])

@@ -1,16 +1,15 @@
 """Field trees compiled to a flat stack-machine program that one numba function evaluates.
 
-Why: the descent (``collide.descent``) evaluates a field once per round on a few
-hundred points; a numpy ``field.evaluate`` costs ~30 us of fixed overhead per call
-(per node of the tree), which dominates small batches. ``compile_field(f)`` turns
-the tree of ``f`` into a :class:`Program` (an int64 instruction table and a
-float64 constant table) that :func:`run` evaluates on a batch of points inside
-njit code (one instruction at a time over the batch), with no Python in the loop:
-value and analytic gradient, the same numbers as ``f.evaluate`` (the same operations
-in the same order, so the same bits, except where numpy rounds in ways the compiled
-code cannot follow: see "Rounding" below). Kernels call it as ``run_shared``, by name
+This is the one implementation of every primitive and operator of ``sdfphys.sdf``:
+``Field.evaluate`` runs the field's program, and so do the collision, ray and
+rendering kernels, which call :func:`run` as ``run_shared``, by name
 (``sdfphys._shared_kernel``): one machine code of ``run`` per process, not a copy
-built into every caller.
+built into every caller. ``compile_field(f)`` turns the tree of ``f`` into a
+:class:`Program` (an int64 instruction table and a float64 constant table) that
+:func:`run` evaluates on a batch of points, one instruction at a time over the
+batch, value and analytic gradient, with no Python in the loop (a numpy evaluation
+costs ~30 us of fixed overhead per node of the tree, which dominated the descent's
+small batches).
 
 Program (postfix). ``code`` (I, 4) int64 rows ``(opcode, offset, a, b)``:
 ``offset`` indexes ``consts`` (F,) float64 where the instruction's parameters
@@ -52,27 +51,31 @@ hexagram (MIRRORED), cross, rounded_cross (folded.py) and baked grids (``bake``,
 grid.py: the node values, decoded if quantized, are consts). The operators:
 transform / translate / rotate, scale, union, intersection, difference, xor,
 smooth_union / smooth_intersection / smooth_difference (all four blends), round
-and onion. Anything else (numeric gradients, user classes, subclasses) makes
-:func:`compile_field` return None: the caller keeps the numpy path. The program
-is cached on the field object (``_compiled_program``), so shared (instanced)
-fields compile once.
+and onion. A subclass that keeps the inherited ``evaluate`` takes its parent's
+instructions. The program is cached on the field object (``_compiled_program``),
+so shared (instanced) fields compile once.
 
-Rounding. Most kinds give numpy's bits exactly (tests/test_compiled_fields*.py
-and tests/test_sdf_curved_bits.py compare with ``assert_array_equal``; the numpy
-fields write their per-point products out, ``vec2.rows_dot``, instead of a BLAS
-``q @ c`` that rounds a row differently with its place in the batch). Where the
-numpy code calls something the compiled code cannot reproduce the results differ
-in the last bits: numpy's SIMD arctan2 (star) and cbrt / arccos / power
-(quadratic_bezier), which are an ulp or a few from libm's, and exp (the
-exponential blend). Measured on 26 000 points per kind: values within 1.5e-14,
-gradients within 1.5e-14, except on kinks and within ~1e-9 of a vertex (where the
-last bit picks the side or turns the direction) and the Bezier's gradients,
-within 6.2e-9 near its evolute (its three Newton steps amplify the seed's last
-bits).
+Fields of the user's own. A field with its own ``evaluate`` (a user's class, the
+numeric gradients of ``gradient.py``) is an EXTERNAL leaf of the program: from
+Python, :func:`evaluate` runs the program up to the leaf, the leaf's ``evaluate``
+takes the points in its frame, and the program resumes (``run`` returns and is
+called again from the next row), so operators written once serve user fields too.
+Kernels cannot call Python: for a tree with externals :func:`compile_field` returns
+None and the collision stages take their Python-driven path.
+
+Rounding. The numpy oracle of the tests (tests/numpy_fields: the vectorized code the
+fields had before this was their one implementation) gives the same bits for most
+kinds (tests/test_compiled_fields*.py and tests/test_sdf_curved_bits.py compare with
+``assert_array_equal``). Where the numpy code calls numpy's SIMD arctan2 (star), cbrt /
+arccos / power (quadratic_bezier) or exp (the exponential blend), an ulp or a few
+from libm's, the results differ in the last bits. Measured on 26 000 points per
+kind: values within 1.5e-14, gradients within 1.5e-14, except on kinks and within
+~1e-9 of a vertex (where the last bit picks the side or turns the direction) and
+the Bezier's gradients, within 6.2e-9 near its evolute (its three Newton steps
+amplify the seed's last bits).
 
 Conventions are those of ``sdfphys.sdf.base``: metres, f < 0 inside, gradients
-deterministic unit vectors (a subgradient) where f is not differentiable, with
-the same fallback directions as the numpy code.
+deterministic unit vectors (a subgradient) where f is not differentiable.
 """
 
 from __future__ import annotations
@@ -87,7 +90,7 @@ from .._jit import njit
 from .._shared_kernel import F1, F2, F3, I2, shared
 from ..vec2 import TINY
 from . import conics, curved, folded, grid, operators, polygonal
-from .base import Field, safe_normalize
+from .base import _EVALUATOR, Field, safe_normalize
 from .blend_kernels import _smooth_min
 from .opcodes import (
     ARC,
@@ -99,6 +102,7 @@ from .opcodes import (
     CUT_DISK,
     EGG,
     ELLIPSE,
+    EXTERNAL,
     GRID,
     HALF_PLANE,
     HEART,
@@ -132,18 +136,23 @@ from .opcodes import (
 )
 from .primitive_kernels import _box, _ellipse, _polygon, _segment, _shape
 
-__all__ = ["RUN_TYPES", "Program", "compile_field", "distance", "evaluate", "run", "run_shared",
-           "scratch"]
+__all__ = ["RUN_RESULT", "RUN_TYPES", "Program", "compile_field", "distance", "evaluate",
+           "field_program", "run", "run_shared", "scratch"]
 
 @dataclass(frozen=True)
 class Program:
     """A compiled field: ``code`` (I, 4) int64, ``consts`` (F,) float64, the value
-    stack ``depth`` and the point stack ``nesting`` it needs (both >= 1)."""
+    stack ``depth`` and the point stack ``nesting`` it needs (both >= 1), and the
+    ``externals``: the fields of the tree that do not compile (user classes), in the
+    order of their EXTERNAL rows' ``a``. A program with externals runs only from
+    Python (:func:`evaluate`); kernels take programs without (:func:`compile_field`).
+    """
 
     code: np.ndarray
     consts: np.ndarray
     depth: int
     nesting: int
+    externals: tuple[Field, ...] = ()
 
 
 class _Builder:
@@ -155,6 +164,7 @@ class _Builder:
         self.depth = 0
         self.frames = 0
         self.nesting = 0
+        self.externals: list[Field] = []
 
     def emit(self, op: int, values=(), a: int = 0, b: int = 0, push: int = 0) -> None:
         block = np.array(values, dtype=np.float64).ravel()
@@ -166,8 +176,8 @@ class _Builder:
 
 
 def _edge_consts(segments) -> list[float]:
-    """The 7 consts of each ``polygonal._Segment`` (see the opcode table), the same
-    numbers as ``polygonal._nearest`` computes (e = b - a, e.e = e_x e_x + e_y e_y)."""
+    """The 7 consts of each ``polygonal._Segment`` (see the opcode table): a, e = b - a,
+    e.e = e_x e_x + e_y e_y and the outward normal."""
     out: list[float] = []
     for seg in segments:
         e = seg.b - seg.a
@@ -176,13 +186,25 @@ def _edge_consts(segments) -> list[float]:
     return out
 
 
-class _Unsupported(Exception):
-    pass
-
-
-def _emit(f: Field, out: _Builder) -> None:
-    """Append the instructions of ``f`` (postfix); raise _Unsupported for other fields."""
+def _kind(f: Field, inherited: bool = False) -> type:
+    """The class whose instructions ``f`` takes: its own; or, for a subclass that keeps
+    the inherited ``evaluate`` (or whose own calls the inherited one: ``inherited``),
+    its nearest compiled ancestor (``_COMPILED``)."""
     kind = type(f)
+    if kind in _COMPILED or not inherited and getattr(kind, "evaluate", None) is not \
+            Field.evaluate:
+        return kind
+    for ancestor in kind.__mro__:
+        if ancestor in _COMPILED:
+            return ancestor
+    raise NotImplementedError(f"{kind.__name__} is a Field without evaluate(); a field of "
+                              "your own must define evaluate(points) -> (value, gradient)")
+
+
+def _emit(f: Field, out: _Builder, inherited: bool = False) -> None:
+    """Append the instructions of ``f`` (postfix); a field that does not compile is an
+    EXTERNAL leaf (``out.externals``). ``inherited``: see ``_kind``."""
+    kind = _kind(f, inherited)
     if kind is curved.Circle:
         out.emit(CIRCLE, [f.radius], push=1)
     elif kind is polygonal.Box:
@@ -319,30 +341,56 @@ def _emit(f: Field, out: _Builder) -> None:
         _emit(f.of, out)
         out.emit(ONION, [f.thickness])
     else:
-        raise _Unsupported(kind.__name__)
+        out.emit(EXTERNAL, a=len(out.externals), push=1)
+        out.externals.append(f)
+
+
+#: The classes ``_emit`` writes instructions for (``_kind`` resolves subclasses).
+_COMPILED = frozenset([
+    curved.Circle, curved.Segment, curved.Capsule, curved.Arc, curved.Ring, curved.Pie,
+    curved.CutDisk, curved.Horseshoe, curved.UnevenCapsule, conics.Ellipse, conics.Vesica,
+    conics.Moon, conics.Egg, conics.Heart, conics.QuadraticBezier, polygonal.Box,
+    polygonal.RoundedBox, polygonal.HalfPlane, polygonal.Polygon, polygonal.OrientedBox,
+    polygonal.Rhombus, polygonal.Trapezoid, polygonal.Parallelogram, polygonal.Triangle,
+    polygonal.EquilateralTriangle, polygonal.IsoscelesTriangle, folded.Star,
+    folded.Pentagon, folded.Hexagon, folded.Octagon, folded.Hexagram, folded.Cross,
+    folded.RoundedCross, grid.GridField, operators.Transform, operators.Translate,
+    operators.Rotate, operators.Scale, operators.Union, operators.Intersection,
+    operators.Difference, operators.Xor, operators.SmoothUnion,
+    operators.SmoothIntersection, operators.SmoothDifference, operators.Round,
+    operators.Onion])
+
+
+def field_program(f: Field, inherited: bool = False) -> Program:
+    """The program of ``f``, its fields that do not compile as EXTERNAL leaves.
+
+    ``inherited``: the program of the nearest compiled ancestor's ``evaluate`` (what
+    ``Field.evaluate`` runs when a subclass's own ``evaluate`` calls it). Cached on
+    ``f`` (attributes ``_compiled_program``, ``_inherited_program``), so shared fields
+    compile once.
+    """
+    inherited = inherited and _kind(f) is not _kind(f, True)
+    name = "_inherited_program" if inherited else "_compiled_program"
+    cached = f.__dict__.get(name) if hasattr(f, "__dict__") else None
+    if cached is not None:
+        return cached
+    out = _Builder()
+    _emit(f, out, inherited)
+    built = Program(np.array(out.code, dtype=np.int64).reshape(-1, 4),
+                    np.concatenate(out.consts + [np.zeros(1)]), max(out.depth, 1),
+                    max(out.nesting, 1), tuple(out.externals))
+    try:
+        setattr(f, name, built)
+    except AttributeError:
+        pass
+    return built
 
 
 def compile_field(f: Field) -> Program | None:
-    """The program of ``f``, or None when some node of its tree does not compile.
-
-    Cached on ``f`` (attribute ``_compiled_program``; False marks "does not compile").
-    """
-    cached = f.__dict__.get("_compiled_program") if hasattr(f, "__dict__") else None
-    if cached is not None:
-        return cached or None
-    out = _Builder()
-    try:
-        _emit(f, out)
-        program: Program | bool = Program(np.array(out.code, dtype=np.int64).reshape(-1, 4),
-                                          np.concatenate(out.consts + [np.zeros(1)]),
-                                          max(out.depth, 1), max(out.nesting, 1))
-    except _Unsupported:
-        program = False
-    try:
-        f._compiled_program = program
-    except AttributeError:
-        pass
-    return program or None
+    """The program of ``f`` for kernels, or None when some node of its tree does not
+    compile (the caller keeps its Python-driven path)."""
+    built = field_program(f)
+    return None if built.externals else built
 
 
 @njit(cache=True, error_model="numpy")
@@ -355,18 +403,22 @@ def scratch(depth: int, nesting: int, n: int
 
 @njit(cache=True, error_model="numpy")
 def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack: np.ndarray,
-        frames: np.ndarray, cur: np.ndarray, value: np.ndarray, grad: np.ndarray) -> None:
+        frames: np.ndarray, cur: np.ndarray, value: np.ndarray, grad: np.ndarray, start: int,
+        sp: int, fp: int) -> tuple[int, int, int]:
     """Value (n,) and gradient (n, 2) of the program at points[:n] (m), into value, grad.
 
     One instruction at a time over the whole batch (the dispatch costs once per
     batch, the inner loops are tight). stack, frames, cur: ``scratch`` arrays of at
-    least the program's depth and nesting and n points.
+    least the program's depth and nesting and n points. Kernels call it with start,
+    sp, fp = 0, 0, 0. Returns (i, sp, fp): i = len(code) once the program has run to
+    its end and written value and grad; otherwise i is the row of an EXTERNAL leaf
+    (``evaluate`` resumes with i + 1, sp + 1, fp once the leaf's value and gradient
+    at cur[:n] are in stack[sp]).
     """
-    for j in range(n):
-        cur[j, 0], cur[j, 1] = points[j, 0], points[j, 1]
-    sp = 0
-    fp = 0
-    i = -1
+    if start == 0:
+        for j in range(n):
+            cur[j, 0], cur[j, 1] = points[j, 0], points[j, 1]
+    i = start - 1
     while i + 1 < code.shape[0]:
         i += 1
         op, o, a, b = code[i, 0], code[i, 1], code[i, 2], code[i, 3]
@@ -389,6 +441,8 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
                     break
             if far:
                 i += a - 1                    # the next row is the one after the blend
+        elif op == EXTERNAL:
+            return i, sp, fp
         elif op == CIRCLE:
             out = stack[sp]
             r = consts[o]
@@ -481,7 +535,7 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
                 top[j, 0] = factor * top[j, 0]
         elif op == SELECT:
             # min (union), max (intersection) or max(a, -b1, -b2, ...) (difference)
-            # of the a operands on top; the first one wins a tie (numpy's arg-min/max).
+            # of the a operands on top; the first one wins a tie.
             first = sp - a
             out = stack[first]
             for j in range(n):
@@ -555,34 +609,52 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
     result = stack[0]
     for j in range(n):
         value[j], grad[j, 0], grad[j, 1] = result[j, 0], result[j, 1], result[j, 2]
+    return code.shape[0], sp, fp
 
 
-#: ``run``'s argument types: the one signature every kernel calls it with.
-RUN_TYPES = (I2, F1, F2, types.int64, F3, F3, F2, F1, F2)
+#: ``run``'s argument and result types: the one signature every kernel calls it with.
+RUN_TYPES = (I2, F1, F2, types.int64, F3, F3, F2, F1, F2, types.int64, types.int64,
+             types.int64)
+RUN_RESULT = types.UniTuple(types.int64, 3)
 
 #: ``run`` for njit callers: one machine code per process, called by name
 #: (``sdfphys._shared_kernel``), not built into each caller.
-run_shared = shared(run, RUN_TYPES, "sdfphys_sdf_compiled_run")
+run_shared = shared(run, RUN_TYPES, "sdfphys_sdf_compiled_run", RUN_RESULT)
 
 
-def evaluate(f: Field, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``f.evaluate(points)`` through the compiled program when ``f`` compiles.
+def evaluate(f: Field, points: np.ndarray, inherited: bool = False
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """Value (N,) and gradient (N, 2) of ``f`` at ``points`` (N, 2), f's frame (m).
 
-    points (N, 2) in f's frame (m); returns value (N,) and gradient (N, 2).
+    The program runs; at each EXTERNAL leaf (a field of the user's own) it stops, the
+    leaf's ``evaluate`` takes the points in the leaf's frame, and the program resumes.
+    ``inherited``: ``Field.evaluate``'s call (see ``field_program``).
     """
-    program = compile_field(f)
-    if program is None:
-        return f.evaluate(points)
+    built = field_program(f, inherited)
     p = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
-    value = np.empty(len(p))
-    grad = np.empty((len(p), 2))
-    stack, frames, cur = scratch(program.depth, program.nesting, len(p))
-    run(program.code, program.consts, p, len(p), stack, frames, cur, value, grad)
+    if len(built.code) == 1 and built.externals:         # f is itself a user's field
+        return f.evaluate(p)
+    n = len(p)
+    value = np.empty(n)
+    grad = np.empty((n, 2))
+    stack, frames, cur = scratch(built.depth, built.nesting, n)
+    i, sp, fp = run(built.code, built.consts, p, n, stack, frames, cur, value, grad, 0, 0, 0)
+    while i < len(built.code):
+        leaf_value, leaf_grad = built.externals[built.code[i, 2]].evaluate(cur.copy())
+        stack[sp, :, 0] = leaf_value
+        stack[sp, :, 1:] = leaf_grad
+        i, sp, fp = run(built.code, built.consts, p, n, stack, frames, cur, value, grad,
+                        i + 1, sp + 1, fp)
     return value, grad
 
 
 def distance(f: Field, points: np.ndarray) -> np.ndarray:
-    """``f.distance(points)`` (N,) through the compiled program when ``f`` compiles."""
-    if compile_field(f) is None:
+    """Value (N,) of ``f`` at ``points`` (N, 2): ``evaluate``'s first result, or a user's
+    field's own ``distance`` when ``f`` is one."""
+    built = field_program(f)
+    if len(built.code) == 1 and built.externals:
         return f.distance(points)
     return evaluate(f, points)[0]
+
+
+_EVALUATOR.append(evaluate)

@@ -14,17 +14,11 @@ from typing import Any
 import numpy as np
 
 from ..errors import SpecError
-from ..vec2 import rows_dot, rows_unit_or
-from .base import REQUIRED, Field, Param, as_points, primitive
+from .base import REQUIRED, Field, Param, primitive
 from .polygonal import (
     _DEGENERATE,
     _aabb,
-    _nearest,
-    _reflect,
     _segment,
-    _sign,
-    _signed,
-    _unreflect,
 )
 
 # --------------------------------------------------------------------------------------
@@ -46,22 +40,6 @@ class _MirrorFolded(Field):
         self.radius = float(radius)
         self._edge = [_segment((x0, radius), (x1, radius), (0.0, 1.0))]
         self._eps = _DEGENERATE * size
-
-    def evaluate(self, points):
-        p = as_points(points)
-        s = _sign(p)
-        if not self._abs_y:
-            s[:, 1] = 1.0
-        q = p * s
-        moved = []
-        for n in self._mirrors:
-            q, m = _reflect(q, n)
-            moved.append(m)
-        dist, v, n, interior = _nearest(q, self._edge)
-        d, g = _signed(dist, v, n, interior, q[:, 1] < self.radius, self._eps)
-        for n, m in zip(reversed(self._mirrors), reversed(moved)):
-            g = _unreflect(g, n, m)
-        return d, g * s
 
 
 def _unit_at(degrees: float) -> np.ndarray:
@@ -206,23 +184,6 @@ class Star(Field):
         self._edge = [_segment(inner, tip, (math.sin(en), -math.cos(en)))]
         self._eps = _DEGENERATE * self.radius
 
-    def evaluate(self, points):
-        p = as_points(points)
-        x, y = np.abs(p[:, 0]), p[:, 1]
-        theta = np.arctan2(x, y)
-        bn = np.mod(theta, 2.0 * self._an) - self._an
-        q_hat = np.stack([np.cos(bn), np.abs(np.sin(bn))], axis=1)
-        q = np.hypot(x, y)[:, None] * q_hat
-        dist, v, n, interior = _nearest(q, self._edge)
-        edge = self._edge[0]
-        inside = rows_dot(q - edge.b, edge.normal) < 0.0
-        d, gq = _signed(dist, v, n, interior, inside, self._eps)
-        g_r = gq[:, 0] * q_hat[:, 0] + gq[:, 1] * q_hat[:, 1]
-        g_t = np.where(bn >= 0.0, -1.0, 1.0) * (gq[:, 1] * q_hat[:, 0] - gq[:, 0] * q_hat[:, 1])
-        st, ct = np.sin(theta), np.cos(theta)
-        g = np.stack([(g_r * st - g_t * ct) * _sign(p[:, 0]), g_r * ct + g_t * st], axis=1)
-        return d, g
-
     def bounds(self):
         angles = math.pi / 2.0 + 2.0 * self._an * np.arange(self.n)
         tips = self.radius * np.stack([np.cos(angles), np.sin(angles)], axis=1)
@@ -270,17 +231,6 @@ class Cross(Field):
             self._edges.append(_segment((by, by), (bx, by), (0.0, 1.0)))
         self._eps = _DEGENERATE * bx
 
-    def evaluate(self, points):
-        p = as_points(points)
-        s = _sign(p)
-        q = np.abs(p)
-        swap = (q[:, 1] > q[:, 0])[:, None]
-        q = np.where(swap, q[:, ::-1], q)
-        dist, v, n, interior = _nearest(q, self._edges)
-        inside = (q[:, 0] < self.half[0]) & (q[:, 1] < self.half[1])
-        d, g = _signed(dist, v, n, interior, inside, self._eps)
-        return d + self.rounding, np.where(swap, g[:, ::-1], g) * s
-
     def bounds(self):
         h = self.half[0] - self.rounding
         return np.array([-h, -h, h, h])
@@ -309,24 +259,6 @@ class RoundedCross(Field):
             raise SpecError("h", f"must be <= 1, got {h:g}")
         self.h, self.radius = float(h), float(radius)
         self._k = 0.5 * (self.h + 1.0 / self.h)
-
-    def evaluate(self, points):
-        p = as_points(points)
-        s = _sign(p)
-        q = np.abs(p) / self.radius
-        h, k = self.h, self._k
-        wedge = (q[:, 0] < 1.0) & (q[:, 1] < q[:, 0] * (k - h) + h)
-        to_centre = np.array([1.0, k]) - q
-        d_arc = k - np.hypot(to_centre[:, 0], to_centre[:, 1])
-        g_arc = rows_unit_or(to_centre, np.array([-1.0, 0.0]), _DEGENERATE)
-        from_top = q - np.array([0.0, h])
-        from_side = q - np.array([1.0, 0.0])
-        top = rows_dot(from_top, from_top) <= rows_dot(from_side, from_side)
-        w = np.where(top[:, None], from_top, from_side)
-        d_tip = np.hypot(w[:, 0], w[:, 1])
-        g_tip = rows_unit_or(w, np.where(top[:, None], [0.0, 1.0], [1.0, 0.0]), _DEGENERATE)
-        d = np.where(wedge, d_arc, d_tip) * self.radius
-        return d, np.where(wedge[:, None], g_arc, g_tip) * s
 
     def bounds(self):
         r, hr = self.radius, self.h * self.radius

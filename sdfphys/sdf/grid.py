@@ -67,7 +67,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import SpecError, check_number
-from .base import REQUIRED, Field, Param, as_points, operator
+from .base import REQUIRED, Field, Param, operator
 from .build import field as build_field
 
 __all__ = ["MAX_NODES", "GridField", "bilinear_error_bound"]
@@ -208,55 +208,12 @@ class GridField(Field):
     def _decode(self, codes: np.ndarray) -> np.ndarray:
         return codes * (2.0 * self.scale / 255.0) - self.scale
 
-    def _nodes(self, i: np.ndarray, j: np.ndarray) -> np.ndarray:
-        if self._values is not None:
-            return self._values[i, j]
-        return self._decode(self._codes[i, j])
-
     @property
     def quantization_error(self) -> float:
         """Largest value error added by uint8 storage, m (r / 255; 0 without it)."""
         return 0.0 if self.scale is None else self.scale / 255.0
 
     # ----------------------------------------------------------------------------------
-
-    def evaluate(self, points):
-        p = as_points(points)
-        h, sides = self.cell, self.margins
-        top = np.array(self.shape) - 1
-        u = (p - self.origin) / h                       # node coordinates
-        uc = np.clip(u, 0.0, top)                       # the nearest point of the grid box
-        cell = np.minimum(np.floor(uc), top - 1).astype(np.intp)
-        t = uc - cell
-        i, j = cell[:, 0], cell[:, 1]
-        v00, v10 = self._nodes(i, j), self._nodes(i + 1, j)
-        v01, v11 = self._nodes(i, j + 1), self._nodes(i + 1, j + 1)
-        tx, ty = t[:, 0], t[:, 1]
-        value = ((1 - tx) * (1 - ty) * v00 + tx * (1 - ty) * v10
-                 + (1 - tx) * ty * v01 + tx * ty * v11)
-        grad = np.stack([(1 - ty) * (v10 - v00) + ty * (v11 - v01),
-                         (1 - tx) * (v01 - v00) + tx * (v11 - v10)], axis=1) / h
-
-        delta = (u - uc) * h                            # p - q, zero inside the grid
-        dist = np.hypot(delta[:, 0], delta[:, 1])
-        out = dist > 0.0
-        if np.any(out):
-            v, gq = value[out], grad[out] * (u[out] == uc[out])   # clamped axes: no slope
-            dq, dd = delta[out], dist[out]
-            m = np.minimum(np.where(dq[:, 0] < 0.0, sides[0],
-                                    np.where(dq[:, 0] > 0.0, sides[2], np.inf)),
-                           np.where(dq[:, 1] < 0.0, sides[1],
-                                    np.where(dq[:, 1] > 0.0, sides[3], np.inf)))
-            pos = np.maximum(v, 0.0)
-            root = np.sqrt(pos * pos + dd * dd + 2.0 * m * dd)
-            value[out] = root + np.minimum(v, 0.0)
-            grad[out] = ((pos[:, None] * gq + ((dd + m) / dd)[:, None] * dq) / root[:, None]
-                         + (v < 0.0)[:, None] * gq)
-        if self.band is not None:
-            beyond = np.abs(value) > self.band
-            value = np.clip(value, -self.band, self.band)
-            grad[beyond] = 0.0
-        return value, grad
 
     def bounds(self):
         return self._bounds.copy()

@@ -8,8 +8,6 @@ the kernels of ``primitive_kernels`` evaluate them.
 
 from __future__ import annotations
 
-from . import operators
-
 CIRCLE = 0          # consts: r
 BOX = 1             # consts: hx, hy
 ROUNDED_BOX = 2     # consts: hx, hy, r0, r1, r2, r3
@@ -53,11 +51,12 @@ GRID = 35           # a, b = node counts nx, ny; consts: origin x, y, cell, marg
                     # (inf: none), then the nx * ny node values (row i = x index)
 QUADRATIC_BEZIER = 36  # consts: a, A = b - a, B = a - 2b + c (2 each), B.B, 3 A.B, 2 A.A,
                        # radius, |A x B|, 1 if the cubic term is used
-# Control (not a primitive; ``run`` takes it before ``_shape``):
+# Control (not primitives; ``run`` takes them before ``_shape``):
 SKIP_FAR = 37       # a = rows to skip (the guarded operand and its blend); consts: the
                     # operand's box xmin, ymin, xmax, ymax in this frame, blend width k
+EXTERNAL = 38       # a = index in Program.externals: a field of the user's own, which
+                    # Python evaluates at the current points (``run`` returns there)
 
 #: Blend kernels by index (``SMOOTH``'s b), as in ``operators.BLENDS``.
 BLEND_INDEX = {"polynomial": 0, "cubic": 1, "circular": 2, "exponential": 3}
-_EXP_SCALE = operators._EXP_SCALE
 _POLYGON_EDGE = 8

@@ -32,12 +32,13 @@ https://iquilezles.org/articles/smin/ (kernels, their blend factor and gradients
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import numpy as np
 
 from ..errors import SpecError, check_number
-from .base import REQUIRED, Field, Param, as_points, operator
+from .base import REQUIRED, Field, Param, operator
+from .blend_kernels import smooth_min_arrays
+from .opcodes import BLEND_INDEX
 
 __all__ = [
     "BLENDS", "Difference", "Intersection", "Onion", "Rotate", "Round", "Scale",
@@ -128,26 +129,6 @@ class Transform(_Leveled):
         c, s = math.cos(self.angle), math.sin(self.angle)
         self.rotation = np.array([[c, -s], [s, c]])
 
-    def evaluate(self, points):
-        d, g = self.of.evaluate(self._to_local(points))
-        return d, self._to_outer(g)
-
-    def distance(self, points):
-        return self.of.distance(self._to_local(points))
-
-    # The 2x2 rotations are written out: a BLAS product (``@``) may round a row
-    # differently depending on its place in the batch, which breaks bit-for-bit
-    # determinism of a body's contacts when the batch around it changes.
-    def _to_local(self, points) -> np.ndarray:
-        """R^T (p - t) for points (N, 2)."""
-        p = as_points(points) - self.offset
-        (c, ms), (s, _) = self.rotation
-        return np.stack([c * p[:, 0] + s * p[:, 1], ms * p[:, 0] + c * p[:, 1]], axis=1)
-
-    def _to_outer(self, v: np.ndarray) -> np.ndarray:
-        """R v for vectors (N, 2)."""
-        (c, ms), (s, _) = self.rotation
-        return np.stack([c * v[:, 0] + ms * v[:, 1], s * v[:, 0] + c * v[:, 1]], axis=1)
 
     def level_bounds(self, level: float) -> np.ndarray:
         """The box of the rotated and moved operand box at ``level``."""
@@ -199,12 +180,6 @@ class Scale(_Leveled):
         self.factor = check_number(factor, "factor", low=0.0, low_open=True)
         self.exact = of.exact
 
-    def evaluate(self, points):
-        d, g = self.of.evaluate(as_points(points) / self.factor)
-        return self.factor * d, g
-
-    def distance(self, points):
-        return self.factor * self.of.distance(as_points(points) / self.factor)
 
     def level_bounds(self, level: float) -> np.ndarray:
         """f <= t  <=>  g(p / s) <= t / s."""
@@ -216,32 +191,13 @@ class Scale(_Leveled):
 # --------------------------------------------------------------------------------------
 
 class _Select(_Leveled):
-    """Common part of union / intersection / difference: pick one operand per point.
-
-    Subclasses set ``_pick`` (argmin or argmax; numpy returns the first index of a
-    tie) and ``_signs`` (+1 keeps an operand, -1 complements it).
-    """
+    """Common part of union / intersection / difference: pick one operand per point
+    (the first one on a tie)."""
 
     exact = False
-    _pick: Callable[..., np.ndarray]
 
     def __init__(self, of: list[Field]):
         self.of = _check_operands(of)
-        self._signs = np.ones(len(self.of))
-
-    def evaluate(self, points):
-        p = as_points(points)
-        values, grads = zip(*(f.evaluate(p) for f in self.of))
-        d = np.array(values) * self._signs[:, None]
-        g = np.array(grads) * self._signs[:, None, None]
-        pick = self._pick(d, axis=0)
-        rows = np.arange(p.shape[0])
-        return d[pick, rows], g[pick, rows]
-
-    def distance(self, points):
-        p = as_points(points)
-        d = np.array([f.distance(p) for f in self.of]) * self._signs[:, None]
-        return d[self._pick(d, axis=0), np.arange(p.shape[0])]
 
 
 @operator("union", Param("of", "fields", REQUIRED, "two or more FIELDs"))
@@ -252,8 +208,6 @@ class Union(_Select):
     inside: where operands overlap, the depth below the union's boundary can exceed
     every |f_i|. Hence ``exact = False``. Bounds: the hull of the operands' boxes.
     """
-
-    _pick = staticmethod(np.argmin)
 
     def level_bounds(self, level: float) -> np.ndarray:
         """min_i f_i <= t when some f_i <= t."""
@@ -269,8 +223,6 @@ class Intersection(_Select):
     (a zero-size box where they do not overlap).
     """
 
-    _pick = staticmethod(np.argmax)
-
     def level_bounds(self, level: float) -> np.ndarray:
         """max_i f_i <= t when every f_i <= t."""
         return _overlap([level_bounds(f, level) for f in self.of])
@@ -284,12 +236,6 @@ class Difference(_Select):
     ties). Exact inside, a bound outside, hence ``exact = False``. Bounds: those
     of the first field.
     """
-
-    _pick = staticmethod(np.argmax)
-
-    def __init__(self, of: list[Field]):
-        super().__init__(of)
-        self._signs[1:] = -1.0
 
     def level_bounds(self, level: float) -> np.ndarray:
         """max(a, ...) <= t implies a <= t."""
@@ -312,25 +258,6 @@ class Xor(_Leveled):
     def __init__(self, of: list[Field]):
         self.of = _check_operands(of)
 
-    def evaluate(self, points):
-        p = as_points(points)
-        d, g = self.of[0].evaluate(p)
-        for f in self.of[1:]:
-            b, gb = f.evaluate(p)
-            low, high = np.minimum(d, b), np.maximum(d, b)
-            g_low = np.where((d <= b)[:, None], g, gb)
-            g_high = np.where((d >= b)[:, None], g, gb)
-            d = np.maximum(low, -high)
-            g = np.where((low >= -high)[:, None], g_low, -g_high)
-        return d, g
-
-    def distance(self, points):
-        p = as_points(points)
-        d = self.of[0].distance(p)
-        for f in self.of[1:]:
-            b = f.distance(p)
-            d = np.maximum(np.minimum(d, b), -np.maximum(d, b))
-        return d
 
     def level_bounds(self, level: float) -> np.ndarray:
         """xor <= t implies min(a, b) <= t."""
@@ -365,40 +292,13 @@ class Xor(_Leveled):
 # blend width of every compact kernel.
 # --------------------------------------------------------------------------------------
 
-_EXP_SCALE = 1.0 / (4.0 * math.log(2.0))
-
-Kernel = Callable[[np.ndarray, float], tuple[np.ndarray, np.ndarray]]
-
-
-def _polynomial(gap: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray]:
-    h = 1.0 - np.minimum(gap / k, 1.0)
-    return 0.25 * k * h * h, 0.5 * h
-
-
-def _cubic(gap: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray]:
-    h = 1.0 - np.minimum(gap / k, 1.0)
-    return k * h * h * h / 6.0, 0.5 * h * h
-
-
-def _circular(gap: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray]:
-    x = np.minimum(gap / k, 1.0)
-    root = np.sqrt(2.0 - x * x)
-    return 0.5 * k * (2.0 - x - root), 0.5 * (1.0 - x / root)
-
-
-def _exponential(gap: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray]:
-    s = k * _EXP_SCALE
-    e = np.exp(-gap / s)
-    return s * np.log1p(e), e / (1.0 + e)
-
-
-#: blend name -> (kernel: (|a - b|, k) -> (dip below min, weight m of the larger
-#: operand), largest dip over k).
-BLENDS: dict[str, tuple[Kernel, float]] = {
-    "polynomial": (_polynomial, 0.25),
-    "cubic": (_cubic, 1.0 / 6.0),
-    "circular": (_circular, 1.0 - math.sqrt(0.5)),
-    "exponential": (_exponential, 0.25),
+#: blend name -> the largest dip below min, over k (at a = b: k w(1)). The kernels are
+#: ``blend_kernels._blend`` (index ``opcodes.BLEND_INDEX``).
+BLENDS: dict[str, float] = {
+    "polynomial": 0.25,
+    "cubic": 1.0 / 6.0,
+    "circular": 1.0 - math.sqrt(0.5),
+    "exponential": 0.25,
 }
 
 
@@ -407,10 +307,14 @@ def smooth_min(a: np.ndarray, b: np.ndarray, k: float,
     """Smooth minimum of ``a`` and ``b`` (N,) with blend width ``k`` (m) and kernel ``blend``.
 
     Returns ``(value, weight_b)`` where ``weight_b`` = d value / d b in [0, 1] and
-    d value / d a = 1 - weight_b (see the derivation above).
+    d value / d a = 1 - weight_b (see the derivation above): the compiled kernels'
+    ``blend_kernels.smooth_min_arrays``.
     """
-    dip, larger = BLENDS[blend][0](np.abs(a - b), k)
-    return np.minimum(a, b) - dip, np.where(b > a, larger, 1.0 - larger)
+    a = np.ascontiguousarray(a, dtype=np.float64).ravel()
+    b = np.ascontiguousarray(b, dtype=np.float64).ravel()
+    value, weight = np.empty(len(a)), np.empty(len(a))
+    smooth_min_arrays(a, b, float(k), BLEND_INDEX[blend], value, weight)
+    return value, weight
 
 
 _SMOOTH_PARAMS = (
@@ -430,7 +334,7 @@ class _Smooth(_Leveled):
         if blend not in BLENDS:
             raise SpecError("blend", f"must be one of {', '.join(BLENDS)}; got {blend!r}")
         self.blend = blend
-        self.dip = BLENDS[blend][1] * self.k
+        self.dip = BLENDS[blend] * self.k
 
 
 @operator("smooth_union", Param("of", "fields", REQUIRED, "two or more FIELDs"),
@@ -445,21 +349,6 @@ class SmoothUnion(_Smooth):
     implies min(a, b) <= t + dip, so each fold grows the hull by ``dip``.
     """
 
-    def evaluate(self, points):
-        p = as_points(points)
-        d, g = self.of[0].evaluate(p)
-        for f in self.of[1:]:
-            b, gb = f.evaluate(p)
-            d, w = smooth_min(d, b, self.k, self.blend)
-            g = (1.0 - w)[:, None] * g + w[:, None] * gb
-        return d, g
-
-    def distance(self, points):
-        p = as_points(points)
-        d = self.of[0].distance(p)
-        for f in self.of[1:]:
-            d = smooth_min(d, f.distance(p), self.k, self.blend)[0]
-        return d
 
     def level_bounds(self, level: float) -> np.ndarray:
         """Fold i (of n - 1) needs its operands at level t + (n - i) dip."""
@@ -480,22 +369,6 @@ class SmoothIntersection(_Smooth):
     so the overlap of the operands' boxes.
     """
 
-    def evaluate(self, points):
-        p = as_points(points)
-        d, g = self.of[0].evaluate(p)
-        for f in self.of[1:]:
-            b, gb = f.evaluate(p)
-            d, w = smooth_min(-d, -b, self.k, self.blend)
-            d = -d
-            g = (1.0 - w)[:, None] * g + w[:, None] * gb
-        return d, g
-
-    def distance(self, points):
-        p = as_points(points)
-        d = self.of[0].distance(p)
-        for f in self.of[1:]:
-            d = -smooth_min(-d, -f.distance(p), self.k, self.blend)[0]
-        return d
 
     def level_bounds(self, level: float) -> np.ndarray:
         """smax <= t implies every operand <= t."""
@@ -512,22 +385,6 @@ class SmoothDifference(_Smooth):
     bound (``exact = False``). Bounds: smax(a, .) >= a, so those of the first field.
     """
 
-    def evaluate(self, points):
-        p = as_points(points)
-        d, g = self.of[0].evaluate(p)
-        for f in self.of[1:]:
-            b, gb = f.evaluate(p)
-            d, w = smooth_min(-d, b, self.k, self.blend)
-            d = -d
-            g = (1.0 - w)[:, None] * g - w[:, None] * gb
-        return d, g
-
-    def distance(self, points):
-        p = as_points(points)
-        d = self.of[0].distance(p)
-        for f in self.of[1:]:
-            d = -smooth_min(-d, f.distance(p), self.k, self.blend)[0]
-        return d
 
     def level_bounds(self, level: float) -> np.ndarray:
         """smax(a, .) <= t implies a <= t."""
@@ -558,12 +415,6 @@ class Round(_Leveled):
         self.of = of
         self.r = check_number(r, "r", low=0.0)
 
-    def evaluate(self, points):
-        d, g = self.of.evaluate(as_points(points))
-        return d - self.r, g
-
-    def distance(self, points):
-        return self.of.distance(as_points(points)) - self.r
 
     def level_bounds(self, level: float) -> np.ndarray:
         """g - r <= t  <=>  g <= t + r."""
@@ -590,13 +441,6 @@ class Onion(_Leveled):
         self.of = of
         self.thickness = check_number(thickness, "thickness", low=0.0, low_open=True)
 
-    def evaluate(self, points):
-        d, g = self.of.evaluate(as_points(points))
-        sign = np.where(d < 0.0, -1.0, 1.0)
-        return np.abs(d) - self.thickness, sign[:, None] * g
-
-    def distance(self, points):
-        return np.abs(self.of.distance(as_points(points))) - self.thickness
 
     def level_bounds(self, level: float) -> np.ndarray:
         """|g| - t <= s implies g <= s + t."""

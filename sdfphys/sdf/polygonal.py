@@ -12,7 +12,8 @@ here is exact except ``cross`` with a non-zero ``rounding`` (a bound).
 Primitives here: box, rounded_box, oriented_box, rhombus, trapezoid, parallelogram,
 equilateral_triangle, isosceles_triangle, triangle, polygon, half_plane; the folded
 ones (pentagon, hexagon, octagon, hexagram, star, cross, rounded_cross) are in
-``folded``, which shares the pieces below.
+``folded``. Their one implementation is the compiled kernels
+(``primitive_kernels``); the classes hold the parameters, validation and bounds.
 
 How the gradients are obtained (one derivation for all of them). For an exact
 field f(p) = s |p - c(p)|, with c(p) the closest boundary point and s = -1
@@ -41,35 +42,17 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..errors import SpecError
-from ..vec2 import rows_dot, rows_unit_or
-from .base import REQUIRED, Field, Param, as_points, primitive
+from ..vec2 import rows_dot
+from .base import REQUIRED, Field, Param, primitive
 
 #: Below this many times a primitive's size, a closest-point offset counts as zero
 #: and the gradient is the outward normal of the nearest edge.
 _DEGENERATE = 1e-12
-#: Polygon evaluation works on chunks of at most this many (point, edge) pairs.
-_CHUNK_PAIRS = 1 << 14
 
 
 # --------------------------------------------------------------------------------------
 # Shared pieces: folds, nearest of a few segments, signed value and gradient.
 # --------------------------------------------------------------------------------------
-
-def _sign(x: np.ndarray) -> np.ndarray:
-    """+1 where ``x >= 0``, -1 where ``x < 0`` (sign(0) = +1: deterministic folds)."""
-    return np.where(x < 0.0, -1.0, 1.0)
-
-
-def _reflect(q: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Fold rows of ``q`` with n.q < 0 across the mirror through the origin with
-    unit normal ``n`` (Quilez's ``p -= 2 min(dot(n, p), 0) n``); also which rows moved."""
-    k = rows_dot(q, n)
-    return q - 2.0 * np.minimum(k, 0.0)[:, None] * n, k < 0.0
-
-
-def _unreflect(g: np.ndarray, n: np.ndarray, moved: np.ndarray) -> np.ndarray:
-    """Gradients mapped back through ``_reflect`` (a reflection is its own inverse)."""
-    return np.where(moved[:, None], g - 2.0 * rows_dot(g, n)[:, None] * n, g)
 
 
 class _Segment(NamedTuple):
@@ -93,63 +76,6 @@ def _edges(vertices: np.ndarray) -> list[_Segment]:
             for i in range(len(vertices))]
 
 
-def _nearest(q: np.ndarray, segments: list[_Segment]
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Nearest of a few fixed segments to each row of ``q`` (N, 2) (Quilez's sdSegment).
-
-    Returns the distance (N,), ``v = q - closest`` (N, 2), the chosen segment's
-    outward normal (N, 2) and ``interior`` (N,): True where the closest point is
-    strictly inside the segment. Ties go to the earlier segment.
-    """
-    for i, seg in enumerate(segments):
-        e = seg.b - seg.a
-        w = q - seg.a
-        t = np.clip(rows_dot(w, e) / rows_dot(e, e), 0.0, 1.0)
-        v = w - t[:, None] * e
-        d2 = rows_dot(v, v)
-        interior = (t > 0.0) & (t < 1.0)
-        if i == 0:
-            best, best_v, best_in = d2, v, interior
-            best_n = np.broadcast_to(seg.normal, q.shape)
-        else:
-            closer = d2 < best
-            best = np.where(closer, d2, best)
-            best_v = np.where(closer[:, None], v, best_v)
-            best_n = np.where(closer[:, None], seg.normal, best_n)
-            best_in = np.where(closer, interior, best_in)
-    return np.sqrt(best), best_v, best_n, best_in
-
-
-def _signed(dist: np.ndarray, v: np.ndarray, normal: np.ndarray, interior: np.ndarray,
-            inside: np.ndarray, eps: float) -> tuple[np.ndarray, np.ndarray]:
-    """Value and gradient from the nearest-feature data of ``_nearest`` (see the
-    module docstring): f = s |v|, grad f = the edge normal where the closest point
-    is inside an edge, else s v / |v|, falling back to the edge normal if |v| < eps."""
-    s = np.where(inside, -1.0, 1.0)
-    g = np.where(interior[:, None], normal, rows_unit_or(s[:, None] * v, normal, eps))
-    return s * dist, g
-
-
-def _box(p: np.ndarray, half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Quilez's sdgBox for half-extents ``half`` ((2,) or per point (N, 2)).
-
-    With w = |p| - half: outside the value is |max(w, 0)| and the gradient
-    sign(p) max(w, 0) / |max(w, 0)|; inside the value is max(w_x, w_y) and the
-    gradient the axis of the nearest face (x wins a tie, so the medial axis is
-    deterministic), times sign(p).
-    """
-    w = np.abs(p) - half
-    s = _sign(p)
-    outside = np.maximum(w, 0.0)
-    out_len = np.hypot(outside[:, 0], outside[:, 1])
-    inner = np.minimum(np.maximum(w[:, 0], w[:, 1]), 0.0)
-    x_face = w[:, 0] >= w[:, 1]
-    g_in = np.where(x_face[:, None], [1.0, 0.0], [0.0, 1.0])
-    g_out = outside / np.where(out_len > 0.0, out_len, 1.0)[:, None]
-    g = np.where((out_len > 0.0)[:, None], g_out, g_in) * s
-    return out_len + inner, g
-
-
 def _aabb(vertices: np.ndarray) -> np.ndarray:
     return np.concatenate([vertices.min(axis=0), vertices.max(axis=0)])
 
@@ -169,9 +95,6 @@ class Box(Field):
 
     def __init__(self, size: Any):
         self.half = np.array(size, dtype=np.float64) / 2.0
-
-    def evaluate(self, points):
-        return _box(as_points(points), self.half)
 
     def bounds(self):
         hx, hy = self.half
@@ -212,14 +135,6 @@ class RoundedBox(Field):
                 raise SpecError(path, f"must be between 0 and {limit:g} (half the smaller "
                                       f"side), got {r:g}")
 
-    def evaluate(self, points):
-        p = as_points(points)
-        right, top = p[:, 0] >= 0.0, p[:, 1] >= 0.0
-        r0, r1, r2, r3 = self.radii
-        r = np.where(top, np.where(right, r0, r1), np.where(right, r3, r2))
-        d, g = _box(p, self.half - r[:, None])
-        return d - r, g
-
     def bounds(self):
         hx, hy = self.half
         return np.array([-hx, -hy, hx, hy])
@@ -248,13 +163,6 @@ class OrientedBox(Field):
         self.axis = (b - a) / length
         self.half = np.array([length / 2.0, float(thickness) / 2.0])
 
-    def evaluate(self, points):
-        r = as_points(points) - self.centre
-        ux, uy = self.axis
-        local = np.stack([r[:, 0] * ux + r[:, 1] * uy, r[:, 1] * ux - r[:, 0] * uy], axis=1)
-        d, gl = _box(local, self.half)
-        return d, np.stack([gl[:, 0] * ux - gl[:, 1] * uy, gl[:, 0] * uy + gl[:, 1] * ux], axis=1)
-
     def bounds(self):
         ux, uy = np.abs(self.axis)
         hl, ht = self.half
@@ -280,15 +188,6 @@ class Rhombus(Field):
         bx, by = self.half
         self._edge = [_segment((bx, 0.0), (0.0, by), (by, bx))]
         self._eps = _DEGENERATE * max(bx, by)
-
-    def evaluate(self, points):
-        p = as_points(points)
-        q = np.abs(p)
-        bx, by = self.half
-        dist, v, n, interior = _nearest(q, self._edge)
-        inside = q[:, 0] * by + q[:, 1] * bx < bx * by
-        d, g = _signed(dist, v, n, interior, inside, self._eps)
-        return d, g * _sign(p)
 
     def bounds(self):
         hx, hy = self.half
@@ -320,15 +219,6 @@ class Trapezoid(Field):
         self._edges.append(self._side)
         self._eps = _DEGENERATE * max(r1, r2, he)
 
-    def evaluate(self, points):
-        p = as_points(points)
-        q = np.stack([np.abs(p[:, 0]), p[:, 1]], axis=1)
-        dist, v, n, interior = _nearest(q, self._edges)
-        inside = (np.abs(q[:, 1]) < self.he) & (rows_dot(q - self._side.a, self._side.normal) < 0)
-        d, g = _signed(dist, v, n, interior, inside, self._eps)
-        g[:, 0] *= _sign(p[:, 0])
-        return d, g
-
     def bounds(self):
         r = max(self.r1, self.r2)
         return np.array([-r, -self.he, r, self.he])
@@ -342,14 +232,6 @@ class _ConvexPolygon(Field):
         self.vertices = vertices
         self._edges = _edges(vertices)
         self._eps = _DEGENERATE * float(np.ptp(vertices, axis=0).max())
-
-    def evaluate(self, points):
-        p = as_points(points)
-        dist, v, n, interior = _nearest(p, self._edges)
-        inside = np.ones(len(p), dtype=bool)
-        for e in self._edges:
-            inside &= rows_dot(p - e.a, e.normal) < 0.0
-        return _signed(dist, v, n, interior, inside, self._eps)
 
     def bounds(self):
         return _aabb(self.vertices)
@@ -387,15 +269,6 @@ class _SymmetricTriangle(Field):
                               (y_apex - y_base, half_width))
         self._edges = [_segment((0.0, y_base), (half_width, y_base), (0.0, -1.0)), self._side]
         self._eps = _DEGENERATE * max(half_width, y_apex - y_base)
-
-    def evaluate(self, points):
-        p = as_points(points)
-        q = np.stack([np.abs(p[:, 0]), p[:, 1]], axis=1)
-        dist, v, n, interior = _nearest(q, self._edges)
-        inside = (q[:, 1] > self.y_base) & (rows_dot(q - self._side.a, self._side.normal) < 0)
-        d, g = _signed(dist, v, n, interior, inside, self._eps)
-        g[:, 0] *= _sign(p[:, 0])
-        return d, g
 
     def bounds(self):
         return np.array([-self.half_width, self.y_base, self.half_width, self.y_apex])
@@ -464,9 +337,8 @@ class Polygon(Field):
     ``points``). Quilez's sdPolygon: the distance is the nearest edge's, the sign
     the parity of the edges crossed by the ray from the point towards +x (an edge
     counts when it spans the point's y, upward with the point on its left or
-    downward with the point on its right). Cost O(N M) for N points and M edges,
-    vectorized over (points, edges) in chunks of ``_CHUNK_PAIRS`` pairs (about
-    20 ns per pair). Gradient from the closest-point branch (module docstring).
+    downward with the point on its right). Cost O(N M) for N points and M edges.
+    Gradient from the closest-point branch (module docstring).
     """
 
     def __init__(self, points: Any):
@@ -483,42 +355,6 @@ class Polygon(Field):
         self._inv_ee = 1.0 / ee
         self._normals = np.stack([e[:, 1], -e[:, 0]], axis=1) / np.sqrt(ee)[:, None]
         self._eps = _DEGENERATE * float(np.ptp(a, axis=0).max())
-
-    def evaluate(self, points):
-        p = as_points(points)
-        d = np.empty(len(p))
-        g = np.empty((len(p), 2))
-        step = max(1, _CHUNK_PAIRS // len(self._ax))
-        for lo in range(0, len(p), step):
-            d[lo:lo + step], g[lo:lo + step] = self._evaluate_chunk(p[lo:lo + step])
-        return d, g
-
-    def _evaluate_chunk(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        # (n, M) arrays, updated in place to keep the working set in cache.
-        ex, ey = self._ex, self._ey
-        px, py = q[:, 0:1], q[:, 1:2]
-        wx = px - self._ax
-        wy = py - self._ay
-        t = wx * ex
-        t += wy * ey
-        t *= self._inv_ee
-        np.clip(t, 0.0, 1.0, out=t)
-        d2 = wx - t * ex
-        d2 *= d2
-        vy = wy - t * ey
-        vy *= vy
-        d2 += vy
-        k = np.argmin(d2, axis=1)
-        # Crossing parity: edge i toggles when (py >= a_y) == (py < b_y) == (q left of it).
-        below_b = py < self._by
-        crossed = np.equal(py >= self._ay, below_b)
-        crossed &= np.equal(below_b, ex * wy > ey * wx)
-        inside = np.count_nonzero(crossed, axis=1) % 2 == 1
-        rows = np.arange(len(q))
-        tk = t[rows, k]
-        v = np.stack([wx[rows, k] - tk * ex[k], wy[rows, k] - tk * ey[k]], axis=1)
-        return _signed(np.sqrt(d2[rows, k]), v, self._normals[k], (tk > 0.0) & (tk < 1.0),
-                       inside, self._eps)
 
     def bounds(self):
         return _aabb(self.vertices)
@@ -543,11 +379,6 @@ class HalfPlane(Field):
             raise SpecError("normal", f"must not be the zero vector, got {[nx, ny]}")
         self.normal = np.array([nx, ny]) / length
         self.level = float(distance)
-
-    def evaluate(self, points):
-        p = as_points(points)
-        d = rows_dot(p, self.normal) - self.level
-        return d, np.broadcast_to(self.normal, p.shape).copy()
 
     def bounds(self):
         lo = np.full(2, -np.inf)

@@ -4,9 +4,12 @@
 points; the primitives that are not a line of arithmetic are the kernels here: one
 point's value and gradient (``_shape`` dispatches on the opcode) and the ellipse's
 solver over the batch; the quadratic Bezier's cubic is in ``bezier_kernel``, the
-smooth blends in ``blend_kernels``. Each repeats the numpy code of its primitive
-(``sdf.curved``, ``sdf.polygonal``, ``sdf.grid``, ``sdf.operators``) operation for
-operation, so that both round alike (the references are in the comments).
+smooth blends in ``blend_kernels``. They are the primitives' one implementation
+(``Field.evaluate`` runs the program); the classes in ``sdf.curved``, ``conics``,
+``polygonal``, ``folded`` and ``grid`` keep the parameters, validation, bounds and the
+formulas' references. The numpy oracle the tests compare them with is
+tests/numpy_fields, operation for operation the same except where numpy's SIMD
+transcendentals round differently.
 """
 
 from __future__ import annotations
@@ -43,13 +46,18 @@ from .opcodes import (
 )
 
 # --------------------------------------------------------------------------------------
-# The evaluator. Each branch repeats the numpy code of its node operation for
-# operation (see the references in the comments), so that both paths round alike.
+# The primitives with their own loops in ``compiled.run``.
 # --------------------------------------------------------------------------------------
 
 @njit(cache=True, error_model="numpy")
 def _box(x: float, y: float, hx: float, hy: float) -> tuple[float, float, float]:
-    """polygonal._box at one point: value and gradient of the box of half-extents h."""
+    """Quilez's sdgBox at one point: value and gradient of the box of half-extents h.
+
+    With w = |p| - h: outside the value is |max(w, 0)| and the gradient
+    sign(p) max(w, 0) / |max(w, 0)|; inside the value is max(w_x, w_y) and the
+    gradient the axis of the nearest face (x wins a tie, so the medial axis is
+    deterministic), times sign(p) (sign(0) = +1).
+    """
     wx, wy = abs(x) - hx, abs(y) - hy
     sx = -1.0 if x < 0.0 else 1.0
     sy = -1.0 if y < 0.0 else 1.0
@@ -68,7 +76,7 @@ def _box(x: float, y: float, hx: float, hy: float) -> tuple[float, float, float]
 @njit(cache=True, error_model="numpy")
 def _polygon(consts: np.ndarray, o: int, m: int, px: float, py: float
              ) -> tuple[float, float, float]:
-    """polygonal.Polygon._evaluate_chunk at one point (edges from consts[o + 1:])."""
+    """polygonal.Polygon at one point (edges from consts[o + 1:])."""
     best = np.inf
     k = 0
     tk = 0.0
@@ -108,7 +116,12 @@ def _polygon(consts: np.ndarray, o: int, m: int, px: float, py: float
 
 @njit(cache=True, error_model="numpy")
 def _segment(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
-    """curved._segment_distance at one point, minus the capsule radius."""
+    """Distance to the segment a -> a + ba (Quilez's sdSegment) minus the capsule radius.
+
+    h = clamp((p - a).ba / |ba|^2, 0, 1); for 0 < h < 1 the gradient is the unit
+    normal of ab on p's side (the left normal on the segment); at a clamped end
+    (p - end) / |p - end|; a == b is a point (left normal (1, 0)).
+    """
     ax, ay, bax, bay, length2 = consts[o], consts[o + 1], consts[o + 2], consts[o + 3], \
         consts[o + 4]
     lx, ly = consts[o + 5], consts[o + 6]
@@ -129,13 +142,10 @@ def _segment(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, f
 
 
 # --------------------------------------------------------------------------------------
-# The primitives that ``_shape`` evaluates point by point. Each repeats its numpy
-# evaluate (curved.py, conics.py, polygonal.py, folded.py, grid.py) operation for
-# operation: the folds as ``_fold_x`` (sign(0) = +1), ``vec2.rows_unit_or`` with
-# its fallbacks (``vec2.unit_or``), ``np.where`` choices as if/else on the same
-# comparisons. Where the numpy code
-# uses a BLAS product (``q @ c``) the products are written out: BLAS may round a
-# row an ulp differently (it depends on the row's place in the batch).
+# The primitives that ``_shape`` evaluates point by point. Conventions: a fold of x
+# takes sign(0) = +1; a unit vector of a zero vector is the primitive's fallback
+# (``vec2.unit_or``); products are written out, so a point's bits never depend on
+# its place in the batch.
 # --------------------------------------------------------------------------------------
 
 _EDGE = 7
@@ -144,8 +154,9 @@ _EDGE = 7
 @njit(cache=True, error_model="numpy")
 def _nearest(consts: np.ndarray, e0: int, m: int, qx: float, qy: float
              ) -> tuple[float, float, float, float, float, bool]:
-    """polygonal._nearest over the m edges at consts[e0:]: distance, v = q - closest,
-    the edge's normal and whether the closest point is inside the edge."""
+    """Nearest of the m edges at consts[e0:] to q (Quilez's sdSegment): distance,
+    v = q - closest, the edge's outward normal and whether the closest point is
+    strictly inside the edge. Ties go to the earlier edge."""
     best, bvx, bvy, bnx, bny, binterior = 0.0, 0.0, 0.0, 0.0, 0.0, False
     for i in range(m):
         j = e0 + _EDGE * i
@@ -166,7 +177,9 @@ def _nearest(consts: np.ndarray, e0: int, m: int, qx: float, qy: float
 @njit(cache=True, error_model="numpy")
 def _signed(dist: float, vx: float, vy: float, nx: float, ny: float, interior: bool,
             inside: bool, eps: float) -> tuple[float, float, float]:
-    """polygonal._signed: s dist, and the edge normal or s v / |v| (normal below eps)."""
+    """Value and gradient from ``_nearest``'s data (polygonal's module docstring):
+    f = s dist, grad f = the edge normal where the closest point is inside an edge,
+    else s v / |v|, the edge normal if |v| < eps."""
     s = -1.0 if inside else 1.0
     if interior:
         return s * dist, nx, ny
@@ -182,14 +195,34 @@ def _sign(x: float) -> float:
     return -1.0 if x < 0.0 else 1.0
 
 
-#: conics.Ellipse's solver counts (its comment gives the reasons).
+# Closest point (Eberly 2013): fold to x, y >= 0 and orient a >= b. The closest
+# point is q = (a^2 x / (u + e), b^2 y / u) with e = a^2 - b^2 and u > 0 the
+# unique root of F(u) = (A / (u + e))^2 + (B / u)^2 - 1, A = a x, B = b y > 0;
+# F decreases from +inf. Bracket: lo = max(B, A - e) (each term alone is >= 1
+# there, so F(lo) >= 0), hi = |(A, B)| (F(hi) <= 0). The root can be far below
+# hi (points near the major axis inside, u* ~ B), so _BISECTIONS geometric-mean
+# bisections shrink the ratio hi / lo to < 2 even from 1e-300. Then Newton on
+# psi(u) = 1 / |(A / (u + e), B / u)| - 1, which is increasing and concave (the
+# secular equation of Moré & Sorensen 1983) and nearly linear, so from the left
+# end it rises monotonically to the root without overshoot and converges fast.
+# Measured on 6e5 points per shape (aspect 1 to 1000, y down to 1e-300, points
+# at the evolute cusp): the distance reaches round-off after 4 Newton steps;
+# _NEWTON = 6 leaves a margin. On the major axis (B = 0) the closed form:
+# q = (a^2 x / e, b sqrt(1 - (a x / e)^2)) if A < e, else the vertex (a, 0).
+# Most points need no bisection: _FAST_NEWTON Newton steps straight from lo (the
+# same monotone rise) whose last step is under _SETTLED u have reached the root to
+# round-off (quadratic convergence: the next step would be ~1e-20 u). Measured on
+# 1.2e6 points (aspects 1 to 1000; around, on rays through and far from the
+# ellipse, y down to 1e-300): 99.3 % settle so, their distances within 6.7e-16
+# (relative) of the bracketed solver's; the others (near the major axis inside,
+# near the largest doubles) run the bracketed solver.
 _BISECTIONS, _NEWTON, _FAST_NEWTON, _SETTLED = 12, 6, 8, 1e-10
 
 
 @njit(cache=True, error_model="numpy")
 def _ellipse_terms(a: float, b: float, swap: int, px: float, py: float
                    ) -> tuple[float, float]:
-    """Ellipse.evaluate's A = a |x|, B = b |y| (after the swap) of a point."""
+    """The ellipse's A = a |x|, B = b |y| (after the swap) of a point."""
     if swap:
         px, py = py, px
     return a * abs(px), b * abs(py)
@@ -207,13 +240,13 @@ def _ellipse_newton(big_a: float, big_b: float, e: float, u: float) -> float:
 
 @njit(cache=True, error_model="numpy")
 def _ellipse(a: float, b: float, swap: int, cur: np.ndarray, n: int, out: np.ndarray) -> None:
-    """conics.Ellipse.evaluate at cur[:n] into out: Eberly's closest point, from
+    """conics.Ellipse at cur[:n] into out: Eberly's closest point, from
     _FAST_NEWTON Newton steps, or for the points whose last step did not settle, 12
     bisections and 6 Newton steps. Each step runs over all the points before the next
-    (as numpy does): the points' dependency chains of divisions and square roots
-    then overlap, 3.5x faster than one point at a time. out[:, 0] holds u, out[:, 1]
-    the u before the last step, until the last pass; the axis rows (B = 0) run the
-    steps on the dummy bracket [1, 1], discarded, as in numpy."""
+    (as vectorized code does): the points' dependency chains of divisions and square
+    roots then overlap, 3.5x faster than one point at a time. out[:, 0] holds u,
+    out[:, 1] the u before the last step, until the last pass; the axis rows (B = 0)
+    run the steps on the dummy bracket [1, 1], discarded."""
     e = a * a - b * b
     for j in range(n):
         big_a, big_b = _ellipse_terms(a, b, swap, cur[j, 0], cur[j, 1])
@@ -277,7 +310,7 @@ def _ellipse(a: float, b: float, swap: int, cur: np.ndarray, n: int, out: np.nda
 @njit(cache=True, error_model="numpy")
 def _ring(consts: np.ndarray, o: int, full: int, px: float, py: float
           ) -> tuple[float, float, float]:
-    """curved.Ring.evaluate."""
+    """curved.Ring."""
     cx, cy, r, w = consts[o], consts[o + 1], consts[o + 2], consts[o + 3]
     sx = _sign(px)
     qx, qy = abs(px), py
@@ -306,7 +339,7 @@ def _ring(consts: np.ndarray, o: int, full: int, px: float, py: float
 @njit(cache=True, error_model="numpy")
 def _pie(consts: np.ndarray, o: int, full: int, px: float, py: float
          ) -> tuple[float, float, float]:
-    """curved.Pie.evaluate."""
+    """curved.Pie."""
     cx, cy, r = consts[o], consts[o + 1], consts[o + 2]
     sx = _sign(px)
     qx, qy = abs(px), py
@@ -330,7 +363,7 @@ def _pie(consts: np.ndarray, o: int, full: int, px: float, py: float
 @njit(cache=True, error_model="numpy")
 def _horseshoe(consts: np.ndarray, o: int, px: float, py: float
                ) -> tuple[float, float, float]:
-    """curved.Horseshoe.evaluate."""
+    """curved.Horseshoe."""
     r, w, L = consts[o], consts[o + 1], consts[o + 2]
     nx, ny, dx, dy = consts[o + 3], consts[o + 4], consts[o + 5], consts[o + 6]
     sx = _sign(px)
@@ -365,7 +398,7 @@ def _horseshoe(consts: np.ndarray, o: int, px: float, py: float
 
 @njit(cache=True, error_model="numpy")
 def _moon(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
-    """conics.Moon.evaluate."""
+    """conics.Moon."""
     ra, rb, dc = consts[o], consts[o + 1], consts[o + 2]
     ka, kb = consts[o + 3], consts[o + 4]
     sy = _sign(py)
@@ -395,7 +428,7 @@ def _moon(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, floa
 
 @njit(cache=True, error_model="numpy")
 def _heart(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
-    """conics.Heart.evaluate (unit heart at p / scale, value times scale)."""
+    """conics.Heart (unit heart at p / scale, value times scale)."""
     scale = consts[o]
     px, py = px / scale, py / scale
     sx = _sign(px)
@@ -423,7 +456,7 @@ def _heart(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, flo
 
 @njit(cache=True, error_model="numpy")
 def _star(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
-    """folded.Star.evaluate: polar reduction to one sector and back."""
+    """folded.Star: polar reduction to one sector and back."""
     an, period, eps = consts[o], consts[o + 1], consts[o + 2]
     x, y = abs(px), py
     theta = math.atan2(x, y)
@@ -446,7 +479,7 @@ def _star(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, floa
 @njit(cache=True, error_model="numpy")
 def _mirrored(consts: np.ndarray, o: int, k: int, abs_y: int, px: float, py: float
               ) -> tuple[float, float, float]:
-    """folded._MirrorFolded.evaluate: |p|, k mirrors, one edge on y = radius."""
+    """folded._MirrorFolded: |p|, k mirrors, one edge on y = radius."""
     sx = _sign(px)
     sy = _sign(py) if abs_y else 1.0
     qx, qy = px * sx, py * sy
@@ -472,7 +505,7 @@ def _mirrored(consts: np.ndarray, o: int, k: int, abs_y: int, px: float, py: flo
 @njit(cache=True, error_model="numpy")
 def _grid(consts: np.ndarray, o: int, nx: int, ny: int, px: float, py: float
           ) -> tuple[float, float, float]:
-    """grid.GridField.evaluate: bilinear inside the grid, the extension outside (with the
+    """grid.GridField: bilinear inside the grid, the extension outside (with the
     margin of the side beyond which the point lies), the band."""
     h, band = consts[o + 2], consts[o + 7]
     ux = (px - consts[o]) / h
