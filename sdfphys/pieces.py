@@ -246,7 +246,7 @@ def split(world: Any, i: int, grid: GridField, before: GridMass) -> None:
         d["mass"][j], d["inertia"][j] = mass, inertia
         d["inv_mass"][j], d["inv_inertia"][j] = 1.0 / mass, 1.0 / inertia
         d["radius"][j] = shape.radius
-        d["core_radius"][j] = -float(shape.field.distance(np.zeros((1, 2)))[0])
+        d["core_radius"][j] = shape.core_radius
 
 
 def _piece_name(world: Any, name: str) -> str:

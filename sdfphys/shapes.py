@@ -98,6 +98,12 @@ class Shape:
         """Body-frame AABB ``[xmin, ymin, xmax, ymax]`` (4,) of the region f <= 0."""
         raise NotImplementedError
 
+    @property
+    def core_radius(self) -> float:
+        """-f at the centre of mass, metres: the radius of the largest disc about it
+        inside the shape (negative when the centre of mass is outside)."""
+        return -float(self.field.distance(np.zeros((1, 2)))[0])
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.spec!r})"
 
@@ -132,6 +138,10 @@ class Circle(Shape):
     @property
     def second_moment(self) -> float:
         return 0.5 * math.pi * self._radius ** 4
+
+    @property
+    def core_radius(self) -> float:
+        return self._radius                 # -(|0| - r), with no field evaluated
 
     def bounds(self) -> np.ndarray:
         r = self._radius
@@ -225,6 +235,12 @@ class TriangleMesh(Shape):
 
     def bounds(self) -> np.ndarray:
         return np.concatenate([self.vertices.min(axis=0), self.vertices.max(axis=0)])
+
+    @cached_property
+    def core_radius(self) -> float:
+        if self.spec["type"] == "box":      # -max(-w/2, -h/2): the box field at its centre
+            return float(np.min(self.vertices[2]))
+        return super().core_radius
 
 
 def _check_extent(points: np.ndarray, path: str) -> None:

@@ -237,7 +237,7 @@ def shape_row(world: World, shape: Shape) -> tuple:
     if row is None:
         bounded = math.isfinite(shape.radius)
         row = (shape_number(world, shape), np.asarray(shape.origin, dtype=np.float64),
-               shape.radius, -float(shape.field.distance(np.zeros((1, 2)))[0]),
+               shape.radius, shape.core_radius,
                shape.area if bounded else None,
                shape.second_moment if bounded else None)
         world._shape_rows[id(shape)] = row

@@ -137,3 +137,20 @@ def test_bad_specs_name_the_key_path(spec, path, message):
         shape_from_spec(spec, "body[2].shape")
     assert err.value.path.startswith(path)
     assert message in err.value.message
+
+
+@pytest.mark.parametrize("spec", [
+    {"type": "circle", "radius": 0.37},
+    {"type": "box", "size": [0.9, 0.3]},
+    {"type": "box", "size": [0.2, 0.7]},
+    {"type": "polygon", "points": [[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]]},
+    {"type": "polygon", "points": [[0, 0], [1, 0], [0.5, 0.8]]},
+    {"type": "sdf", "field": {"type": "star", "radius": 0.7, "points": 5, "m": 3.0}},
+])
+def test_core_radius_is_minus_the_field_at_the_centre_of_mass_bit_for_bit(spec):
+    """Circles and boxes give it in closed form (no field evaluated when a scene loads,
+    so a scene of circles and boxes compiles no field program), the same bits."""
+    shape = shape_from_spec(spec)
+    expected = -float(shape.field.evaluate(np.zeros((1, 2)))[0][0])
+    assert shape.core_radius == expected
+    assert math.copysign(1.0, shape.core_radius) == math.copysign(1.0, expected)
