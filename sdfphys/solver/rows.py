@@ -136,13 +136,24 @@ def _effective_mass(ma: float, ia: float, mb: float, ib: float, rax: float, ray:
 @njit(cache=True)
 def _prepare_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inertia,
                     body_friction, body_restitution, body_a, body_b, point, normal, depth,
-                    anchor_a, anchor_b, arm_a, arm_b, local_anchor, base_separation,
-                    normal_mass, tangent_mass, friction, restitution, relative_velocity, stiff,
-                    pair_start, gravity):
-    """Fill the per-contact arrays (see ContactConstraints); returns the number of pairs.
+                    gravity):
+    """The per-contact arrays of ``ContactConstraints`` for K contacts (body_a, body_b
+    (K,) int64, point, normal (K, 2), depth (K,) m) of bodies with com .. inv_inertia
+    (``BodyState``'s) and per-body body_friction, body_restitution (B,); gravity (2,).
 
-    local_anchor (K, 2): the contact point in body a's frame, R(-angle_a) (point - com_a).
+    Returns (anchor_a0, anchor_b0, anchor_a, anchor_b, local_anchor (K, 2),
+    base_separation, normal_mass, tangent_mass, friction, restitution,
+    relative_velocity (K,), stiff (K,) int64, pair_start (P + 1,) int64): the fields of
+    ``ContactConstraints`` of those names (anchor_a0, anchor_b0 before the curvature's
+    shift), local_anchor the contact point in body a's frame, R(-angle_a) (point - com_a).
     """
+    n = depth.shape[0]
+    anchor_a, anchor_b = np.empty((n, 2)), np.empty((n, 2))
+    arm_a, arm_b, local_anchor = np.empty((n, 2)), np.empty((n, 2)), np.empty((n, 2))
+    base_separation, normal_mass, tangent_mass = np.empty(n), np.empty(n), np.empty(n)
+    friction, restitution, relative_velocity = np.empty(n), np.empty(n), np.empty(n)
+    stiff = np.empty(n, np.int64)
+    pair_start = np.empty(n + 1, np.int64)
     n_pairs = 0
     for k in range(depth.shape[0]):
         a = body_a[k]
@@ -198,7 +209,9 @@ def _prepare_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inerti
         relative_velocity[k] = vn0
         stiff[k] = 1 if (ma == 0.0 or mb == 0.0) else 0
     pair_start[n_pairs] = depth.shape[0]
-    return n_pairs
+    return (anchor_a, anchor_b, arm_a, arm_b, local_anchor, base_separation, normal_mass,
+            tangent_mass, friction, restitution, relative_velocity, stiff,
+            pair_start[:n_pairs + 1])
 
 
 def prepare_contacts(contacts: Contacts, bodies: BodyState, friction: np.ndarray,
@@ -221,20 +234,13 @@ def prepare_contacts(contacts: Contacts, bodies: BodyState, friction: np.ndarray
     rho_a + rho_b, the same separation now, turning as a round body's.
     """
     k = len(contacts)
-    anchor_a, anchor_b = np.empty((k, 2)), np.empty((k, 2))
-    arm_a, arm_b, local_anchor = np.empty((k, 2)), np.empty((k, 2)), np.empty((k, 2))
-    base_separation, normal_mass, tangent_mass = np.empty(k), np.empty(k), np.empty(k)
-    mixed_friction, mixed_restitution, relative_velocity = np.empty(k), np.empty(k), np.empty(k)
-    stiff = np.empty(k, np.int64)
-    pair_start = np.empty(k + 1, np.int64)
     normal = np.ascontiguousarray(contacts.normal, dtype=np.float64)
-    n_pairs = _prepare_kernel(
+    (anchor_a, anchor_b, arm_a, arm_b, local_anchor, base_separation, normal_mass, tangent_mass,
+     mixed_friction, mixed_restitution, relative_velocity, stiff, pair_start) = _prepare_kernel(
         bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
         bodies.inv_inertia, friction, restitution, contacts.body_a, contacts.body_b,
         np.ascontiguousarray(contacts.point, dtype=np.float64), normal,
         np.ascontiguousarray(contacts.depth, dtype=np.float64),
-        anchor_a, anchor_b, arm_a, arm_b, local_anchor, base_separation, normal_mass,
-        tangent_mass, mixed_friction, mixed_restitution, relative_velocity, stiff, pair_start,
         np.zeros(2) if gravity is None else np.asarray(gravity, np.float64))
     if curvature is not None:
         rho_a, rho_b = curvature
@@ -256,7 +262,7 @@ def prepare_contacts(contacts: Contacts, bodies: BodyState, friction: np.ndarray
         restitution=mixed_restitution, relative_velocity=relative_velocity, stiff=stiff,
         normal_impulse=normal_impulse, tangent_impulse=tangent_impulse,
         total_normal_impulse=np.zeros(k), total_tangent_impulse=np.zeros(k),
-        pair_start=pair_start[:n_pairs + 1],
+        pair_start=pair_start,
         local_anchor=local_anchor)
 
 
