@@ -425,3 +425,35 @@ def test_stiff_iterations_one_runs_no_extra_pass(monkeypatch):
     monkeypatch.setattr(stages_module, "solve_substeps", spy)
     _, world = heavy_on_light(100.0, SETTINGS.with_values(stiff_iterations=1), seconds=0.5)
     assert world.stage_counts["converge"] == 0 and {extra for extra, _, _ in calls} == {0}
+
+
+def test_the_softness_bundles_hold_their_fields_in_order_and_share_the_arrays():
+    """The params' maker lists SOFTNESS_PARAMS by hand (compiled, cached); SoftnessRows
+    holds fields of bundles.SubstepRows (the substep solve passes that bundle to the same
+    kernel); a step's params are kept for the same settings and gravity, made anew for
+    others; the rows' coefficients are filled in the caller's arrays."""
+    import inspect
+
+    from sdfphys.solver import bundles, softness
+
+    assert tuple(inspect.signature(softness._row_softness_params.py_func).parameters) == \
+        softness.SOFTNESS_PARAMS
+    assert set(softness.SoftnessRows._fields) <= set(bundles.ROW_FIELDS)
+    params = softness.row_softness_params(SETTINGS, G)
+    assert softness.row_softness_params(SETTINGS, G.copy()) is params
+    assert softness.row_softness_params(SETTINGS, 2.0 * G) is not params
+    assert softness.row_softness_params(SETTINGS.with_values(stiff_island_limit=3), G) \
+        is not params
+    inv_mass, c = rows([(0, 1), (1, 2)], [0.0, 1.0, 1.0], [2.0, 1.0])
+    k = len(c.feature)
+    coefficients = np.full(k, np.nan), np.full(k, np.nan), np.full(k, np.nan)
+    ref = bundles._substep_rows(*(
+        coefficients[("bias_rate", "mass_scale", "impulse_scale").index(name)]
+        if name in ("bias_rate", "mass_scale", "impulse_scale")
+        else getattr(c, name, np.zeros((k, 2)) if name.startswith("anchor") else np.zeros(k))
+        for name in bundles.ROW_FIELDS))
+    loaded, _ = softness.loaded_rows(inv_mass, ref, softness.row_softness_params(SETTINGS, G))
+    expected_rows = row_softness(inv_mass, c, G, SETTINGS)
+    for mine, theirs in zip(coefficients, expected_rows[:3]):
+        np.testing.assert_array_equal(mine, theirs)
+    np.testing.assert_array_equal(loaded, expected_rows[3])

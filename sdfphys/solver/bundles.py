@@ -15,19 +15,12 @@ unpacked once a pass), only a signature of 16 arguments instead of 43.
 
 from __future__ import annotations
 
-from numba.core import types
 from numba.experimental import structref
 
+from .._bundles import PlainFields
 from .._jit import njit
 
 __all__ = ["PlainFields", "SubstepBodies", "SubstepRows", "substep_bodies", "substep_rows"]
-
-
-class PlainFields(types.StructRef):
-    """A StructRef type whose fields take their values' plain (not literal) types."""
-
-    def preprocess_fields(self, fields):
-        return tuple((name, types.unliteral(t)) for name, t in fields)
 
 
 @structref.register
@@ -63,8 +56,9 @@ class _SubstepRowsType(PlainFields):
 
 
 class SubstepRows(structref.StructRefProxy):
-    """The contact rows as the substep kernel takes them: ``rows.ContactConstraints``'
-    arrays and the row coefficients of ``softness.row_softness`` (bias_rate, mass_scale,
+    """The contact rows as the substep kernel and ``softness.row_softness`` take them:
+    ``rows.ContactConstraints``' arrays (but restitution and local_anchor) and the row
+    coefficients (K,) that ``row_softness`` fills (bias_rate 1/s, mass_scale,
     impulse_scale); made by ``substep_rows``."""
 
 
@@ -72,7 +66,7 @@ ROW_FIELDS = ("body_a", "body_b", "pair_start", "normal", "anchor_a0", "anchor_b
               "anchor_a", "anchor_b", "base_separation", "separation", "normal_mass",
               "tangent_mass", "friction", "bias_rate", "mass_scale", "impulse_scale",
               "normal_impulse", "tangent_impulse", "total_normal_impulse",
-              "total_tangent_impulse")
+              "total_tangent_impulse", "stiff", "relative_velocity", "feature")
 structref.define_proxy(SubstepRows, _SubstepRowsType, list(ROW_FIELDS))
 
 
@@ -80,11 +74,13 @@ structref.define_proxy(SubstepRows, _SubstepRowsType, list(ROW_FIELDS))
 def _substep_rows(body_a, body_b, pair_start, normal, anchor_a0, anchor_b0, anchor_a,
                   anchor_b, base_separation, separation, normal_mass, tangent_mass, friction,
                   bias_rate, mass_scale, impulse_scale, normal_impulse, tangent_impulse,
-                  total_normal_impulse, total_tangent_impulse):
+                  total_normal_impulse, total_tangent_impulse, stiff, relative_velocity,
+                  feature):
     return SubstepRows(body_a, body_b, pair_start, normal, anchor_a0, anchor_b0, anchor_a,
                        anchor_b, base_separation, separation, normal_mass, tangent_mass,
                        friction, bias_rate, mass_scale, impulse_scale, normal_impulse,
-                       tangent_impulse, total_normal_impulse, total_tangent_impulse)
+                       tangent_impulse, total_normal_impulse, total_tangent_impulse, stiff,
+                       relative_velocity, feature)
 
 
 def substep_rows(constraints, bias_rate, mass_scale, impulse_scale) -> SubstepRows:

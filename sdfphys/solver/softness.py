@@ -10,19 +10,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
+from numba.experimental import structref
 
 from .._jit import njit
 from ..islands import island_roots
 from ..settings import Settings
+from .bundles import PlainFields, SubstepRows
 
 if TYPE_CHECKING:
     from .rows import ContactConstraints
 
-__all__ = ["CONVERGED", "IMPACT_HOPS", "LOADED", "MASS_RATIO", "REST_SPEED", "Softness",
-           "contact_softness", "row_softness", "soft_coefficients"]
+__all__ = ["CONVERGED", "IMPACT_HOPS", "LOADED", "MASS_RATIO", "REST_SPEED", "SOFTNESS_PARAMS",
+           "RowSoftnessParams", "Softness", "SoftnessRows", "contact_softness", "loaded_rows",
+           "row_softness", "row_softness_params", "soft_coefficients"]
 
 
 # --------------------------------------------------------------------------------------
@@ -261,30 +264,127 @@ def _exact_rows(pair_start, feature):
     return exact
 
 
-@njit(cache=True)
-def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_impulse, stiff,
-                         up, weight_impulse, omega, zeta, h, base_bias_rate, base_mass_scale,
-                         base_impulse_scale, stiffen, limit, large_cap, bias_rate, mass_scale,
-                         impulse_scale, loaded_pairs, passes, separation, soft_depth,
-                         rest_limit, moving, relative_velocity, dt, extra_passes, jam_depth,
-                         feature):
-    """Fill the per-row coefficients (K,) and the loaded pairs; returns their count.
+class SoftnessRows(NamedTuple):
+    """The rows' arrays ``row_softness`` reads and fills, as ``bundles.SubstepRows`` holds
+    them (the fields of ``rows.ContactConstraints`` of these names, and the coefficients
+    (K,) it fills: bias_rate 1/s, mass_scale, impulse_scale). The substep solve passes
+    its ``SubstepRows`` instead (``loaded_rows``), one reference for both kernels."""
 
-    weight_impulse: |g| h, the impulse per substep that carries 1 kg (0: no gravity, no
-    load stiffening). omega: rad/s, the capped base stiffness (doubled for stiff rows).
-    base_*: (2,) contact_softness's coefficients, [movable, static], used where r = 1.
-    limit: largest loaded island (dynamic bodies); rest_limit: the same for islands with
-    no row deeper than soft_depth (m; separation (K,) at the start of the step);
-    large_cap: the most weights counted in larger islands, which get no extra pass.
-    passes: (P,) int64, filled per loaded pair: its extra passes per phase, at most,
-    extra_passes (stiff, impact, rest: islands of at most ``limit`` bodies, the pairs
-    of an impact's region (``_impact_region``; relative_velocity (K,) m/s, dt s) and
-    the static rows of its bodies and of the bodies they touch through pairs that are
-    not exact, or of an impact in such a pair, the islands at rest up to rest_limit);
-    the largest that applies. moving: (B,) bool, bodies faster than REST_SPEED (their
-    islands are not at rest). jam_depth: m, a row deeper marks its island jammed (no
-    impact passes). feature: (K,) int64, the rows' feature keys (``_exact_rows``).
+    body_a: np.ndarray
+    body_b: np.ndarray
+    pair_start: np.ndarray
+    normal: np.ndarray
+    normal_impulse: np.ndarray
+    stiff: np.ndarray
+    separation: np.ndarray
+    relative_velocity: np.ndarray
+    feature: np.ndarray
+    bias_rate: np.ndarray
+    mass_scale: np.ndarray
+    impulse_scale: np.ndarray
+
+
+@structref.register
+class _RowSoftnessParamsType(PlainFields):
+    """Numba's type of ``RowSoftnessParams``."""
+
+
+class RowSoftnessParams(structref.StructRefProxy):
+    """What ``row_softness`` takes from the settings and gravity, by reference (made by
+    ``_row_softness_params``, once per settings and gravity; opaque to Python).
+
+    up: (2,) unit, against gravity (zero without gravity). weight_impulse: N s / kg,
+    |g| h, the impulse per substep that carries 1 kg (0: no gravity, no load
+    stiffening). omega: rad/s, the capped base stiffness (doubled for stiff rows);
+    zeta: its damping ratio; h: s, the substep. base_bias_rate (1/s), base_mass_scale,
+    base_impulse_scale: (2,) ``contact_softness``' coefficients, [movable, static],
+    used where r = 1. stiffen: bool, ``load_stiffening``. limit: the largest loaded
+    island (dynamic bodies); rest_limit: the same for islands with no row deeper than
+    soft_depth (m); large_cap: the most weights counted in larger islands, which get no
+    extra pass. dt: s, the step. stiff_passes, impact_passes, rest_passes: int, the
+    extra passes per phase of a loaded pair, at most (stiff, impact, rest; each at most
+    ``stiff_iterations - 1``). jam_depth: m, a row deeper marks its island jammed (no
+    impact passes).
     """
+
+
+SOFTNESS_PARAMS = ("up", "weight_impulse", "omega", "zeta", "h", "base_bias_rate",
+                   "base_mass_scale", "base_impulse_scale", "stiffen", "limit", "rest_limit",
+                   "large_cap", "soft_depth", "dt", "stiff_passes", "impact_passes",
+                   "rest_passes", "jam_depth")
+structref.define_proxy(RowSoftnessParams, _RowSoftnessParamsType, list(SOFTNESS_PARAMS))
+
+
+@njit(cache=True)
+def _row_softness_params(up, weight_impulse, omega, zeta, h, base_bias_rate, base_mass_scale,
+                         base_impulse_scale, stiffen, limit, rest_limit, large_cap,
+                         soft_depth, dt, stiff_passes, impact_passes, rest_passes,
+                         jam_depth):
+    return RowSoftnessParams(up, weight_impulse, omega, zeta, h, base_bias_rate,
+                             base_mass_scale, base_impulse_scale, stiffen, limit, rest_limit,
+                             large_cap, soft_depth, dt, stiff_passes, impact_passes,
+                             rest_passes, jam_depth)
+
+
+#: The last ``row_softness_params``: (settings, gravity x, gravity y, the bundle).
+_LAST_PARAMS: list = [None]
+
+
+def row_softness_params(settings: Settings, gravity: np.ndarray) -> RowSoftnessParams:
+    """``RowSoftnessParams`` of ``settings`` under ``gravity`` (2,) m/s^2; the last one
+    made is kept (a world steps with the same settings and gravity)."""
+    gx, gy = float(gravity[0]), float(gravity[1])
+    last = _LAST_PARAMS[0]
+    if last is not None and last[0] is settings and last[1] == gx and last[2] == gy:
+        return last[3]
+    soft, stiff = contact_softness(settings)
+    h = settings.dt / settings.substeps
+    g = float(np.hypot(gx, gy))
+    up = -np.asarray(gravity, np.float64) / g if g > 0.0 else np.zeros(2)
+    most = settings.stiff_iterations - 1
+    params = _row_softness_params(
+        up, g * h, 2.0 * math.pi * min(settings.contact_hertz, 0.25 / h),
+        float(settings.contact_damping_ratio), h, np.array([soft.bias_rate, stiff.bias_rate]),
+        np.array([soft.mass_scale, stiff.mass_scale]),
+        np.array([soft.impulse_scale, stiff.impulse_scale]), bool(settings.load_stiffening),
+        int(settings.stiff_island_limit), int(settings.rest_island_limit),
+        float(settings.large_island_load_cap), float(settings.soft_depth),
+        float(settings.dt), int(most), int(min(settings.impact_iterations - 1, most)),
+        int(min(settings.rest_iterations - 1, most)),
+        float(settings.soft_depth + settings.max_push_out * settings.dt))
+    _LAST_PARAMS[0] = (settings, gx, gy, params)
+    return params
+
+
+@njit(cache=True)
+def _row_softness_kernel(inv_mass, moving, rows, params):
+    """Fill the rows' coefficients bias_rate, mass_scale, impulse_scale (K,); returns
+    the loaded pairs (L,) int64 (indices into pair_start, in order) and their extra
+    passes per phase, at most (L,) int64.
+
+    inv_mass: (B,) 1/kg. moving: (B,) bool, bodies faster than REST_SPEED (their islands
+    are not at rest). rows: ``bundles.SubstepRows`` (separation (K,) m at the start of
+    the step, relative_velocity (K,) m/s, feature (K,) int64 keys: ``_exact_rows``).
+    params: ``RowSoftnessParams``. A pair's passes are the largest that applies of:
+    stiff_passes (islands of at most ``limit`` bodies), impact_passes (the pairs of an
+    impact's region (``_impact_region``) and the static rows of its bodies and of the
+    bodies they touch through pairs that are not exact, or of an impact in such a pair),
+    rest_passes (the islands at rest up to rest_limit).
+    """
+    body_a, body_b, pair_start, normal = rows.body_a, rows.body_b, rows.pair_start, rows.normal
+    normal_impulse, stiff, separation = rows.normal_impulse, rows.stiff, rows.separation
+    relative_velocity, feature = rows.relative_velocity, rows.feature
+    bias_rate, mass_scale, impulse_scale = rows.bias_rate, rows.mass_scale, rows.impulse_scale
+    up, weight_impulse, omega, zeta, h = (params.up, params.weight_impulse, params.omega,
+                                          params.zeta, params.h)
+    base_bias_rate, base_mass_scale, base_impulse_scale = (
+        params.base_bias_rate, params.base_mass_scale, params.base_impulse_scale)
+    stiffen, limit, rest_limit, large_cap = (params.stiffen, params.limit, params.rest_limit,
+                                             params.large_cap)
+    soft_depth, dt, jam_depth = params.soft_depth, params.dt, params.jam_depth
+    extra_passes = (params.stiff_passes, params.impact_passes, params.rest_passes)
+    loaded_pairs = np.empty(max(pair_start.shape[0] - 1, 0), np.int64)
+    passes = np.empty(loaded_pairs.shape[0], np.int64)
     nb = inv_mass.shape[0]
     n_pairs = pair_start.shape[0] - 1
     ratio = np.ones(nb)
@@ -398,7 +498,7 @@ def _row_softness_kernel(inv_mass, body_a, body_b, pair_start, normal, normal_im
                 known |= 1 << j
             bias_rate[k], mass_scale[k], impulse_scale[k] = \
                 loaded[j, 0], loaded[j, 1], loaded[j, 2]
-    return count
+    return loaded_pairs[:count], passes[:count]
 
 
 def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity: np.ndarray,
@@ -418,27 +518,23 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
     """
     c = constraints
     k = len(c.feature)
-    soft, stiff = contact_softness(settings)
-    h = settings.dt / settings.substeps
-    g = float(np.hypot(gravity[0], gravity[1]))
-    up = -gravity / g if g > 0.0 else np.zeros(2)
     bias_rate, mass_scale, impulse_scale = np.empty(k), np.empty(k), np.empty(k)
-    loaded_pairs = np.empty(max(len(c.pair_start) - 1, 0), np.int64)
-    passes = np.empty(len(loaded_pairs), np.int64)
-    most = settings.stiff_iterations - 1
-    extra = (most, min(settings.impact_iterations - 1, most),
-             min(settings.rest_iterations - 1, most))
-    count = _row_softness_kernel(
-        inv_mass, c.body_a, c.body_b, c.pair_start, c.normal, c.normal_impulse, c.stiff, up,
-        g * h, 2.0 * math.pi * min(settings.contact_hertz, 0.25 / h),
-        settings.contact_damping_ratio, h,
-        np.array([soft.bias_rate, stiff.bias_rate]), np.array([soft.mass_scale, stiff.mass_scale]),
-        np.array([soft.impulse_scale, stiff.impulse_scale]), settings.load_stiffening,
-        settings.stiff_island_limit, settings.large_island_load_cap, bias_rate, mass_scale,
-        impulse_scale, loaded_pairs, passes, c.separation, settings.soft_depth,
-        settings.rest_island_limit, np.zeros(len(inv_mass), np.bool_) if moving is None
-        else moving, c.relative_velocity, settings.dt, extra,
-        settings.soft_depth + settings.max_push_out * settings.dt, c.feature)
-    return bias_rate, mass_scale, impulse_scale, loaded_pairs[:count], passes[:count]
+    loaded_pairs, passes = loaded_rows(
+        inv_mass, SoftnessRows(c.body_a, c.body_b, c.pair_start, c.normal, c.normal_impulse,
+                               c.stiff, c.separation, c.relative_velocity, c.feature,
+                               bias_rate, mass_scale, impulse_scale),
+        row_softness_params(settings, gravity), moving)
+    return bias_rate, mass_scale, impulse_scale, loaded_pairs, passes
+
+
+def loaded_rows(inv_mass: np.ndarray, rows: SubstepRows | SoftnessRows,
+                params: RowSoftnessParams, moving: np.ndarray | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """``row_softness`` into the coefficient arrays of ``rows``; returns loaded_pairs,
+    passes. rows: the step's ``bundles.substep_rows`` (the bundle the substep kernel then
+    takes; ``solve_substeps``), or a ``SoftnessRows`` (``row_softness``: any object with
+    the constraints' arrays it reads). params: ``row_softness_params(settings, gravity)``."""
+    return _row_softness_kernel(inv_mass, np.zeros(len(inv_mass), np.bool_) if moving is None
+                                else moving, rows, params)
 
 

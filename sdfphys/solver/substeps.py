@@ -65,7 +65,7 @@ from .pair_rows import (
     store_pair,
 )
 from .rows import BodyState, ContactConstraints
-from .softness import CONVERGED, REST_SPEED, row_softness
+from .softness import CONVERGED, REST_SPEED, loaded_rows, row_softness_params
 
 __all__ = ["MAX_ROTATION", "solve_substeps"]
 
@@ -616,13 +616,15 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     spin = 0.0 if bodies.radius is None else w * np.where(bodies.inv_mass > 0.0,
                                                           bodies.radius, 0.0)
     moving = v[:, 0] ** 2 + v[:, 1] ** 2 + spin * spin > REST_SPEED ** 2
-    bias_rate, mass_scale, impulse_scale, loaded_pairs, caps = row_softness(
-        bodies.inv_mass, c, gravity, settings, moving)
+    k = len(c.feature)
+    row_ref = substep_rows(c, np.empty(k), np.empty(k), np.empty(k))  # filled by loaded_rows
+    loaded_pairs, caps = loaded_rows(bodies.inv_mass, row_ref,
+                                     row_softness_params(settings, gravity), moving)
     measured = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
     measured[loaded_pairs] = True
     start_tangent = c.tangent_impulse.copy()
     passes, push_outs, joint_runs = _substeps_kernel(
-        substep_bodies(bodies), substep_rows(c, bias_rate, mass_scale, impulse_scale),
+        substep_bodies(bodies), row_ref,
         gravity, (loaded_pairs, caps, measured),
         h, settings.substeps, settings.relax_passes, settings.max_push_out,
         settings.max_linear_speed, use_friction, settings.stiff_iterations - 1,
