@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from numba import njit
 from oracles import Opaque, enclosing_circles, merge_minima
 from test_descent import CIRCLE, FIELDS, UNION, random_triangles
 
@@ -146,3 +147,42 @@ def test_compiled_triangle_helpers_equal_the_numpy_ones():
     point[::3] = 0.5
     np.testing.assert_array_equal(descent.merge_minima(point, 1e-6),
                                   merge_minima(point, 1e-6))
+
+
+def test_the_descent_bundles_hold_their_fields_in_order_and_type_the_shared_signature():
+    """``_compiled_descent``'s makers list PROBLEM_FIELDS and WORK_FIELDS by hand
+    (compiled, cached) and make the types of the shared ``_rounds`` signature (PROBLEM,
+    WORK); a descent through a small work bundle grows its arrays in the bundle and
+    gives the results of the thread's own."""
+    import inspect
+
+    from numba import typeof
+
+    from sdfphys.collide import _compiled_descent as cd
+
+    assert tuple(inspect.signature(cd._descent_problem.py_func).parameters) == \
+        cd.PROBLEM_FIELDS
+    assert tuple(inspect.signature(cd._descent_work.py_func).parameters) == cd.WORK_FIELDS
+    small = cd.descent_work(1)
+    assert typeof(small) == cd.WORK
+    f = field(FIELDS["smooth_union"])
+    program = compiled.compile_field(f)
+    tri = random_triangles(f, 40, np.random.default_rng(9))
+    points, owner, sigma, at_vertex = descent.start_kernels.triangle_starts(
+        tri, np.ascontiguousarray(descent.START_BARYCENTRIC))
+    problem = cd.descent_problem(cd.TRIANGLE, False, 2, program, program, np.zeros((1, 2, 2)),
+                                 np.zeros((1, 2)), owner, tri, owner, at_vertex, 7, True,
+                                 False)
+    assert typeof(problem) == cd.PROBLEM
+    tol = np.full(len(points), 1e-12)
+    results = [cd.descend(problem, points, sigma, 16, tol, descent.SHAPE_TOL, work)
+               for work in (small, descent.work(), small)]
+    for other in results[1:]:
+        for mine, theirs in zip(results[0], other):
+            np.testing.assert_array_equal(mine, theirs)
+    assert _state_rows(small) >= len(points)
+
+
+@njit
+def _state_rows(work):
+    return work.state.shape[0]

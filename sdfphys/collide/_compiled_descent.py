@@ -33,7 +33,9 @@ import math
 
 import numpy as np
 from numba import types
+from numba.experimental import structref
 
+from .._bundles import PlainFields
 from .._jit import njit
 from .._shared_kernel import F1, F2, F3, I1, I2, shared
 from ..sdf.compiled import run_shared, scratch
@@ -48,6 +50,8 @@ from ._descent_paths import (
     COUNT,
     HAS_PREVIOUS,
     IMBALANCE,
+    N_FLAGS,
+    N_STATE,
     TRIANGLE,
 )
 from ._descent_starts import (
@@ -62,7 +66,9 @@ from ._descent_starts import (
     with_dips,
 )
 
-__all__ = ["descend", "descend_sampled", "enclosing_circles", "merge_minima"]
+__all__ = ["PROBLEM_FIELDS", "WORK_FIELDS", "DescentProblem", "DescentWork", "descend",
+           "descend_sampled", "descent_problem", "descent_work", "enclosing_circles",
+           "merge_minima"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -87,17 +93,110 @@ _BLOCK = 8192
 _SAMPLE_BLOCK = 512
 
 
+@structref.register
+class _DescentProblemType(PlainFields):
+    """Numba's type of ``DescentProblem``."""
+
+
+class DescentProblem(structref.StructRefProxy):
+    """A descent's problem (module docstring) as ``descend`` and ``_rounds`` take it, by
+    reference; made by ``descent_problem`` (one maker call per descent), opaque to
+    Python.
+
+    kind: int, ``TRIANGLE`` or ``PAIR``; barzilai_borwein: bool, whether the steps use
+    the Barzilai-Borwein scale; kd: int, the data width (2 TRIANGLE, 6 PAIR). Fields
+    rather than constants, so that the kernels are the same compiled functions as the
+    Python-driven loop's (a literal would compile them again, costing seconds at a cold
+    start). code_a (I, 4) int64, consts_a (F,), depth_a, nesting_a (int): field a's
+    program (``sdf.compiled.Program``); code_b .. nesting_b: field b's (PAIR; any
+    program for TRIANGLE). rotation (L, 2, 2), offset (L, 2) m: pair k places b in a's
+    frame by p_a = R_k p_b + o_k; pair_of (P,) int64: each start's pair (PAIR; unused
+    for TRIANGLE). tri (T, 3, 2) m, owner (P,) int64, at_vertex (T, 3) int64, n_start
+    (int, starts per triangle), spanning, convex (bool): as ``descent._TriangleProblem``
+    (PAIR: one dummy triangle, owner empty).
+    """
+
+
+PROBLEM_FIELDS = ("kind", "barzilai_borwein", "kd", "code_a", "consts_a", "depth_a",
+                  "nesting_a", "code_b", "consts_b", "depth_b", "nesting_b", "rotation",
+                  "offset", "pair_of", "tri", "owner", "at_vertex", "n_start", "spanning",
+                  "convex")
+structref.define_proxy(DescentProblem, _DescentProblemType, list(PROBLEM_FIELDS))
+
+
+@njit(cache=True)
+def _descent_problem(kind, barzilai_borwein, kd, code_a, consts_a, depth_a, nesting_a, code_b,
+                     consts_b, depth_b, nesting_b, rotation, offset, pair_of, tri, owner,
+                     at_vertex, n_start, spanning, convex):
+    return DescentProblem(kind, barzilai_borwein, kd, code_a, consts_a, depth_a, nesting_a,
+                          code_b, consts_b, depth_b, nesting_b, rotation, offset, pair_of, tri,
+                          owner, at_vertex, n_start, spanning, convex)
+
+
+def descent_problem(kind: int, barzilai_borwein: bool, kd: int, a, b, rotation: np.ndarray,
+                    offset: np.ndarray, pair_of: np.ndarray, tri: np.ndarray,
+                    owner: np.ndarray, at_vertex: np.ndarray, n_start: int, spanning: bool,
+                    convex: bool) -> DescentProblem:
+    """``DescentProblem`` of programs a and b (``sdf.compiled.Program``) and the arrays
+    (C-contiguous, of the field types of ``PROBLEM``)."""
+    return _descent_problem(kind, barzilai_borwein, kd, a.code, a.consts, a.depth, a.nesting,
+                            b.code, b.consts, b.depth, b.nesting, rotation, offset, pair_of,
+                            tri, owner, at_vertex, n_start, spanning, convex)
+
+
+@structref.register
+class _DescentWorkType(PlainFields):
+    """Numba's type of ``DescentWork``."""
+
+
+class DescentWork(structref.StructRefProxy):
+    """The compiled descents' work arrays, kept between calls (one set per thread:
+    ``descent.work``), by reference; a descent uses their leading rows and grows them
+    (a new array in the field) when it needs more. Contents undefined between calls.
+
+    Per start (at least P rows): state (N, N_STATE), flags (N, N_FLAGS) int64, running
+    (N,) int64 (``_descent_paths``' columns). The round buffers (at least the
+    candidates of a round): cand (C, 5), cand_i (C, 2) int64, candidates (C, 2) m.
+    """
+
+
+WORK_FIELDS = ("state", "flags", "running", "cand", "cand_i", "candidates")
+structref.define_proxy(DescentWork, _DescentWorkType, list(WORK_FIELDS))
+
+
+@njit(cache=True)
+def _descent_work(state, flags, running, cand, cand_i, candidates):
+    return DescentWork(state, flags, running, cand, cand_i, candidates)
+
+
+def descent_work(rows: int = 64) -> DescentWork:
+    """New work arrays of ``rows`` rows each."""
+    return _descent_work(np.empty((rows, N_STATE)), np.empty((rows, N_FLAGS), np.int64),
+                         np.empty(rows, np.int64), np.empty((rows, 5)),
+                         np.empty((rows, 2), np.int64), np.empty((rows, 2)))
+
+
 @njit(cache=True, error_model="numpy")
-def _evaluate(kind: int, code_a: np.ndarray, consts_a: np.ndarray, depth_a: int,
-              nesting_a: int, code_b: np.ndarray, consts_b: np.ndarray, depth_b: int,
-              nesting_b: int, rotation: np.ndarray, offset: np.ndarray, points: np.ndarray,
-              pair: np.ndarray, n: int, phi: np.ndarray, grad: np.ndarray,
-              data: np.ndarray) -> None:
+def _grown_running(running: np.ndarray, n: int) -> np.ndarray:
+    """``running`` if it has at least n entries, else a new (max(n, 2 len),) array."""
+    if running.shape[0] >= n:
+        return running
+    return np.empty(max(n, 2 * running.shape[0]), dtype=running.dtype)
+
+
+@njit(cache=True, error_model="numpy")
+def _evaluate(problem, points: np.ndarray, pair: np.ndarray, n: int, phi: np.ndarray,
+              grad: np.ndarray, data: np.ndarray) -> None:
     """The problem at points[:n] (of pairs pair[:n], PAIR): phi, grad phi, data rows.
 
     The operations are those of ``field_pairs._PairProblem.values`` / ``evaluate``
     (``_times`` writes v @ M as v_x M_0j + v_y M_1j), in chunks of ``_CHUNK`` points.
     """
+    kind, rotation, offset = problem.kind, problem.rotation, problem.offset
+    code_a, consts_a, depth_a, nesting_a = (problem.code_a, problem.consts_a, problem.depth_a,
+                                            problem.nesting_a)
+    code_b, consts_b, depth_b, nesting_b = (problem.code_b, problem.consts_b, problem.depth_b,
+                                            problem.nesting_b)
     size = min(n, _CHUNK)
     stack_a, frames_a, cur_a = scratch(depth_a, nesting_a, size)
     fa, ga = np.empty(size), np.empty((size, 2))
@@ -138,70 +237,48 @@ def _evaluate(kind: int, code_a: np.ndarray, consts_a: np.ndarray, depth_a: int,
 
 
 @njit(cache=True, error_model="numpy")
-def descend(kind: int, barzilai_borwein: bool, kd: int,
-            code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
-            code_b: np.ndarray, consts_b: np.ndarray, depth_b: int, nesting_b: int,
-            rotation: np.ndarray, offset: np.ndarray, pair_of: np.ndarray,
-            tri: np.ndarray, owner: np.ndarray, at_vertex: np.ndarray, n_start: int,
-            spanning: bool, convex: bool, points: np.ndarray, sigma: np.ndarray,
-            iterations: int, tol: np.ndarray, shape_tol: float, state: np.ndarray,
-            flags: np.ndarray, running: np.ndarray, cand: np.ndarray, cand_i: np.ndarray,
-            candidates: np.ndarray):
+def descend(problem, points: np.ndarray, sigma: np.ndarray, iterations: int, tol: np.ndarray,
+            shape_tol: float, work):
     """``descent._descend`` of a problem given by its fields' programs (module docstring).
 
-    kind, barzilai_borwein, kd: the problem's kind, whether it uses the
-    Barzilai-Borwein scale, its data width (2 TRIANGLE, 6 PAIR); passed in, not
-    constants, so that the kernels are the same compiled functions as the
-    Python-driven loop's (a literal argument would compile them again, costing
-    seconds at a cold start). code_*, consts_*, depth_*, nesting_*: the programs
-    (``sdf.compiled.Program``) of field a and, for PAIR, field b (any program for
-    TRIANGLE). rotation (L, 2, 2), offset (L, 2), pair_of (P,): the placements of
-    b and each start's pair (PAIR; unused for TRIANGLE). tri (T, 3, 2), owner (P,),
-    at_vertex (T, 3), n_start, spanning, convex: as ``descent._TriangleProblem``
-    (for PAIR: one dummy triangle, owner empty). points (P, 2): the starts, sigma
-    (P,) their first step scales, iterations the round budget, tol (P,) (m) the
-    step below which each start stops, shape_tol the tolerance of
-    ``triangle_known``. Work arrays (contents undefined, reused between calls):
-    state (P, N_STATE), flags (P, N_FLAGS), running (P,), and the round buffers
-    cand (C, 5), cand_i (C, 2) int64 and candidates (C, 2), grown here when a
-    round needs more.
+    problem: ``DescentProblem``. points (P, 2): the starts, sigma (P,) their first step
+    scales, iterations the round budget, tol (P,) (m) the step below which each start
+    stops, shape_tol the tolerance of ``triangle_known``. work: ``DescentWork``.
 
-    Returns best (P, 2), phi (P,), data (P, kd) at best, rounds (P,), the number
-    of points evaluated, and the round buffers (possibly grown).
+    Returns best (P, 2), phi (P,), data (P, kd) at best, rounds (P,) and the number of
+    points evaluated.
     """
     n_points = points.shape[0]
     phi = np.empty(n_points)
     grad = np.empty((n_points, 2))
-    data = np.empty((n_points, kd))                      # updated in place by accept
-    _evaluate(kind, code_a, consts_a, depth_a, nesting_a, code_b, consts_b, depth_b, nesting_b,
-              rotation, offset, points, pair_of, n_points, phi, grad, data)
-    if kind == TRIANGLE:
-        corner, shape = triangle_known(tri, at_vertex, points, phi, grad, n_start, spanning,
-                                       convex, shape_tol)
+    data = np.empty((n_points, problem.kd))              # updated in place by accept
+    _evaluate(problem, points, problem.pair_of, n_points, phi, grad, data)
+    if problem.kind == TRIANGLE:
+        corner, shape = triangle_known(problem.tri, problem.at_vertex, points, phi, grad,
+                                       problem.n_start, problem.spanning, problem.convex,
+                                       shape_tol)
     else:
         corner, shape = np.full((1, 3, 3), np.nan), np.zeros((1, 4))
-    return rounds_shared(kind, barzilai_borwein, kd, code_a, consts_a, depth_a, nesting_a,
-                         code_b, consts_b, depth_b, nesting_b, rotation, offset, pair_of, tri,
-                         owner, n_start, points, phi, grad, data, corner, shape, sigma,
-                         iterations, tol, shape_tol, state, flags, running, cand, cand_i,
-                         candidates)
+    return rounds_shared(problem, points, phi, grad, data, corner, shape, sigma, iterations,
+                         tol, shape_tol, work)
 
 
 @njit(cache=True, error_model="numpy")
-def _rounds(kind: int, barzilai_borwein: bool, kd: int,
-            code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
-            code_b: np.ndarray, consts_b: np.ndarray, depth_b: int, nesting_b: int,
-            rotation: np.ndarray, offset: np.ndarray, pair_of: np.ndarray,
-            tri: np.ndarray, owner: np.ndarray, n_start: int, points: np.ndarray,
-            phi: np.ndarray, grad: np.ndarray, data: np.ndarray, corner: np.ndarray,
-            shape: np.ndarray, sigma: np.ndarray, iterations: int, tol: np.ndarray,
-            shape_tol: float, state: np.ndarray, flags: np.ndarray, running: np.ndarray,
-            cand: np.ndarray, cand_i: np.ndarray, candidates: np.ndarray):
+def _rounds(problem, points: np.ndarray, phi: np.ndarray, grad: np.ndarray, data: np.ndarray,
+            corner: np.ndarray, shape: np.ndarray, sigma: np.ndarray, iterations: int,
+            tol: np.ndarray, shape_tol: float, work):
     """``descend`` once the starts are evaluated (phi, grad, data at points) and what
     they tell of the triangles is known (corner, shape; dummies for PAIR): the
-    rounds. Same arguments (n_start: the starts per triangle, in blocks of whole
-    triangles) and results."""
+    rounds. Same arguments (problem.n_start: the starts per triangle, in blocks of
+    whole triangles) and results."""
+    kind, barzilai_borwein, kd = problem.kind, problem.barzilai_borwein, problem.kd
+    tri, owner, pair_of, n_start = problem.tri, problem.owner, problem.pair_of, problem.n_start
     n_points = points.shape[0]
+    work.state = _grown(work.state, n_points)
+    work.flags = _grown(work.flags, n_points)
+    work.running = _grown_running(work.running, n_points)
+    state, flags, running = work.state[:n_points], work.flags[:n_points], work.running
+    cand, cand_i, candidates = work.cand, work.cand_i, work.candidates
     least = np.inf
     most = -np.inf
     for i in range(n_points):
@@ -251,9 +328,7 @@ def _rounds(kind: int, barzilai_borwein: bool, kd: int,
                         if source > AT_BEST:
                             pair[source] = pair_of[i]
                         row += 1
-            _evaluate(kind, code_a, consts_a, depth_a, nesting_a, code_b, consts_b, depth_b,
-                      nesting_b, rotation, offset, candidates, pair, n_eval, value, gradient,
-                      cand_data)
+            _evaluate(problem, candidates, pair, n_eval, value, gradient, cand_data)
             evaluated += n_eval
             if uneven:
                 for r in range(n_running):
@@ -275,27 +350,29 @@ def _rounds(kind: int, barzilai_borwein: bool, kd: int,
                 if kept < n_running:
                     n_running = kept
                     size = bound(kind, owner, shape, state, flags, running[:n_running])
+    work.cand, work.cand_i, work.candidates = cand, cand_i, candidates     # maybe grown
     best, phi, rounds = results(state, flags)
-    return best, phi, data, rounds, evaluated, cand, cand_i, candidates
+    return best, phi, data, rounds, evaluated
 
 
 # ``_rounds`` for ``descend`` and ``descend_sampled``: one machine code per process
-# (``sdfphys._shared_kernel``), not a copy built into each. Its one signature:
+# (``sdfphys._shared_kernel``), not a copy built into each. Its one signature, with the
+# bundles' types as ``descent_problem`` and ``descent_work`` make them:
 _INT = types.int64
+PROBLEM = _DescentProblemType(list(zip(PROBLEM_FIELDS, (
+    _INT, types.boolean, _INT, I2, F1, _INT, _INT, I2, F1, _INT, _INT, F3, F2, I1, F3, I1, I2,
+    _INT, types.boolean, types.boolean))))
+WORK = _DescentWorkType(list(zip(WORK_FIELDS, (F2, I2, I1, F2, I2, F2))))
 rounds_shared = shared(
-    _rounds, (_INT, types.boolean, _INT, I2, F1, _INT, _INT, I2, F1, _INT, _INT, F3, F2, I1, F3,
-              I1, _INT, F2, F1, F2, F2, F3, F2, F1, _INT, F1, types.float64, F2, I2, I1, F2, I2,
-              F2),
-    "sdfphys_collide_descent_rounds", types.Tuple((F2, F1, F2, I1, _INT, F2, I2, F2)))
+    _rounds, (PROBLEM, F2, F1, F2, F2, F3, F2, F1, _INT, F1, types.float64, WORK),
+    "sdfphys_collide_descent_rounds", types.Tuple((F2, F1, F2, I1, _INT)))
 
 
 @njit(cache=True, error_model="numpy")
 def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
                     tri: np.ndarray, weights: np.ndarray, neighbours: np.ndarray,
                     edges: np.ndarray, spacing: float, k: int, iterations: int, tol: float,
-                    shape_tol: float, state: np.ndarray, flags: np.ndarray,
-                    running: np.ndarray, cand: np.ndarray, cand_i: np.ndarray,
-                    candidates: np.ndarray):
+                    shape_tol: float, work):
     """``lattice.triangle_deepest_sampled`` of a field given by its program.
 
     The field is evaluated at the lattice samples (weights (N, 3), spacing
@@ -305,17 +382,22 @@ def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nest
     slots); what the lattice samples tell of each triangle (``triangle_known``, all
     N as starts that span it: vertex values, plane, cone; not the cuts, whose model
     costs O(N^3)) is kept; the k samples or dips ``pick_starts`` chooses descend
-    (``_rounds``), tol (m) for all. Work arrays as ``descend``.
+    (``_rounds``), tol (m) for all. work: ``DescentWork``.
 
-    Returns best (T k, 2), phi (T k,), rounds (T k,), the number of points
-    evaluated and the round buffers (possibly grown).
+    Returns best (T k, 2), phi (T k,), rounds (T k,) and the number of points
+    evaluated.
     """
     n_sample = weights.shape[0]
     n_dip = neighbours.shape[0] - n_sample
     n_tri = tri.shape[0]
     n_dips = 0
     no_pair = np.empty(0, dtype=np.int64)
-    no_rotation, no_offset = np.zeros((1, 2, 2)), np.zeros((1, 2))
+    # The triangle problem of field a (no field b, no placements); its starts' owners
+    # are set once chosen.
+    problem = DescentProblem(TRIANGLE, False, 2, code_a, consts_a, depth_a, nesting_a, code_a,
+                             consts_a, depth_a, nesting_a, np.zeros((1, 2, 2)),
+                             np.zeros((1, 2)), no_pair, tri, no_pair,
+                             np.full((1, 3), -1, np.int64), k, True, False)
     corner = np.empty((n_tri, 3, 3))
     shape = np.empty((n_tri, 4))
     points, phi = np.empty((n_tri * k, 2)), np.empty(n_tri * k)
@@ -330,8 +412,7 @@ def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nest
         part = tri[lo:hi]
         spoints, _, ssigma, sat = triangle_starts(part, weights)
         n = spoints.shape[0]
-        _evaluate(TRIANGLE, code_a, consts_a, depth_a, nesting_a, code_a, consts_a, depth_a,
-                  nesting_a, no_rotation, no_offset, spoints, no_pair, n, sphi, sgrad, sdata)
+        _evaluate(problem, spoints, no_pair, n, sphi, sgrad, sdata)
         c, sh = triangle_known(part, sat, spoints, sphi, sgrad, n_sample, True, False,
                                shape_tol)
         corner[lo:hi], shape[lo:hi] = c, sh
@@ -339,9 +420,7 @@ def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nest
                                                          edges, n_dip))
         m = dip_points.shape[0]
         dip_phi, dip_grad, dip_data = np.empty(m), np.empty((m, 2)), np.empty((m, 2))
-        _evaluate(TRIANGLE, code_a, consts_a, depth_a, nesting_a, code_a, consts_a, depth_a,
-                  nesting_a, no_rotation, no_offset, dip_points, no_pair, m, dip_phi, dip_grad,
-                  dip_data)
+        _evaluate(problem, dip_points, no_pair, m, dip_phi, dip_grad, dip_data)
         n_dips += m
         xpoints, xphi, xgrad, xsigma = with_dips(spoints, sphi[:n], sgrad, ssigma, n_sample,
                                                  n_dip, dip_points, dip_place, dip_phi,
@@ -353,13 +432,12 @@ def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nest
         sigma[lo * k:hi * k], owner[lo * k:hi * k] = sg, ow + lo
     data = grad.copy()
     tols = np.full(points.shape[0], tol)
-    best, phi, data, rounds, evaluated, cand, cand_i, candidates = rounds_shared(
-        TRIANGLE, False, 2, code_a, consts_a, depth_a, nesting_a, code_a, consts_a, depth_a,
-        nesting_a, no_rotation, no_offset, owner, tri, owner, k, points, phi, grad, data,
-        corner, shape, sigma, iterations, tols, shape_tol, state, flags, running, cand, cand_i,
-        candidates)
-    return (best, phi, rounds, evaluated + n_tri * (n_sample - k) + n_dips, cand, cand_i,
-            candidates)
+    problem.owner = owner
+    problem.pair_of = owner
+    best, phi, data, rounds, evaluated = rounds_shared(
+        problem, points, phi, grad, data, corner, shape, sigma, iterations, tols, shape_tol,
+        work)
+    return best, phi, rounds, evaluated + n_tri * (n_sample - k) + n_dips
 
 
 # --------------------------------------------------------------------------------------

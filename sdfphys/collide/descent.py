@@ -140,7 +140,13 @@ from ..sdf.compiled import distance as compiled_distance
 from . import _descent_kernels as kernels
 from . import _descent_paths as paths
 from . import _descent_starts as start_kernels
-from ._compiled_descent import descend, enclosing_circles
+from ._compiled_descent import (
+    DescentWork,
+    descend,
+    descent_problem,
+    descent_work,
+    enclosing_circles,
+)
 from ._compiled_descent import merge_minima as compiled_merge_minima
 
 if TYPE_CHECKING:
@@ -290,11 +296,14 @@ class _Workspace(threading.local):
     Fresh arrays of tens of megabytes (10^4 triangles) cost their page faults on
     every call, as much time as the descent itself; the physics step and the
     benchmarks query again and again. One set per thread (a descent fills them
-    from start to end of a call; nothing is read that the call did not write).
+    from start to end of a call; nothing is read that the call did not write): the
+    Python loop's (``rows``) and the compiled descents' bundle (``work``), which
+    they grow themselves.
     """
 
     def __init__(self) -> None:
         self._arrays: dict[str, np.ndarray] = {}
+        self.descent_work: DescentWork | None = None
 
     def rows(self, name: str, n: int, width: int, dtype: type = np.float64) -> np.ndarray:
         """(n, width) C-contiguous rows of the array ``name``, contents undefined."""
@@ -304,34 +313,17 @@ class _Workspace(threading.local):
             array = self._arrays[name] = np.empty((size, width), dtype=dtype)
         return array[:n]
 
-    def whole(self, name: str, width: int, dtype: type = np.float64) -> np.ndarray:
-        """All rows (at least 64) of the array ``name``, contents undefined."""
-        self.rows(name, 64, width, dtype)
-        return self._arrays[name]
-
-    def keep(self, name: str, array: np.ndarray) -> None:
-        """Make ``array`` (grown by a compiled caller) the array ``name``."""
-        self._arrays[name] = array
-
 
 _WORK = _Workspace()
 
 
-def scratch(n_points: int) -> tuple:
-    """The compiled descents' work arrays for ``n_points`` starts (this thread's, reused
-    between calls): state, flags, running, and the candidate buffers cand, cand_i, points
-    (a descent may grow these: give back what it returns with ``keep_round_buffers``)."""
-    return (_WORK.rows("state", n_points, paths.N_STATE),
-            _WORK.rows("flags", n_points, paths.N_FLAGS, np.int64),
-            _WORK.rows("running", n_points, 1, np.int64)[:, 0],
-            _WORK.whole("cand", 5), _WORK.whole("cand_i", 2, np.int64), _WORK.whole("points", 2))
-
-
-def keep_round_buffers(cand: np.ndarray, cand_i: np.ndarray, points: np.ndarray) -> None:
-    """Keep the candidate buffers a compiled descent returned (it may have grown them)."""
-    _WORK.keep("cand", cand)
-    _WORK.keep("cand_i", cand_i)
-    _WORK.keep("points", points)
+def work() -> DescentWork:
+    """The compiled descents' work arrays (``_compiled_descent.DescentWork``), this
+    thread's, kept between calls (the descents grow them)."""
+    bundle = _WORK.descent_work
+    if bundle is None:
+        bundle = _WORK.descent_work = descent_work()
+    return bundle
 
 
 def _point_starts(cand_i: np.ndarray, flags: np.ndarray, proposing: np.ndarray, n: int,
@@ -435,13 +427,12 @@ def _descend_compiled(problem: _TriangleProblem | field_pairs._PairProblem,
         return descend_pairs(programs, problem.rotation, problem.offset, problem.pair_of,
                              points, sigma, tol, iterations)
     a, b = programs
-    best, phi, data, rounds, _, cand, cand_i, candidates = descend(
-        problem.kind, problem.barzilai_borwein, 2, a.code, a.consts, a.depth, a.nesting,
-        b.code, b.consts, b.depth, b.nesting, _NO_ROTATION, _NO_OFFSET, problem.owner,
-        problem.triangles, problem.owner, problem.at_vertex, problem.n_start,
-        problem.spanning, problem.convex, points, np.ascontiguousarray(sigma, dtype=np.float64),
-        iterations, tol, SHAPE_TOL, *scratch(len(points)))
-    keep_round_buffers(cand, cand_i, candidates)
+    best, phi, data, rounds, _ = descend(
+        descent_problem(problem.kind, problem.barzilai_borwein, 2, a, b, _NO_ROTATION,
+                        _NO_OFFSET, problem.owner, problem.triangles, problem.owner,
+                        problem.at_vertex, problem.n_start, problem.spanning, problem.convex),
+        points, np.ascontiguousarray(sigma, dtype=np.float64), iterations, tol, SHAPE_TOL,
+        work())
     return best, phi, data, rounds
 
 
@@ -454,14 +445,12 @@ def descend_pairs(programs: tuple[Program, Program], rotation: np.ndarray, offse
     (P,) float64 (m, writable); ``_descend``'s results: best (P, 2), phi (P,), data (P, 6),
     rounds (P,)."""
     a, b = programs
-    best, phi, data, rounds, _, cand, cand_i, candidates = descend(
-        paths.PAIR, True, 6, a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
-        b.nesting, np.ascontiguousarray(rotation), np.ascontiguousarray(offset), pair_of,
-        NO_TRIANGLE, NO_OWNER, NO_CORNERS, 0, False, False,
+    best, phi, data, rounds, _ = descend(
+        descent_problem(paths.PAIR, True, 6, a, b, np.ascontiguousarray(rotation),
+                        np.ascontiguousarray(offset), pair_of, NO_TRIANGLE, NO_OWNER,
+                        NO_CORNERS, 0, False, False),
         np.ascontiguousarray(points, dtype=np.float64),
-        np.ascontiguousarray(sigma, dtype=np.float64), iterations, tol, SHAPE_TOL,
-        *scratch(len(points)))
-    keep_round_buffers(cand, cand_i, candidates)
+        np.ascontiguousarray(sigma, dtype=np.float64), iterations, tol, SHAPE_TOL, work())
     return best, phi, data, rounds
 
 

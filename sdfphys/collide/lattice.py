@@ -105,12 +105,10 @@ def triangle_deepest_sampled(field: Field, triangles: np.ndarray, degree: int, n
     tri = np.ascontiguousarray(tri)
     program = compile_field(field)
     if program is not None:
-        n_points = n_tri * k
-        best, value, _, _, cand, cand_i, candidates = descend_sampled(
+        best, value, _, _ = descend_sampled(
             program.code, program.consts, program.depth, program.nesting, tri, weights,
             with_slots, edges, 1.0 / degree, k, iterations, float(tol), descent.SHAPE_TOL,
-            *descent.scratch(n_points))
-        descent.keep_round_buffers(cand, cand_i, candidates)
+            descent.work())
         return best.reshape(n_tri, k, 2), value.reshape(n_tri, k)
     spoints, _, ssigma, sat = start_kernels.triangle_starts(tri, weights)
     sphi, sgrad = field.evaluate(spoints)
