@@ -50,14 +50,16 @@ checks, the result type ``RayHits``, the point queries and the box overlaps.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
+from numba.experimental import structref
 
+from ._bundles import PlainFields
 from ._jit import njit
 from .collide.broadphase import world_bounds
 from .errors import check_number
-from .queries import _CIRCLE, _MESH, _SDF, RayHits, _bodies, _grid, _packed, _rays
+from .queries import _CIRCLE, _MESH, _SDF, RayHits, _bodies, _grid, _Packed, _packed, _rays
 from .sdf.compiled import run_shared
 
 __all__ = ["COARSE", "MAX_STEPS", "OMEGA", "ROOT_TOLERANCE", "TOUCH", "cast"]
@@ -79,6 +81,80 @@ OMEGA = 1.6
 MAX_STEPS = 1000
 #: Root-solve iterations per hit.
 _ROOT_STEPS = 100
+
+
+@structref.register
+class _ShapeTablesType(PlainFields):
+    """Numba's type of ``ShapeTables``."""
+
+
+class ShapeTables(structref.StructRefProxy):
+    """The world's per-shape tables (``queries._Packed``, S shapes) as the ray kernel
+    takes them, by reference; made once per packing (``_shape_tables``), opaque to
+    Python.
+
+    kind: (S,) int64, ``_CIRCLE``, ``_MESH`` or ``_SDF``. radius: (S,) m, the bounding
+    radius about the centre of mass (inf: unbounded). bounds: (S, 4) m, the local AABB
+    (x0, y0, x1, y1). vstart, vcount: (S,) int64, the outline's rows of vertices (V, 2)
+    m, counter-clockwise. cstart, ccount: (S,) int64, the program's rows of code (I, 4)
+    int64, its constants in consts (F,). shift: (S, 2) m, the translation taken out of
+    each program (``queries._outer_shift``). depth, nesting: int, the largest stack
+    depth and nesting of the programs.
+    """
+
+
+SHAPE_FIELDS = ("kind", "radius", "bounds", "vstart", "vcount", "vertices", "cstart",
+                "ccount", "code", "consts", "shift", "depth", "nesting")
+structref.define_proxy(ShapeTables, _ShapeTablesType, list(SHAPE_FIELDS))
+
+
+@njit(cache=True)
+def _shape_tables_of(kind, radius, bounds, vstart, vcount, vertices, cstart, ccount, code,
+                     consts, shift, depth, nesting):
+    return ShapeTables(kind, radius, bounds, vstart, vcount, vertices, cstart, ccount, code,
+                       consts, shift, depth, nesting)
+
+
+def _shape_tables(world, pk: _Packed) -> ShapeTables:
+    """``pk``'s arrays by reference (``pk``: ``_packed(world)``), kept on the world with
+    the packing they were made of."""
+    cache = world.__dict__.get("_ray_tables")
+    if cache is None or cache[0] is not pk:
+        cache = (pk, _shape_tables_of(*(getattr(pk, name) for name in SHAPE_FIELDS)))
+        world._ray_tables = cache
+    return cache[1]
+
+
+class _Shapes(NamedTuple):
+    """``ShapeTables``' arrays as ``_hit`` takes them: a tuple of the same arrays, made
+    once per cast in ``_cast_into`` (njit), so that the tests of every (ray, body) read
+    them from registers, not through the bundle's pointer."""
+
+    kind: np.ndarray
+    radius: np.ndarray
+    bounds: np.ndarray
+    vstart: np.ndarray
+    vcount: np.ndarray
+    vertices: np.ndarray
+    cstart: np.ndarray
+    ccount: np.ndarray
+    code: np.ndarray
+    consts: np.ndarray
+    shift: np.ndarray
+
+
+class _ProgramWork(NamedTuple):
+    """One point's work arrays for the field programs (``sdf.compiled.run``): the point
+    pt (1, 2) m, the program's stack (depth, 1, 3), frames (nesting, 1, 2) and cur
+    (1, 2), and its results value (1,) m and grad (1, 2). Made in ``_cast`` (njit), passed
+    to ``_hit``."""
+
+    pt: np.ndarray
+    stack: np.ndarray
+    frames: np.ndarray
+    cur: np.ndarray
+    value: np.ndarray
+    grad: np.ndarray
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -107,12 +183,14 @@ def _slab(px, py, dx, dy, b, grow, top):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _hit(body, ox, oy, dx, dy, rad, top, com, cosine, sine, sid, pk_kind, pk_radius, pk_bounds,
-         vstart, vcount, verts, cstart, ccount, code, consts, shift, pt, stack, frames, cur, value,
-         grad):
+def _hit(body, ox, oy, dx, dy, rad, top, com, cosine, sine, sid, shapes, work):
     """First hit (t, nx, ny) of the ray o + t d (unit d), 0 <= t <= top, on ``body``
     grown by rad (m; the disc of a circle cast); t = inf for none. Normal in world axes.
-    cosine, sine (B,): of the bodies' angles. See the module docstring."""
+    com (B, 2) m; cosine, sine (B,): of the bodies' angles; sid (B,) int64, their shapes
+    in ``shapes`` (``_Shapes``). work: ``_ProgramWork``. See the module docstring."""
+    pk_kind, pk_radius, pk_bounds, vstart, vcount, verts, cstart, ccount, code, consts, \
+        shift = shapes
+    pt, stack, frames, cur, value, grad = work
     s = sid[body]
     c, sn = cosine[body], sine[body]
     rx, ry = ox - com[body, 0], oy - com[body, 1]
@@ -319,24 +397,54 @@ def _trace(px, py, ex, ey, ox, oy, rad, t0, t1, code, consts, pt, stack, frames,
 
 
 @njit(cache=True, error_model="numpy")
-def _cast(origin, direction, rad, top, every, com, angle, sid, box, pk_kind, pk_radius, pk_bounds,
-          vstart, vcount, verts, cstart, ccount, code, consts, shift, depth, nesting, g_lo, h,
-          g_shape, g_start, g_list, big, out_body, out_t, out_n, out_ray):
-    """Closest hit per ray (every = False: into out_body (N,), out_t (N,), out_n (N, 2),
-    out_ray unused) or every hit (every = True: rows of out_*, out_ray the ray; returns
-    the count, rows beyond the capacity counted, not written). See the module docstring.
+def _cast(origin, direction, rad, top, every, com, angle, sid, box, shapes, grid):
+    """Closest hit per ray (every = False) or every hit (every = True) of the rays
+    origin + t direction (N, 2) (unit directions), 0 <= t <= top, of discs of radius rad
+    (m; 0: rays), on the bodies (com (B, 2) m, angle (B,) rad, sid (B,) int64 their shapes
+    in ``shapes``, a ``ShapeTables``, box (B, 4) m their world AABBs grown by rad) of
+    ``grid`` (``queries._grid``'s tuple: origin, cell, shape, start, list, big).
+
+    Returns (body (H,) int64, t (H,) m, normal (H, 2) unit, ray (H,) int64, count):
+    closest: one row per ray (body -1 and t nan for none), ray empty; every: the first
+    ``count`` rows, one per hit. See the module docstring.
     """
+    if not every:
+        n = origin.shape[0]
+        out_body, out_t, out_n = np.empty(n, np.int64), np.empty(n), np.empty((n, 2))
+        out_ray = np.empty(0, np.int64)
+        count = _cast_into(origin, direction, rad, top, False, com, angle, sid, box, shapes,
+                           grid, out_body, out_t, out_n, out_ray)
+        return out_body, out_t, out_n, out_ray, count
+    size = 4 * origin.shape[0] + 16
+    while True:
+        out_body, out_t = np.empty(size, np.int64), np.empty(size)
+        out_n, out_ray = np.empty((size, 2)), np.empty(size, np.int64)
+        count = _cast_into(origin, direction, rad, top, True, com, angle, sid, box, shapes,
+                           grid, out_body, out_t, out_n, out_ray)
+        if count <= size:
+            return out_body, out_t, out_n, out_ray, count
+        size = count
+
+
+@njit(cache=True, error_model="numpy")
+def _cast_into(origin, direction, rad, top, every, com, angle, sid, box, shapes, grid,
+               out_body, out_t, out_n, out_ray):
+    """``_cast`` into out_body (N,), out_t (N,), out_n (N, 2) (every = False; out_ray
+    unused) or into their rows and out_ray's (every = True; returns the count, rows
+    beyond the capacity counted, not written)."""
+    g_lo, h, g_shape, g_start, g_list, big = grid
+    pk_kind = shapes.kind
+    tables = _Shapes(shapes.kind, shapes.radius, shapes.bounds, shapes.vstart, shapes.vcount,
+                     shapes.vertices, shapes.cstart, shapes.ccount, shapes.code, shapes.consts,
+                     shapes.shift)
     n_bodies = com.shape[0]
     stamp = np.full(n_bodies, -1, np.int64)
     cosine, sine = np.empty(n_bodies), np.empty(n_bodies)
     for b in range(n_bodies):              # once per body, not per (ray, body) test
         cosine[b], sine[b] = math.cos(angle[b]), math.sin(angle[b])
-    pt = np.empty((1, 2))
-    stack = np.empty((depth, 1, 3))
-    frames = np.empty((nesting, 1, 2))
-    cur = np.empty((1, 2))
-    value = np.empty(1)
-    grad = np.empty((1, 2))
+    work = _ProgramWork(np.empty((1, 2)), np.empty((shapes.depth, 1, 3)),
+                        np.empty((shapes.nesting, 1, 2)), np.empty((1, 2)), np.empty(1),
+                        np.empty((1, 2)))
     capacity = out_t.shape[0]
     count = 0
     nx_cells, ny_cells = g_shape[0], g_shape[1]
@@ -385,9 +493,7 @@ def _cast(origin, direction, rad, top, every, com, angle, sid, box, pk_kind, pk_
                 if a0 > a1:
                     continue
                 t, nx, ny = _hit(body, ox, oy, dx, dy, rad, best if not every else top, com,
-                                 cosine, sine, sid, pk_kind, pk_radius, pk_bounds, vstart, vcount,
-                                 verts, cstart, ccount, code, consts, shift, pt, stack, frames,
-                                 cur, value, grad)
+                                 cosine, sine, sid, tables, work)
                 if t == math.inf:
                     continue
                 if every:
@@ -437,27 +543,13 @@ def cast(world, origins: Any, directions: Any, max_distance: Any = math.inf,
     angle = np.ascontiguousarray(world._view("angle"))
     sid = np.ascontiguousarray(world._view("shape_id"))
     box = world_bounds(pk.bounds[sid], pk.radius[sid], com, angle, rad)
-    g_lo, h, g_shape, g_start, g_list, big = _grid(box, keep)
-    args = (com, angle, sid, box, pk.kind, pk.radius, pk.bounds, pk.vstart, pk.vcount,
-            pk.vertices, pk.cstart, pk.ccount, pk.code, pk.consts, pk.shift, pk.depth,
-            pk.nesting, g_lo, h, g_shape, g_start, g_list, big)
+    body, t, normal, ray, count = _cast(o, d, rad, top, every, com, angle, sid, box,
+                                       _shape_tables(world, pk), _grid(box, keep))
     if not every:
-        body = np.empty(len(o), np.int64)
-        t = np.empty(len(o))
-        normal = np.empty((len(o), 2))
-        _cast(o, d, rad, top, False, *args, body, t, normal, np.empty(0, np.int64))
         point = o + t[:, None] * d
         if rad > 0.0:
             point -= rad * normal
         return RayHits(body, point, normal, t)
-    size = 4 * len(o) + 16
-    while True:
-        body, t = np.empty(size, np.int64), np.empty(size)
-        normal, ray = np.empty((size, 2)), np.empty(size, np.int64)
-        count = _cast(o, d, rad, top, True, *args, body, t, normal, ray)
-        if count <= size:
-            break
-        size = count
     order = np.lexsort((body[:count], t[:count], ray[:count]))
     body, t, normal, ray = body[order], t[order], normal[order], ray[order]
     point = o[ray] + t[:, None] * d[ray]

@@ -353,3 +353,25 @@ def test_bad_input_raises_one_line_naming_the_argument(call, message):
     assert message in str(error.value)
     assert "\n" not in str(error.value)
 
+
+
+def test_the_ray_kernel_s_shape_tables_hold_the_packing_in_order_and_are_kept():
+    """``rays._shape_tables_of`` lists SHAPE_FIELDS by hand (compiled, cached), the
+    fields of ``queries._Packed``; the bundle is made once per packing and made anew
+    when a shape is added."""
+    import dataclasses
+    import inspect
+
+    from sdfphys import queries, rays
+
+    assert tuple(inspect.signature(rays._shape_tables_of.py_func).parameters) == \
+        rays.SHAPE_FIELDS
+    assert rays.SHAPE_FIELDS == tuple(f.name for f in dataclasses.fields(queries._Packed))
+    world = World()
+    world.add_body({"type": "circle", "radius": 0.5}, position=(0.0, 0.0))
+    first = rays._shape_tables(world, queries._packed(world))
+    assert rays._shape_tables(world, queries._packed(world)) is first
+    world.add_body({"type": "box", "size": [1.0, 1.0]}, position=(3.0, 0.0))
+    assert rays._shape_tables(world, queries._packed(world)) is not first
+    hits = world.ray_cast([[-2.0, 0.0], [5.0, 0.0]], [[1.0, 0.0], [-1.0, 0.0]])
+    np.testing.assert_array_equal(hits.body, [0, 1])
