@@ -232,3 +232,14 @@ def test_copies_step_on_as_the_original_and_edits_forget():
     assert len(w._contact_cache) == 0
     w.step()
     assert w.contacts.body_b.max() <= 2
+
+
+def test_the_kernels_take_the_kept_arrays_in_their_named_order():
+    """``ContactCache.kept`` is the kept arrays themselves, in ``KEPT`` order."""
+    from sdfphys.collide.contact_cache import KEPT, ContactCache
+
+    cache = ContactCache()
+    cache._set(*(np.full(3, float(i)) for i in range(len(KEPT))))
+    assert len(cache.kept) == len(KEPT)
+    for name, array in zip(KEPT, cache.kept):
+        assert array is getattr(cache, name)

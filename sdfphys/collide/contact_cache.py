@@ -51,7 +51,7 @@ from .._jit import njit
 from ..settings import Settings
 from .contacts import Contacts
 
-__all__ = ["ContactCache", "body_turns"]
+__all__ = ["BODIES", "KEPT", "ContactCache", "body_turns"]
 
 _SHIFT = np.int64(32)
 
@@ -79,6 +79,14 @@ def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
     return offset + np.arange(total, dtype=np.int64)
 
 
+#: The kept arrays' order in ``ContactCache.kept`` (the class docstring gives them).
+KEPT = ("key", "shape", "ref_is_lo", "relative", "margin", "first", "on_ref", "on_other",
+        "normal", "feature")
+#: The bodies' arrays the kernels take, in order: pose (B, 3), cos, sin, cos_neg, sin_neg
+#: (B,) (``body_turns``), radius (B,) m, round_ (B,) bool, body_shape (B,) int64.
+BODIES = ("pose", "cos", "sin", "cos_neg", "sin_neg", "radius", "round_", "body_shape")
+
+
 class ContactCache:
     """One world's kept contacts of the descent pairs (module docstring).
 
@@ -90,7 +98,9 @@ class ContactCache:
     kept contact (K,): on_ref, on_other (K, 2) the surface points of the reference
     body and of the other in their body frames (m), normal (K, 2) unit in the
     reference's frame from lo toward hi, feature (K,) int64. The loops over pairs and
-    contacts are compiled (``_carry``, ``_merged``).
+    contacts are compiled (``_carry``, ``_merged``), which take these ten arrays as one
+    tuple, ``kept`` (``KEPT``: the order), and the bodies' arrays as another,
+    ``bodies`` (``BODIES``).
     """
 
     def __init__(self) -> None:
@@ -109,6 +119,13 @@ class ContactCache:
         self.margin, self.first = margin, first
         self.on_ref, self.on_other, self.normal, self.feature = on_ref, on_other, normal, \
             feature
+
+    @property
+    def kept(self) -> tuple[np.ndarray, ...]:
+        """The kept arrays as the kernels take them, in ``KEPT`` order (a plain tuple:
+        numba types it in its C fast path, a named tuple through Python)."""
+        return (self.key, self.shape, self.ref_is_lo, self.relative, self.margin, self.first,
+                self.on_ref, self.on_other, self.normal, self.feature)
 
     def __len__(self) -> int:
         return len(self.key)
@@ -144,9 +161,8 @@ class ContactCache:
             self.clear()
             self.settings = settings
         reused, kept, lo, hi, point, normal, depth = _carry(
-            self.key, self.shape, self.ref_is_lo, self.relative, self.margin, self.first,
-            self.on_ref, self.on_other, self.normal, np.ascontiguousarray(pairs, np.int64),
-            pose, *turns, radius, round_, body_shape, margin, float(tau))
+            self.kept, np.ascontiguousarray(pairs, np.int64),
+            (pose, *turns, radius, round_, body_shape), margin, float(tau))
         self._keep(kept)
         return reused, Contacts(lo, hi, point, normal, depth, self.feature.copy())
 
@@ -164,10 +180,9 @@ class ContactCache:
         rows = np.argsort(row_key, kind="stable")
         c = contacts.take(rows)
         self._set(*_merged(
-            self.key, self.shape, self.ref_is_lo, self.relative, self.margin, self.first,
-            self.on_ref, self.on_other, self.normal, self.feature, key[by_key], lo[by_key],
-            hi[by_key], found_margin[by_key], row_key[rows], c.point, c.normal, c.depth,
-            c.feature, pose, *turns, radius, round_, body_shape))
+            self.kept, (key[by_key], lo[by_key], hi[by_key], found_margin[by_key]),
+            (row_key[rows], c.point, c.normal, c.depth, c.feature),
+            (pose, *turns, radius, round_, body_shape)))
 
 
 def body_turns(pose: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -187,15 +202,16 @@ def _reference(lo: int, hi: int, radius: np.ndarray, round_: np.ndarray) -> bool
 
 
 @njit(cache=True, error_model="numpy")
-def _carry(key, shape, ref_is_lo, relative, margin, first, on_ref, on_other, normal, pairs,
-           pose, cos, sin, cos_neg, sin_neg, radius, round_, body_shape, pair_margin, tau):
-    """``ContactCache.reuse`` over the kept arrays (the class docstring's names).
+def _carry(kept, pairs, bodies, pair_margin, tau):
+    """``ContactCache.reuse`` over the kept arrays.
 
-    pairs (P, 2), pose (B, 3), cos, sin, cos_neg, sin_neg (B,) (``body_turns``), radius,
-    round_, body_shape (B,), pair_margin (P,), tau: as ``reuse``. Returns reused (P,),
-    kept (N,) bool (the kept pairs reused), and per contact of those, in the kept
-    order: lo, hi (K,), point, normal (K, 2), depth (K,).
+    kept: ``ContactCache.kept`` (``KEPT``); pairs (P, 2); bodies: ``BODIES``; pair_margin
+    (P,), tau: as ``reuse``. Returns reused (P,), kept (N,) bool (the kept pairs
+    reused), and per contact of those, in the kept order: lo, hi (K,), point, normal
+    (K, 2), depth (K,).
     """
+    key, shape, ref_is_lo, relative, margin, first, on_ref, on_other, normal, _ = kept
+    pose, cos, sin, cos_neg, sin_neg, radius, round_, body_shape = bodies
     n_kept = key.shape[0]
     reused = np.zeros(pairs.shape[0], dtype=np.bool_)
     kept = np.zeros(n_kept, dtype=np.bool_)
@@ -259,13 +275,16 @@ def _carry(key, shape, ref_is_lo, relative, margin, first, on_ref, on_other, nor
 
 
 @njit(cache=True, error_model="numpy")
-def _merged(key, shape, ref_is_lo, relative, margin, first, on_ref, on_other, normal,
-            feature, new_key, new_lo, new_hi, new_margin, row_key, point, row_normal, depth,
-            row_feature, pose, cos, sin, cos_neg, sin_neg, radius, round_, body_shape):
-    """``ContactCache.store``: the kept arrays (the class docstring's names) merged with
-    the pairs just searched, new_key, new_lo, new_hi, new_margin (P,) sorted by key,
-    and their contacts sorted by pair key: row_key (K,), point, row_normal (K, 2), depth,
-    row_feature (K,) (body_a < body_b). Returns the arrays of ``ContactCache._set``."""
+def _merged(kept, searched, found, bodies):
+    """``ContactCache.store``: the kept arrays (``kept``: ``KEPT``) merged with the pairs
+    just searched, ``searched`` = (new_key, new_lo, new_hi, new_margin) (P,) sorted by
+    key, and their contacts, ``found`` = (row_key (K,), point, row_normal (K, 2), depth,
+    row_feature (K,)) sorted by pair key (body_a < body_b). bodies: ``BODIES``. Returns
+    the arrays of ``ContactCache._set``."""
+    key, shape, ref_is_lo, relative, margin, first, on_ref, on_other, normal, feature = kept
+    new_key, new_lo, new_hi, new_margin = searched
+    row_key, point, row_normal, depth, row_feature = found
+    pose, cos, sin, cos_neg, sin_neg, radius, round_, body_shape = bodies
     n_old, n_new, n_rows = key.shape[0], new_key.shape[0], row_key.shape[0]
     n_all = n_old + n_new
     k_all = on_ref.shape[0] + n_rows
