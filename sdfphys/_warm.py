@@ -30,9 +30,12 @@ import os
 import pickle
 import signal
 import threading
+from collections.abc import Callable
 from typing import Any
 
-__all__ = ["CHILD_SECONDS", "STOP_SECONDS", "start", "stop"]
+import numpy as np
+
+__all__ = ["CHILD_SECONDS", "STOP_SECONDS", "placeholder_world", "start", "start_early", "stop"]
 
 _started = False
 #: The child's pid while it may run (``stop``).
@@ -62,6 +65,48 @@ def start(world: Any) -> int | None:
     """Fork the compiling child for ``world`` if this process has not yet, the machine has
     two cores or more, the platform forks, it is not turned off and the cache is cold.
     Returns the child's pid (None: no child)."""
+    return _fork(lambda: world)
+
+
+def start_early(scene: Any) -> int | None:
+    """Fork the compiling child before ``scene`` builds its world, when some of its SDF
+    bodies will integrate their mass properties then (``start``'s conditions apply).
+
+    That quadrature evaluates the fields, so the parent compiles the field evaluator
+    (``sdf.compiled.run`` and its primitive kernels, about 8 s) while it builds the
+    world, before ``start`` would fork. The child builds its own world with placeholder
+    masses (``placeholder_world``) and compiles ahead as ``start``'s does, while the
+    parent compiles the evaluator."""
+    from .shapes import SdfShape
+
+    if not any(isinstance(b.shape, SdfShape) and b.shape.bounded
+               and "_mass" not in b.shape.__dict__ for b in scene.bodies):
+        return None
+    return _fork(lambda: placeholder_world(scene))
+
+
+def placeholder_world(scene: Any) -> Any:
+    """``scene``'s world with no field evaluated: its SDF shapes' mass properties and its
+    SDF and mesh shapes' core radii set from their bounds' boxes (the kernels' argument
+    types are the same; their values do not matter to the compiling child). The values
+    stay on the scene's shapes, which equal specs share: only for a process that
+    leaves after (the child)."""
+    from .shapes import SdfShape, TriangleMesh
+
+    for shape in {id(b.shape): b.shape for b in scene.bodies}.values():
+        if isinstance(shape, SdfShape) and shape.bounded and "_mass" not in shape.__dict__:
+            x0, y0, x1, y1 = shape._user_bounds
+            w, h = x1 - x0, y1 - y0
+            shape.__dict__["_mass"] = (w * h, np.array([0.5 * (x0 + x1), 0.5 * (y0 + y1)]),
+                                       w * h * (w * w + h * h) / 12.0)
+        if isinstance(shape, (SdfShape, TriangleMesh)) and shape.bounded:
+            x0, y0, x1, y1 = shape.bounds()
+            shape.__dict__["core_radius"] = 0.5 * min(x1 - x0, y1 - y0)
+    return scene.build()
+
+
+def _fork(make_world: Callable[[], Any]) -> int | None:
+    """``start``'s fork: the child compiles ahead for ``make_world()``, its own world."""
     global _started, _child
     if _started:
         return None
@@ -82,7 +127,7 @@ def start(world: Any) -> int | None:
             os.environ["SDFPHYS_COMPILE_NOTICE"] = "0"
             from .world_stages import compile_ahead
 
-            compile_ahead(world)
+            compile_ahead(make_world())
         finally:
             os._exit(0)
     _child = pid

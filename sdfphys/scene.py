@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -130,9 +129,11 @@ class Scene:
 
     def build(self):
         """A fresh World with every body added in scene order."""
+        from . import _warm
         from .world import World
         from .world_bodies import add
 
+        _warm.start_early(self)     # before the SDF bodies' quadratures compile the fields
         world = World(gravity=self.gravity, settings=self.settings)
         for b in self.bodies:
             values = BodyValues(*b[2:11], 0.0, 0.0, *b[11:])
@@ -377,7 +378,7 @@ def _parse_carves(carves: Any, bodies: list[BodySpec], index: dict[str, int],
         if target.kind == "dynamic" and deposit:
             raise SpecError(f"{path}.body", f"body {target.name!r} is dynamic: only static "
                                             "and kinematic bodies take deposits")
-        if not math.isfinite(target.shape.radius):
+        if not target.shape.bounded:
             raise SpecError(f"{path}.body", f"body {target.name!r} is unbounded (e.g. a "
                                             "half-plane): only a bounded field can be carved")
         carved = build_field(_image_paths(table["field"], base), f"{path}.field")
@@ -454,7 +455,7 @@ def _parse_body(data: Any, i: int, base: Path | None = None) -> BodySpec:
     if isinstance(shape, Mapping) and shape.get("type") == "sdf":     # may hold an image
         shape = _image_paths(shape, base)
     shape = shape_from_spec(shape, f"{path}.shape")
-    if kind == "dynamic" and not math.isfinite(shape.radius):
+    if kind == "dynamic" and not shape.bounded:       # (no quadrature while parsing)
         raise SpecError(f"{path}.shape", "an unbounded shape (e.g. a half-plane) must be static")
     if "density" in body and "mass" in body:
         raise SpecError(f"{path}.mass", "give density or mass, not both")

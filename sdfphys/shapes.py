@@ -68,6 +68,8 @@ class Shape:
 
     kind: str = ""
     spec: dict
+    #: Whether the region f <= 0 is bounded (known without the mass properties).
+    bounded: bool = True
 
     @property
     def field(self) -> Field:
@@ -98,7 +100,7 @@ class Shape:
         """Body-frame AABB ``[xmin, ymin, xmax, ymax]`` (4,) of the region f <= 0."""
         raise NotImplementedError
 
-    @property
+    @cached_property
     def core_radius(self) -> float:
         """-f at the centre of mass, metres: the radius of the largest disc about it
         inside the shape (negative when the centre of mass is outside)."""

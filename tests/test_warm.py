@@ -49,3 +49,48 @@ def test_no_child_when_turned_off():
     """SDFPHYS_WARM=0: no fork, whatever the cache holds."""
     out = _probe(SDFPHYS_WARM="0")
     assert out[1:3] == ["False", "True"]
+
+
+EARLY = """
+import sdfphys
+from sdfphys import _warm
+from sdfphys.scene import read_scene
+from sdfphys.sdf import base
+
+calls = []
+evaluate = base._EVALUATOR[0]
+base._EVALUATOR[0] = lambda *a, **k: calls.append(1) or evaluate(*a, **k)
+scene = read_scene("scenes/showcase.toml")
+parsed = len(calls)
+world = _warm.placeholder_world(scene)
+print(parsed, len(calls), len(world), len(scene.bodies))
+"""
+
+
+def test_the_early_child_s_world_evaluates_no_field():
+    """A scene's parse integrates no SDF body's mass (so ``start_early`` can fork before
+    the quadratures compile the field evaluator), and the child's placeholder world is
+    built without evaluating a field: every body is there."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = subprocess.run([sys.executable, "-c", EARLY], capture_output=True, text=True,
+                         check=True, timeout=900, cwd=root,
+                         env={**os.environ, "SDFPHYS_COMPILE_NOTICE": "0"}).stdout.split()
+    assert out[:2] == ["0", "0"] and out[2] == out[3] and int(out[2]) > 30
+
+
+def test_the_early_child_only_while_sdf_masses_are_unknown(monkeypatch):
+    from sdfphys import _warm
+    from sdfphys.scene import read_scene
+
+    forks = []
+    monkeypatch.setattr(_warm, "_fork", lambda make_world: forks.append(make_world))
+    scene = read_scene({"version": 1, "body": [{"shape": {"type": "sdf", "field": {
+        "type": "circle", "radius": 0.3125}}}]})
+    scene.build()                               # forks (here: recorded), then integrates
+    assert len(forks) == 1
+    _warm.start_early(scene)                    # the mass is known now: no child
+    scene.build()
+    assert len(forks) == 1
+    boxes = read_scene({"version": 1, "body": [{"shape": {"type": "box", "size": [1, 1]}}]})
+    boxes.build()                               # nothing to integrate: no early child
+    assert len(forks) == 1
