@@ -304,7 +304,7 @@ def test_ellipse_near_its_axes_and_evolute():
 
 def test_ellipse_newton_from_the_bracket_agrees_with_the_bracketed_solver(monkeypatch):
     """Most points skip the bisections: Newton steps from the bracket's low end that
-    settle (``primitive_kernels._SETTLED``) have reached the root; their distances agree
+    settle (``ellipse_kernel._SETTLED``) have reached the root; their distances agree
     with the bracketed solver's (every point forced through it, ``_SETTLED = -1``, in
     the numpy oracle, whose answers ``_check`` holds the compiled kernel to) to 4 ulps
     (measured 3), the gradients to 1e-10 (measured 6e-13, near the evolute's cusps);

@@ -92,6 +92,7 @@ from ..vec2 import TINY
 from . import conics, curved, folded, grid, operators, polygonal
 from .base import _EVALUATOR, Field, safe_normalize
 from .blend_kernels import _smooth_min
+from .ellipse_kernel import _ellipse
 from .opcodes import (
     ARC,
     BLEND_INDEX,
@@ -134,7 +135,7 @@ from .opcodes import (
     VESICA,
     XOR,
 )
-from .primitive_kernels import _box, _ellipse, _polygon, _segment, _shape
+from .primitive_kernels import _box, _polygon, _segment, _shape
 
 __all__ = ["RUN_RESULT", "RUN_TYPES", "Program", "compile_field", "distance", "evaluate",
            "field_program", "run", "run_shared", "scratch"]

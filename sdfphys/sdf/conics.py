@@ -149,7 +149,7 @@ class Ellipse(Field):
     """Axis-aligned ellipse of full ``size`` [w, h] centred at the origin, exact.
 
     The closest point is found to round-off by a fixed-count solver
-    (``primitive_kernels._ellipse``, Eberly's);
+    (``ellipse_kernel._ellipse``, Eberly's);
     the gradient is the outward normal there, (x/a^2, y/b^2) normalized, also
     for inside points. At the centre it is (0, +-1) towards the nearer vertex
     ((1, 0) for a circle).

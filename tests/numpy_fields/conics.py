@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from sdfphys.sdf.base import as_points
-from sdfphys.sdf.primitive_kernels import _BISECTIONS, _FAST_NEWTON, _NEWTON, _SETTLED
+from sdfphys.sdf.ellipse_kernel import _BISECTIONS, _FAST_NEWTON, _NEWTON, _SETTLED
 from sdfphys.vec2 import rows_dot, rows_unit_or
 
 from .curved import _DOWN, _LEFT, _RIGHT, _UP, _fold_x, _norm, _pick, _unfold
