@@ -73,10 +73,11 @@ __all__ = ["PROBLEM_FIELDS", "WORK_FIELDS", "DescentProblem", "DescentWork", "de
 
 @njit(cache=True, error_model="numpy")
 def _grown(rows: np.ndarray, n: int) -> np.ndarray:
-    """``rows`` if it has at least n rows, else a new (max(n, 2 len), width) array."""
+    """``rows`` if it has at least n rows, else a new array of max(n, 2 len) rows of the
+    same width (1-D or 2-D)."""
     if rows.shape[0] >= n:
         return rows
-    return np.empty((max(n, 2 * rows.shape[0]), rows.shape[1]), dtype=rows.dtype)
+    return np.empty((max(n, 2 * rows.shape[0]),) + rows.shape[1:], dtype=rows.dtype)
 
 
 #: Points per field evaluation inside ``_evaluate``: the program's work arrays stay in
@@ -177,14 +178,6 @@ def descent_work(rows: int = 64) -> DescentWork:
 
 
 @njit(cache=True, error_model="numpy")
-def _grown_running(running: np.ndarray, n: int) -> np.ndarray:
-    """``running`` if it has at least n entries, else a new (max(n, 2 len),) array."""
-    if running.shape[0] >= n:
-        return running
-    return np.empty(max(n, 2 * running.shape[0]), dtype=running.dtype)
-
-
-@njit(cache=True, error_model="numpy")
 def _evaluate(problem, points: np.ndarray, pair: np.ndarray, n: int, phi: np.ndarray,
               grad: np.ndarray, data: np.ndarray) -> None:
     """The problem at points[:n] (of pairs pair[:n], PAIR): phi, grad phi, data rows.
@@ -276,7 +269,7 @@ def _rounds(problem, points: np.ndarray, phi: np.ndarray, grad: np.ndarray, data
     n_points = points.shape[0]
     work.state = _grown(work.state, n_points)
     work.flags = _grown(work.flags, n_points)
-    work.running = _grown_running(work.running, n_points)
+    work.running = _grown(work.running, n_points)
     state, flags, running = work.state[:n_points], work.flags[:n_points], work.running
     cand, cand_i, candidates = work.cand, work.cand_i, work.candidates
     least = np.inf

@@ -370,7 +370,8 @@ def field_program(f: Field, inherited: bool = False) -> Program:
     ``f`` (attributes ``_compiled_program``, ``_inherited_program``), so shared fields
     compile once.
     """
-    inherited = inherited and _kind(f) is not _kind(f, True)
+    kind = type(f)                      # the inherited program differs for an override
+    inherited = inherited and kind not in _COMPILED and kind.evaluate is not Field.evaluate
     name = "_inherited_program" if inherited else "_compiled_program"
     cached = f.__dict__.get(name) if hasattr(f, "__dict__") else None
     if cached is not None:
