@@ -70,6 +70,15 @@ def rows() -> list[Row]:
                 Row(case, "deepest contact", "penetration", stacking.NOT_SUNK,
                     lambda b=base: stacking.ours_pyramid(b),
                     lambda b=base: stacking.pymunk_pyramid(b))]
+    wide = stacking.SYMMETRY_BASE
+    case = (f"pyramid of base {wide} ({wide * (wide + 1) // 2} boxes), "
+            f"{stacking.SYMMETRY_SECONDS:g} s")
+    out += [Row(case, "mean horizontal displacement", "lean", stacking.SYMMETRIC,
+                stacking.ours_pyramid_symmetry, stacking.pymunk_pyramid_symmetry,
+                stacking.box2d_pyramid_symmetry),
+            Row(case, "fastest box at the end", "speed", stacking.SETTLED,
+                stacking.ours_pyramid_symmetry, stacking.pymunk_pyramid_symmetry,
+                stacking.box2d_pyramid_symmetry)]
     out += [Row(f"base-5 pyramid of {side:g} m boxes, 10 s", "largest displacement / side",
                 "relative", stacking.STANDS_RELATIVE,
                 lambda s=side: stacking.ours_scaled_pyramid(s),

@@ -120,6 +120,18 @@ def pyramid_cells(base: int, side: float) -> list[tuple[float, float]]:
             for row in range(base) for i in range(base - row)]
 
 
+def b2_ground_world():
+    """A Box2D v3 world (pyb2d3, imported here: a ``[bench]`` extra) with ``ground_world``'s
+    ground, 200 m wide, top face y = 0, sleeping off; (world, ground body)."""
+    import pyb2d3 as b2
+
+    world = b2.World(gravity=(0.0, -G))
+    world.sleeping_enabled = False
+    ground = world.create_static_body(position=(0.0, -10.0))
+    ground.create_polygon_shape(b2.shape_def(), b2.box(100.0, 10.0))
+    return world, ground
+
+
 def pm_space(gravity: float = -G) -> pymunk.Space:
     """A pymunk Space at its defaults with vertical ``gravity`` (m/s^2)."""
     space = pymunk.Space()

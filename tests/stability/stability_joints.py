@@ -19,7 +19,16 @@ from pathlib import Path
 
 import numpy as np
 import pymunk
-from stability_common import DT, Bound, G, advance, ground_world, pm_ground, pm_space, pm_steps
+from stability_common import (
+    DT,
+    Bound,
+    advance,
+    b2_ground_world,
+    ground_world,
+    pm_ground,
+    pm_space,
+    pm_steps,
+)
 
 from sdfphys.world import World
 
@@ -109,17 +118,6 @@ def pymunk_heavy_chain() -> dict[str, float]:
     return {"gap": worst, "hanging": gap(hanging)}
 
 
-def _b2_world():
-    """A Box2D v3 world with the ground (top face y = 0), sleeping off; (world, ground)."""
-    import pyb2d3 as b2
-
-    world = b2.World(gravity=(0.0, -G))
-    world.sleeping_enabled = False
-    ground = world.create_static_body(position=(0.0, -10.0))
-    ground.create_polygon_shape(b2.shape_def(), b2.box(100.0, 10.0))
-    return world, ground
-
-
 def _b2_revolute(world, a, b, anchor, limits=None):
     """A revolute joint of ``a`` and ``b`` at world ``anchor``; (a, b, local anchors)."""
     import pyb2d3 as b2
@@ -143,7 +141,7 @@ def box2d_heavy_chain() -> dict[str, float]:
     import pyb2d3 as b2
 
     def build(hanging: bool):
-        world, previous = _b2_world()
+        world, previous = b2_ground_world()
         joints = []
         for i, (centre, angle, anchor) in enumerate(_chain_layout(hanging)):
             body = world.create_dynamic_body(position=centre, rotation=angle)
@@ -237,7 +235,7 @@ def pymunk_ragdoll() -> dict[str, float]:
 def box2d_ragdoll() -> dict[str, float]:
     import pyb2d3 as b2
 
-    world, _ = _b2_world()
+    world, _ = b2_ground_world()
     bodies, joints = _ragdoll()
     made = {}
     for b in bodies:

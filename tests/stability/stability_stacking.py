@@ -22,6 +22,7 @@ from stability_common import (
     Bound,
     G,
     advance,
+    b2_ground_world,
     ground_world,
     pm_box,
     pm_deepest,
@@ -46,6 +47,12 @@ STANDS_RELATIVE = Bound(0.05, "", "STANDS in units of the box side")
 SAME_FAR_AWAY = Bound(1e-3, "m", "the issue: relative positions within 1e-3 m")
 #: Resting stacks come to rest.
 AT_REST = Bound(1e-3, "m/s", "the issue: speeds below 1 mm/s")
+#: A symmetric pyramid on level ground stays symmetric: the mean horizontal displacement of
+#: its boxes stays under this.
+SYMMETRIC = Bound(0.005, "m", "one linear slop: by symmetry the mean is zero")
+#: A big pyramid settles: its fastest box at the end is slower than this.
+SETTLED = Bound(0.05, "m/s", "Settings.sleep_speed (Box2D v3's sleep threshold): it could "
+                             "fall asleep")
 
 RATIO_SECONDS = 5.0
 
@@ -185,6 +192,61 @@ def ours_pyramid(base: int, seconds: float = PYRAMID_SECONDS) -> dict[str, float
         penetration = max([penetration, *world.contacts.depth.tolist()])
     return {"top": float(np.linalg.norm(world.position[-1] - start)),
             "penetration": penetration}
+
+
+SYMMETRY_BASE = 50
+SYMMETRY_SECONDS = 3.0
+
+
+@cache
+def ours_pyramid_symmetry(base: int = SYMMETRY_BASE,
+                          seconds: float = SYMMETRY_SECONDS) -> dict[str, float]:
+    """A pyramid of unit boxes (``base`` in its bottom row), sleeping off, ``seconds`` s.
+
+    lean: the mean horizontal displacement of its boxes at the end, absolute (m: the
+    pyramid's shift to either side); speed: the fastest box's speed at the end (m/s).
+    """
+    world = ground_world(width=4.0 * base + 20.0)
+    for x, y in pyramid_cells(base, 1.0):
+        world.add_body(UNIT_BOX, position=(x, y), friction=MU)
+    start = world.position[1:, 0].copy()
+    for _ in advance(world, round(seconds / DT)):
+        pass
+    return {"lean": abs(float(np.mean(world.position[1:, 0] - start))),
+            "speed": float(np.linalg.norm(world.velocity, axis=1).max())}
+
+
+@cache
+def pymunk_pyramid_symmetry(base: int = SYMMETRY_BASE,
+                            seconds: float = SYMMETRY_SECONDS) -> dict[str, float]:
+    """The same case in pymunk."""
+    space = pm_space()
+    pm_ground(space, width=4.0 * base + 20.0)
+    boxes = [pm_box(space, (1, 1), c) for c in pyramid_cells(base, 1.0)]
+    start = np.array([b.position.x for b in boxes])
+    for _ in pm_steps(space, round(seconds / DT)):
+        pass
+    return {"lean": abs(float(np.mean([b.position.x for b in boxes] - start))),
+            "speed": max(float(abs(b.velocity)) for b in boxes)}
+
+
+@cache
+def box2d_pyramid_symmetry(base: int = SYMMETRY_BASE,
+                           seconds: float = SYMMETRY_SECONDS) -> dict[str, float]:
+    """The same case in Box2D v3 at its defaults (4 substeps, sleeping off)."""
+    import pyb2d3 as b2
+
+    world, _ = b2_ground_world()
+    boxes = []
+    for c in pyramid_cells(base, 1.0):
+        body = world.create_dynamic_body(position=c)
+        body.create_polygon_shape(b2.shape_def(density=1.0), b2.box(0.5, 0.5))
+        boxes.append(body)
+    start = np.array([b.position[0] for b in boxes])
+    for _ in range(round(seconds / DT)):
+        world.step(DT, 4)
+    return {"lean": abs(float(np.mean([b.position[0] for b in boxes] - start))),
+            "speed": max(float(np.hypot(*b.linear_velocity)) for b in boxes)}
 
 
 @cache
