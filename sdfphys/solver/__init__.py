@@ -25,9 +25,11 @@ an impulse lambda along n pushes b by +lambda n and a by -lambda n. Accumulated
 impulses are per substep (N s): the warm start applies them once per substep.
 
 The sweeps are sequential Gauss-Seidel loops over the contacts in their given order
-(sorted by (body_a, body_b, feature): deterministic), compiled with numba
-(``cache=True``); docs/solver.md measures why this beats coloured numpy batches. Static and
-kinematic bodies take part through their zero inverse mass and inertia: impulses leave
+(sorted by (body_a, body_b, feature): deterministic; an island over rest_island_limit
+is swept in reverse in two substeps of every four, ``substeps``' "Sweep order"),
+compiled with numba (``cache=True``); docs/solver.md measures why this beats coloured
+numpy batches. Static and kinematic bodies take part through their zero inverse mass
+and inertia: impulses leave them as they are.
 
 Modules: ``softness`` (soft constraint coefficients, loaded islands: ``row_softness``),
 ``rows`` (the body state and the prepared contact rows: ``prepare_contacts``,

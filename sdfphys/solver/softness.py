@@ -359,8 +359,10 @@ def row_softness_params(settings: Settings, gravity: np.ndarray) -> RowSoftnessP
 @njit(cache=True)
 def _row_softness_kernel(inv_mass, moving, rows, params):
     """Fill the rows' coefficients bias_rate, mass_scale, impulse_scale (K,); returns
-    the loaded pairs (L,) int64 (indices into pair_start, in order) and their extra
-    passes per phase, at most (L,) int64.
+    the loaded pairs (L,) int64 (indices into pair_start, in order), their extra
+    passes per phase, at most (L,) int64, and whether each pair (P,) bool belongs to an
+    island of more than rest_limit dynamic bodies (one pass per phase, whatever else
+    holds: ``substeps``, "Sweep order").
 
     inv_mass: (B,) 1/kg. moving: (B,) bool, bodies faster than REST_SPEED (their islands
     are not at rest). rows: ``bundles.SubstepRows`` (separation (K,) m at the start of
@@ -454,10 +456,12 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
             touched[a] = True
     count = 0
     loaded = np.empty((2, 3))
+    large = np.zeros(n_pairs, np.bool_)
     for p in range(n_pairs):
         first = pair_start[p]
         a = body_a[first]
         b = body_b[first]
+        large[p] = size[root[b] if inv_mass[a] == 0.0 else root[a]] > rest_limit
         hot_a = inv_mass[a] > 0.0 and hot[root[a]] and size[root[a]] <= largest[root[a]]
         hot_b = inv_mass[b] > 0.0 and hot[root[b]] and size[root[b]] <= largest[root[b]]
         r = 1.0
@@ -498,7 +502,7 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
                 known |= 1 << j
             bias_rate[k], mass_scale[k], impulse_scale[k] = \
                 loaded[j, 0], loaded[j, 1], loaded[j, 2]
-    return loaded_pairs[:count], passes[:count]
+    return loaded_pairs[:count], passes[:count], large
 
 
 def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity: np.ndarray,
@@ -519,7 +523,7 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
     c = constraints
     k = len(c.feature)
     bias_rate, mass_scale, impulse_scale = np.empty(k), np.empty(k), np.empty(k)
-    loaded_pairs, passes = loaded_rows(
+    loaded_pairs, passes, _ = loaded_rows(
         inv_mass, SoftnessRows(c.body_a, c.body_b, c.pair_start, c.normal, c.normal_impulse,
                                c.stiff, c.separation, c.relative_velocity, c.feature,
                                bias_rate, mass_scale, impulse_scale),
@@ -529,9 +533,10 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
 
 def loaded_rows(inv_mass: np.ndarray, rows: SubstepRows | SoftnessRows,
                 params: RowSoftnessParams, moving: np.ndarray | None = None
-                ) -> tuple[np.ndarray, np.ndarray]:
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``row_softness`` into the coefficient arrays of ``rows``; returns loaded_pairs,
-    passes. rows: the step's ``bundles.substep_rows`` (the bundle the substep kernel then
+    passes and the pairs of islands over rest_island_limit ((P,) bool). rows: the
+    step's ``bundles.substep_rows`` (the bundle the substep kernel then
     takes; ``solve_substeps``), or a ``SoftnessRows`` (``row_softness``: any object with
     the constraints' arrays it reads). params: ``row_softness_params(settings, gravity)``."""
     return _row_softness_kernel(inv_mass, np.zeros(len(inv_mass), np.bool_) if moving is None
