@@ -264,6 +264,9 @@ def test_reduction_drops_points_shadowed_by_a_deeper_one():
 
 GROUND = {"type": "box", "size": [4.0, 1.0]}           # top face at y = 0.5
 TOP = {"type": "box", "size": [1.0, 0.5]}
+#: The L of scenes/concave_polygons.toml: arms 0.4 m wide, 1.2 m long.
+L_ARMS = {"type": "polygon", "points": [[-0.6, -0.6], [0.6, -0.6], [0.6, -0.2], [-0.2, -0.2],
+                                        [-0.2, 0.6], [-0.6, 0.6]]}
 L_SHAPE = {"type": "polygon", "points": [[0, 0], [3, 0], [3, 1], [1, 1], [1, 2], [0, 2]]}
 TABLE = {"type": "polygon", "points": [[0, 0], [0.5, 0], [0.5, 1], [2.5, 1], [2.5, 0],
                                        [3, 0], [3, 1.5], [0, 1.5]]}
@@ -392,6 +395,26 @@ def test_box_in_the_notch_of_an_l():
                                         [0.0, 1.0]], atol=1e-9)
     np.testing.assert_allclose(point, [[0.995, 0.99], [0.995, 1.58], [1.79, 0.99]],
                                atol=1e-9)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "measured 0.1 m, two rows, normals (-1, 0) and (0, -1): no vertex of either L is inside "
+    "the other, so no vertex row sees the crossing, and the descent minima that do (0.2 m "
+    "deep, inside the arms) are off the outline, which the polygon filters drop "
+    "(collide/mesh_contacts.py, stage 3). In scenes/concave_polygons.toml under another "
+    "sweep order a star's arm cut through a U's corner this way: 120 mm of overlap over "
+    "20 steps while every row read under 6 mm (docs/stability.md)"))
+def test_crossing_arms_of_two_concave_polygons_are_seen_as_deep_as_they_overlap():
+    """Two L's whose arms cross in a '+' (the overlap a 0.4 m square, no vertex of either
+    inside the other): the deepest contact is at least the overlap's inscribed depth, 0.2
+    m (the arms' half width: the point of the overlap farthest from both outlines; a
+    point of one outline inside the other is at least that deep where it crosses the
+    other's arm)."""
+    for pose_a, pose_b in (((0.0, 0.0, 0.0), (0.5, -0.5, 0.0)),
+                           ((0.5, -0.5, 0.0), (0.0, 0.0, 0.0))):
+        c = collide(L_ARMS, pose_a, L_ARMS, pose_b)
+        assert len(c) > 0
+        assert c.depth.max() >= 0.2 - 1e-9
 
 
 @pytest.mark.parametrize("shift", [(1e-4, 0.0), (0.0, 1e-4), (-1e-4, 1e-4)])
