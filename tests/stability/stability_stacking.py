@@ -33,6 +33,8 @@ from stability_common import (
     pyramid_cells,
 )
 
+from sdfphys.world import World
+
 #: The light box is not crushed: the heavy box above it never sinks more than this.
 NOT_CRUSHED = Bound(0.02, "m", "2 % of the 1 m light box (4 linear slops, the speculative "
                                "distance): a box squashed by more is visibly crushed")
@@ -176,6 +178,14 @@ def pymunk_tall_stack(count: int = 20, seconds: float = 30.0) -> dict[str, float
 PYRAMID_SECONDS = 5.0
 
 
+def _pyramid_world(base: int) -> World:
+    """Unit boxes in a pyramid of ``base`` on the ground (4 base + 20 m wide), sleeping off."""
+    world = ground_world(width=4.0 * base + 20.0)
+    for x, y in pyramid_cells(base, 1.0):
+        world.add_body(UNIT_BOX, position=(x, y), friction=MU)
+    return world
+
+
 @cache
 def ours_pyramid(base: int, seconds: float = PYRAMID_SECONDS) -> dict[str, float]:
     """A pyramid of unit boxes with ``base`` boxes in its bottom row, ``seconds`` s.
@@ -183,9 +193,7 @@ def ours_pyramid(base: int, seconds: float = PYRAMID_SECONDS) -> dict[str, float
     top: displacement of the top box at the end; penetration: the deepest contact of
     any step (m).
     """
-    world = ground_world(width=4.0 * base + 20.0)
-    for x, y in pyramid_cells(base, 1.0):
-        world.add_body(UNIT_BOX, position=(x, y), friction=MU)
+    world = _pyramid_world(base)
     start = world.position[-1]
     penetration = 0.0
     for _ in advance(world, round(seconds / DT)):
@@ -206,9 +214,7 @@ def ours_pyramid_symmetry(base: int = SYMMETRY_BASE,
     lean: the mean horizontal displacement of its boxes at the end, absolute (m: the
     pyramid's shift to either side); speed: the fastest box's speed at the end (m/s).
     """
-    world = ground_world(width=4.0 * base + 20.0)
-    for x, y in pyramid_cells(base, 1.0):
-        world.add_body(UNIT_BOX, position=(x, y), friction=MU)
+    world = _pyramid_world(base)
     start = world.position[1:, 0].copy()
     for _ in advance(world, round(seconds / DT)):
         pass
