@@ -150,19 +150,21 @@ def prepare(world: World, contacts: Contacts, bodies: BodyState) -> ContactConst
     return constraints
 
 
-def substeps(world: World, constraints: ContactConstraints, bodies: BodyState) -> None:
+def substeps(world: World, constraints: ContactConstraints, bodies: BodyState,
+             kernel_only: bool = False) -> None:
     """Stage 3: per substep integrate v, warm start, solve, integrate x, relax; loaded
     islands (mass ratios, heavy loads: ``solver.row_softness``) get extra passes until
     converged, counted one by one as ``converge``; ``push_out`` counts the substeps
     with a row deeper than ``soft_depth`` (its overlap pushed out through
     pseudo-velocities, solver "Split push-out"); ``joints`` the solve and relax passes
     over the joints (each a Gauss-Seidel pass over the rows the islands' direct solves
-    do not take, then those solves; ``solver.joint_direct``)."""
+    do not take, then those solves; ``solver.joint_direct``). kernel_only: see
+    ``solve_substeps`` (``compile_ahead``)."""
     s = world.settings
     use_friction = bool(np.any(constraints.friction > 0.0))
     extra, push_outs, joint_runs = solve_substeps(
         bodies, constraints, world._gravity, s, use_friction,
-        (world._joints.rows, world._joints.stiffness_cap), accelerations(world))
+        (world._joints.rows, world._joints.stiffness_cap), accelerations(world), kernel_only)
     counts = world.stage_counts
     counts["converge"] += extra
     counts["push_out"] += push_outs
@@ -238,9 +240,11 @@ def record(world: World, rows: WorldContacts, relative_velocity: np.ndarray) -> 
 def compile_ahead(world: World) -> None:
     """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
     the kernels' sake: the stages after the preparation of the contact rows, once on no
-    contacts, last stage first; then the collisions' pair functions from the last
-    group to the first (``collide.compile_ahead``). The parent starts from the other
-    end."""
+    contacts, last stage first (the substep kernel before the row softness kernel that
+    precedes it in a step: the parent, reaching the softness first, compiles that one
+    meanwhile; docs/performance.md, "Start-up and the numba cache"); then the
+    collisions' pair functions from the last group to the first
+    (``collide.compile_ahead``). The parent starts from the other end."""
     bodies = body_state(world)
     constraints = ContactConstraints.empty()
     if world.settings.sleeping:
@@ -248,6 +252,7 @@ def compile_ahead(world: World) -> None:
                                 bodies.angle.copy(), world_sleep.awake(world),
                                 world_sleep.active(world))
     apply_restitution(bodies, constraints, world.settings)
+    substeps(world, constraints, bodies, kernel_only=True)
     substeps(world, constraints, bodies)
     movable = world._view("kind") == DYNAMIC
     collide_ahead(collision_shapes(world), world._view("shape_id"), bodies.com, bodies.angle,

@@ -94,3 +94,32 @@ def test_the_early_child_only_while_sdf_masses_are_unknown(monkeypatch):
     boxes = read_scene({"version": 1, "body": [{"shape": {"type": "box", "size": [1, 1]}}]})
     boxes.build()                               # nothing to integrate: no early child
     assert len(forks) == 1
+
+
+def test_the_child_compiles_the_substep_kernel_before_the_row_softness(monkeypatch):
+    """``compile_ahead`` reaches the substep kernel before the row softness kernel, which
+    the parent meets first in its step (each compiles one of the two), and the substep
+    kernel alone is refused for rows it would run without their softness."""
+    import numpy as np
+
+    import sdfphys
+    from sdfphys import world_stages
+    from sdfphys.solver import substeps
+
+    calls = []
+    kernel, loaded = substeps._substeps_kernel, substeps.loaded_rows
+    monkeypatch.setattr(substeps, "_substeps_kernel",
+                        lambda *a: calls.append("kernel") or kernel(*a))
+    monkeypatch.setattr(substeps, "loaded_rows",
+                        lambda *a: calls.append("softness") or loaded(*a))
+    w = sdfphys.World()
+    w.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
+    w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 0.9))
+    world_stages.compile_ahead(w)
+    assert calls == ["kernel", "softness", "kernel"]
+    bodies = world_stages.body_state(w)
+    rows = world_stages.prepare(w, world_stages.collide(w, bodies, None), bodies)
+    assert len(rows) > 0                            # the box rests on the ground
+    with pytest.raises(ValueError, match="kernel_only"):
+        substeps.solve_substeps(bodies, rows, np.array([0.0, -9.81]), w.settings, True,
+                                kernel_only=True)

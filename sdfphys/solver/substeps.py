@@ -625,8 +625,8 @@ def _substeps_kernel(bodies, rows, gravity, loaded, large, h, substeps, relax_pa
 def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: np.ndarray,
                    settings: Settings, use_friction: bool,
                    joints: tuple[JointRows, np.ndarray] | None = None,
-                   accel: tuple[np.ndarray, np.ndarray] | None = None
-                   ) -> tuple[int, int, int]:
+                   accel: tuple[np.ndarray, np.ndarray] | None = None,
+                   kernel_only: bool = False) -> tuple[int, int, int]:
     """Run every substep of one step in place (one compiled call).
 
     accel: None, or (linear (B, 2) m/s^2, angular (B,) rad/s^2): each dynamic body's
@@ -642,6 +642,12 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     Returns (the number of extra passes run over loaded islands, ``row_softness``; the
     number of substeps with a row deeper than ``soft_depth``, "Split push-out"; the
     number of solve and relax passes over the joints, ``joint_direct.joint_passes``).
+
+    kernel_only: for ``constraints`` with no rows only (the compiling child of a cold
+    start, ``world_stages.compile_ahead``): the substep kernel without the row softness
+    kernel before it, with no loaded pairs, which are the softness kernel's to find; the
+    child compiles the substep kernel first while the parent, which meets the softness
+    kernel first in its step, compiles that one.
     """
     c = constraints
     h = settings.dt / settings.substeps
@@ -662,8 +668,15 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     moving = v[:, 0] ** 2 + v[:, 1] ** 2 + spin * spin > REST_SPEED ** 2
     k = len(c.feature)
     row_ref = substep_rows(c, np.empty(k), np.empty(k), np.empty(k))  # filled by loaded_rows
-    loaded_pairs, caps, large = loaded_rows(bodies.inv_mass, row_ref,
-                                            row_softness_params(settings, gravity), moving)
+    if kernel_only:
+        if k:
+            raise ValueError("kernel_only: only for constraints with no rows")
+        loaded_pairs, caps = np.zeros(0, np.int64), np.zeros(0, np.int64)
+        large = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
+    else:
+        loaded_pairs, caps, large = loaded_rows(bodies.inv_mass, row_ref,
+                                                row_softness_params(settings, gravity),
+                                                moving)
     measured = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
     measured[loaded_pairs] = True
     start_tangent = c.tangent_impulse.copy()
