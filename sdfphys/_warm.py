@@ -5,9 +5,10 @@ serial: the field evaluator for the first frame, the collision kernels (most of 
 for fields: the descents), then the solver's. On a machine with two cores or more, the
 first world a process steps or simulates forks a child (``start``) when the solver's
 kernels are not yet in the on-disk cache. The child works through the first step's
-kernels from the other end (``world_stages.compile_ahead``: the stages after the
-contact rows' preparation, last stage first, then the collisions' pair groups in the
-reverse of their order in a step), calling them on its copy of the world with the same
+kernels from the other end (``world_stages.compile_ahead``: the collisions' pair
+groups that are no closed form in the reverse of their order in a step, then the
+stages after the contact rows' preparation, last stage first), calling them on its
+copy of the world with the same
 argument types, which compiles them into the same cache, and exits. The parent goes on
 as without it. Each kernel is compiled once: a process that reaches a kernel the other
 is compiling waits for it and loads it (``sdfphys._compile_lock``), so the two meet

@@ -239,13 +239,17 @@ def record(world: World, rows: WorldContacts, relative_velocity: np.ndarray) -> 
 
 def compile_ahead(world: World) -> None:
     """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
-    the kernels' sake: the stages after the preparation of the contact rows, once on no
-    contacts, last stage first (the substep kernel before the row softness kernel that
-    precedes it in a step: the parent, reaching the softness first, compiles that one
-    meanwhile; docs/performance.md, "Start-up and the numba cache"); then the
-    collisions' pair functions from the last group to the first
-    (``collide.compile_ahead``). The parent starts from the other end."""
+    the kernels' sake: first the collisions' pair functions that are no closed form
+    (descents, field programs), from the last group to the first
+    (``collide.compile_ahead``), then the stages after the preparation of the contact
+    rows, once on no contacts, last stage first, the substep kernel before the row
+    softness kernel that precedes it in a step. The parent starts from the other end:
+    its first frame's field evaluator, the closed-form contacts, the first groups, the
+    preparation, the softness (docs/performance.md, "Start-up and the numba cache")."""
     bodies = body_state(world)
+    movable = world._view("kind") == DYNAMIC
+    collide_ahead(collision_shapes(world), world._view("shape_id"), bodies.com, bodies.angle,
+                  movable, world.settings)
     constraints = ContactConstraints.empty()
     if world.settings.sleeping:
         world_sleep.fall_asleep(world, bodies, constraints, bodies.com.copy(),
@@ -254,6 +258,3 @@ def compile_ahead(world: World) -> None:
     apply_restitution(bodies, constraints, world.settings)
     substeps(world, constraints, bodies, kernel_only=True)
     substeps(world, constraints, bodies)
-    movable = world._view("kind") == DYNAMIC
-    collide_ahead(collision_shapes(world), world._view("shape_id"), bodies.com, bodies.angle,
-                  movable, world.settings)

@@ -97,9 +97,10 @@ def test_the_early_child_only_while_sdf_masses_are_unknown(monkeypatch):
 
 
 def test_the_child_compiles_the_substep_kernel_before_the_row_softness(monkeypatch):
-    """``compile_ahead`` reaches the substep kernel before the row softness kernel, which
-    the parent meets first in its step (each compiles one of the two), and the substep
-    kernel alone is refused for rows it would run without their softness."""
+    """``compile_ahead`` runs the collisions that are no closed form first, then the
+    substep kernel before the row softness kernel, which the parent meets first in its
+    step (each compiles one of the two); the substep kernel alone is refused for rows
+    it would run without their softness."""
     import numpy as np
 
     import sdfphys
@@ -112,11 +113,14 @@ def test_the_child_compiles_the_substep_kernel_before_the_row_softness(monkeypat
                         lambda *a: calls.append("kernel") or kernel(*a))
     monkeypatch.setattr(substeps, "loaded_rows",
                         lambda *a: calls.append("softness") or loaded(*a))
+    ahead = world_stages.collide_ahead
+    monkeypatch.setattr(world_stages, "collide_ahead",
+                        lambda *a: calls.append("collide") or ahead(*a))
     w = sdfphys.World()
     w.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
     w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 0.9))
     world_stages.compile_ahead(w)
-    assert calls == ["kernel", "softness", "kernel"]
+    assert calls == ["collide", "kernel", "softness", "kernel"]
     bodies = world_stages.body_state(w)
     rows = world_stages.prepare(w, world_stages.collide(w, bodies, None), bodies)
     assert len(rows) > 0                            # the box rests on the ground
