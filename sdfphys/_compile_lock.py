@@ -26,17 +26,28 @@ No deadlock: a process waits for a kernel only while compiling a caller of it (n
 compiles a callee while typing its caller), so two processes waiting for each other
 would need a cycle of calls between kernels, which an njit call graph without recursion
 between kernels does not have.
+
+Work while waiting (``while_waiting``): a process may leave jobs (callables that
+compile kernels it will need later) to run, one at a time and each once, whenever it
+finds a kernel's lock held by another process while it holds none itself (a kernel it
+calls, not a callee of one it is compiling), instead of sleeping. A job's own waits
+sleep (no job runs inside a job). A job holds locks only of kernels it compiles and
+their callees, as any caller does, so the argument above still holds. The parent of a
+cold start leaves its step's last stages there (``sdfphys._warm``), so that it compiles
+them while the compiling child holds a kernel it needs.
 """
 
 from __future__ import annotations
 
 import os
+import threading
 import time
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from numba.core import dispatcher, sigutils
 
-__all__ = ["POLL_SECONDS", "STALE_SECONDS", "install", "lock_path"]
+__all__ = ["POLL_SECONDS", "STALE_SECONDS", "install", "lock_path", "while_waiting"]
 
 #: Seconds between two looks at a lock another process holds.
 POLL_SECONDS = 0.02
@@ -52,6 +63,38 @@ _PACKAGE = __name__.split(".")[0]
 
 #: Lock files this process holds -> how many nested compilations hold each.
 _held: dict[str, int] = {}
+
+#: Jobs to run while waiting for another process's kernel (``while_waiting``), in order.
+_jobs: list[Callable[[], None]] = []
+#: Held while a job runs: one job at a time, none inside another.
+_job_running = threading.Lock()
+
+
+def while_waiting(jobs: Iterable[Callable[[], None]]) -> None:
+    """Replace the jobs left to run while this process waits for a kernel another
+    process is compiling (module docstring); an empty iterable clears them."""
+    _jobs[:] = list(jobs)
+
+
+def _run_a_job() -> bool:
+    """Run the next job, if any, none is running and this process holds no kernel's
+    lock (it waits for a kernel it calls, not for a callee of one it is compiling, which
+    a job might call again); whether one ran. A job that fails is dropped: it only
+    compiles ahead, and the kernel it aimed at compiles at its first real call
+    instead."""
+    if not _jobs or _held or not _job_running.acquire(blocking=False):
+        return False
+    try:
+        if not _jobs:
+            return False
+        job = _jobs.pop(0)
+        try:
+            job()
+        except Exception:
+            pass
+        return True
+    finally:
+        _job_running.release()
 
 
 def lock_path(kernel) -> str | None:
@@ -101,7 +144,7 @@ def _acquire(path: str) -> bool:
                     os.unlink(path)
                 except OSError:
                     pass
-            else:
+            elif not _run_a_job():
                 time.sleep(POLL_SECONDS)
             continue
         except OSError:

@@ -39,6 +39,8 @@ import numpy as np
 __all__ = ["CHILD_SECONDS", "STOP_SECONDS", "placeholder_world", "start", "start_early", "stop"]
 
 _started = False
+#: Whether the parent's own share (``start``) has been handed to ``_compile_lock``.
+_behind = False
 #: The child's pid while it may run (``stop``).
 _child: int | None = None
 #: Set while no child runs.
@@ -65,8 +67,18 @@ def _cold() -> bool:
 def start(world: Any) -> int | None:
     """Fork the compiling child for ``world`` if this process has not yet, the machine has
     two cores or more, the platform forks, it is not turned off and the cache is cold.
-    Returns the child's pid (None: no child)."""
-    return _fork(lambda: world)
+    While a child runs (this one, or ``start_early``'s), the parent's own share: the
+    step's last stages, compiled whenever it would wait for a kernel the child holds
+    (``world_stages.compile_behind``). Returns the child's pid (None: no child)."""
+    global _behind
+    pid = _fork(lambda: world)
+    if _child is not None and not _done.is_set() and not _behind:
+        from . import _compile_lock
+        from .world_stages import compile_behind
+
+        _behind = True
+        _compile_lock.while_waiting(compile_behind(world))
+    return pid
 
 
 def start_early(scene: Any) -> int | None:
@@ -164,3 +176,7 @@ def stop() -> None:
             pass
         _done.wait(STOP_SECONDS)
     _child = None
+    if _behind:
+        from . import _compile_lock
+
+        _compile_lock.while_waiting(())

@@ -10,6 +10,8 @@ Falling asleep (stage 7) is ``world_sleep.fall_asleep``.
 
 from __future__ import annotations
 
+import copy
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -31,6 +33,8 @@ from .solver import (
     solve_substeps,
 )
 from .solver import store_impulses as impulse_cache
+from .solver.bundles import substep_rows
+from .solver.softness import loaded_rows, row_softness_params
 from .toi import fast_bodies, step_fractions
 from .world_bodies import DYNAMIC, STATIC
 
@@ -38,8 +42,8 @@ if TYPE_CHECKING:
     from .world import World
 
 __all__ = ["PAIR_STAGES", "STAGES", "accelerations", "body_state", "collide",
-           "collision_shapes", "compile_ahead", "pair_filter", "prepare", "record",
-           "restitution", "store_impulses", "substeps", "time_of_impact"]
+           "collision_shapes", "compile_ahead", "compile_behind", "pair_filter", "prepare",
+           "record", "restitution", "store_impulses", "substeps", "time_of_impact"]
 
 #: Narrowphase stages, one per pair kind (``collide.narrowphase.PAIR_FUNCTIONS``):
 #: ``circle_circle``, ``circle_mesh``, ..., ``sdf_sdf``, counted once per step in which
@@ -239,22 +243,48 @@ def record(world: World, rows: WorldContacts, relative_velocity: np.ndarray) -> 
 
 def compile_ahead(world: World) -> None:
     """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
-    the kernels' sake: first the collisions' pair functions that are no closed form
-    (descents, field programs), from the last group to the first
-    (``collide.compile_ahead``), then the stages after the preparation of the contact
-    rows, once on no contacts, last stage first, the substep kernel before the row
-    softness kernel that precedes it in a step. The parent starts from the other end:
-    its first frame's field evaluator, the closed-form contacts, the first groups, the
-    preparation, the softness (docs/performance.md, "Start-up and the numba cache")."""
+    the kernels' sake: the substep kernel (alone, on no contacts); the collisions' pair
+    functions that are no closed form (descents, field programs), from the last group
+    to the first (``collide.compile_ahead``); then the other stages after the
+    preparation of the contact rows, on no contacts, last stage first, the row softness
+    last. The parent starts from the other end (its first frame's field evaluator, the
+    closed-form contacts, the first groups) and compiles the row softness, the
+    preparation and the restitution while it waits for the child (``compile_behind``;
+    docs/performance.md, "Start-up and the numba cache")."""
     bodies = body_state(world)
+    constraints = ContactConstraints.empty()
+    substeps(world, constraints, bodies, kernel_only=True)
     movable = world._view("kind") == DYNAMIC
     collide_ahead(collision_shapes(world), world._view("shape_id"), bodies.com, bodies.angle,
                   movable, world.settings)
-    constraints = ContactConstraints.empty()
     if world.settings.sleeping:
         world_sleep.fall_asleep(world, bodies, constraints, bodies.com.copy(),
                                 bodies.angle.copy(), world_sleep.awake(world),
                                 world_sleep.active(world))
     apply_restitution(bodies, constraints, world.settings)
-    substeps(world, constraints, bodies, kernel_only=True)
     substeps(world, constraints, bodies)
+
+
+def compile_behind(world: World) -> list[Callable[[], None]]:
+    """The parent's share of a cold start's compiling (``sdfphys._warm``): jobs that run
+    the first step's last stages on no contacts, for the kernels' sake, while it waits
+    for a kernel the compiling child holds (``_compile_lock.while_waiting``): the row
+    softness, the preparation, the substep kernel, the restitution, in the order a step
+    meets them. They act on copies of the bodies and joints made now: the world does
+    not change."""
+    bodies = copy.deepcopy(body_state(world))
+    settings, gravity = world.settings, np.array(world._gravity, np.float64)
+
+    def softness() -> None:
+        empty = ContactConstraints.empty()
+        rows = substep_rows(empty, np.empty(0), np.empty(0), np.empty(0))
+        loaded_rows(bodies.inv_mass, rows, row_softness_params(settings, gravity),
+                    np.zeros(len(bodies.inv_mass), np.bool_))
+
+    def preparation() -> None:
+        prepare(world, Contacts.empty(), bodies)
+
+    def restitution() -> None:
+        apply_restitution(bodies, ContactConstraints.empty(), settings)
+
+    return [softness, preparation, restitution]

@@ -45,6 +45,47 @@ def test_a_lock_held_by_a_live_process_is_waited_for(tmp_path):
     assert not os.path.exists(path)
 
 
+
+def test_jobs_run_once_each_while_waiting_and_not_inside_a_held_lock(tmp_path):
+    """While another live process holds the lock, the waiting process runs its jobs in
+    order, each once; a job that fails is dropped; a job's own wait runs no other job;
+    none runs while this process holds a lock of its own (a callee's wait)."""
+    path, other = str(tmp_path / "kernel.nbi.lock"), str(tmp_path / "callee.nbi.lock")
+    ran = []
+
+    def nested():
+        ran.append("nested")
+        Path(other).write_text(str(os.getppid()))
+        threading.Timer(0.2, os.unlink, args=(other,)).start()
+        assert _compile_lock._acquire(other)     # waits; "never" must not run meanwhile
+        _compile_lock._release(other)
+
+    def fails():
+        ran.append("fails")
+        raise RuntimeError("a job that fails is dropped")
+
+    def last():
+        ran.append("last")
+        os.unlink(path)                          # the other process is done
+
+    _compile_lock.while_waiting([nested, fails, last, lambda: ran.append("never")])
+    try:
+        Path(path).write_text(str(os.getppid()))
+        assert _compile_lock._acquire(path)
+        assert ran == ["nested", "fails", "last"]
+        _compile_lock._release(path)
+        held = str(tmp_path / "held.nbi.lock")
+        assert _compile_lock._acquire(held)
+        Path(path).write_text(str(os.getppid()))
+        threading.Timer(0.3, os.unlink, args=(path,)).start()
+        assert _compile_lock._acquire(path)      # waits, holding `held`: no job
+        assert ran == ["nested", "fails", "last"]
+        _compile_lock._release(path)
+        _compile_lock._release(held)
+    finally:
+        _compile_lock.while_waiting(())
+
+
 def test_a_lock_whose_owner_died_is_taken_over_at_once(tmp_path):
     path = str(tmp_path / "kernel.nbi.lock")
     Path(path).write_text(str(_dead_pid()))

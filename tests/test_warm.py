@@ -97,10 +97,10 @@ def test_the_early_child_only_while_sdf_masses_are_unknown(monkeypatch):
 
 
 def test_the_child_compiles_the_substep_kernel_before_the_row_softness(monkeypatch):
-    """``compile_ahead`` runs the collisions that are no closed form first, then the
-    substep kernel before the row softness kernel, which the parent meets first in its
-    step (each compiles one of the two); the substep kernel alone is refused for rows
-    it would run without their softness."""
+    """``compile_ahead`` runs the substep kernel alone first, then the collisions that
+    are no closed form, then the row softness, which the parent meets first in its step
+    (and compiles while it waits: ``compile_behind``); the substep kernel alone is
+    refused for rows it would run without their softness."""
     import numpy as np
 
     import sdfphys
@@ -120,10 +120,44 @@ def test_the_child_compiles_the_substep_kernel_before_the_row_softness(monkeypat
     w.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
     w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 0.9))
     world_stages.compile_ahead(w)
-    assert calls == ["collide", "kernel", "softness", "kernel"]
+    assert calls == ["kernel", "collide", "softness", "kernel"]
     bodies = world_stages.body_state(w)
     rows = world_stages.prepare(w, world_stages.collide(w, bodies, None), bodies)
     assert len(rows) > 0                            # the box rests on the ground
     with pytest.raises(ValueError, match="kernel_only"):
         substeps.solve_substeps(bodies, rows, np.array([0.0, -9.81]), w.settings, True,
                                 kernel_only=True)
+
+
+BEHIND = """
+import numpy as np
+import sdfphys
+from sdfphys import world_stages
+from sdfphys.solver import restitution, rows, softness
+
+w = sdfphys.World()
+w.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
+w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 1.2), velocity=(0.5, -1.0))
+before = (w.position.copy(), w.velocity.copy(), dict(w.stage_counts), w.step_count)
+for job in world_stages.compile_behind(w):
+    job()
+after = (w.position.copy(), w.velocity.copy(), dict(w.stage_counts), w.step_count)
+unchanged = all(np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y
+                for x, y in zip(before, after))
+kernels = (softness._row_softness_kernel, rows._prepare_kernel, restitution._restitution_kernel)
+behind = [len(k.signatures) for k in kernels]
+w.step()
+print(unchanged, behind, [len(k.signatures) for k in kernels])
+"""
+
+
+@pytest.mark.slow
+def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(tmp_path):
+    """``compile_behind``'s jobs (the row softness, the preparation, the restitution, on
+    copies) leave the world as it was and compile each kernel with the argument types
+    its step then calls it with: the step adds no signature (an empty cache)."""
+    out = subprocess.run([sys.executable, "-c", BEHIND], capture_output=True, text=True,
+                         check=True, timeout=900,
+                         env={**os.environ, "SDFPHYS_COMPILE_NOTICE": "0", "SDFPHYS_WARM": "0",
+                              "NUMBA_CACHE_DIR": str(tmp_path)}).stdout.strip().split(maxsplit=1)
+    assert out == ["True", "[1, 1, 1] [1, 1, 1]"]
