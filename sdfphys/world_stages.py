@@ -19,6 +19,7 @@ import numpy as np
 from . import world_sleep
 from .collide import Contacts, find_contacts
 from .collide import compile_ahead as collide_ahead
+from .collide import compile_behind as collide_behind
 from .collide.curvature import curvature_radii, turning_bodies
 from .collide.filter import PairFilter
 from .collide.narrowphase import PAIR_FUNCTIONS
@@ -268,10 +269,10 @@ def compile_ahead(world: World) -> None:
 def compile_behind(world: World) -> list[Callable[[], None]]:
     """The parent's share of a cold start's compiling (``sdfphys._warm``): jobs that run
     the first step's last stages on no contacts, for the kernels' sake, while it waits
-    for a kernel the compiling child holds (``_compile_lock.while_waiting``): the row
-    softness, the preparation, the substep kernel, the restitution, in the order a step
-    meets them. They act on copies of the bodies and joints made now: the world does
-    not change."""
+    for a kernel the compiling child holds (``_compile_lock.while_waiting``): the end of
+    the collision query (``collide.compile_behind``), the row softness, the
+    preparation, the restitution, in the order a step meets them. They act on copies of
+    the bodies made now: the world does not change."""
     bodies = copy.deepcopy(body_state(world))
     settings, gravity = world.settings, np.array(world._gravity, np.float64)
 
@@ -287,4 +288,5 @@ def compile_behind(world: World) -> list[Callable[[], None]]:
     def restitution() -> None:
         apply_restitution(bodies, ContactConstraints.empty(), settings)
 
-    return [softness, preparation, restitution]
+    return collide_behind(len(bodies.inv_mass), settings) + [softness, preparation,
+                                                             restitution]

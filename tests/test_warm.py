@@ -129,35 +129,41 @@ def test_the_child_compiles_the_substep_kernel_before_the_row_softness(monkeypat
                                 kernel_only=True)
 
 
-BEHIND = """
-import numpy as np
-import sdfphys
-from sdfphys import world_stages
-from sdfphys.solver import restitution, rows, softness
 
-w = sdfphys.World()
-w.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
-w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 1.2), velocity=(0.5, -1.0))
-before = (w.position.copy(), w.velocity.copy(), dict(w.stage_counts), w.step_count)
-for job in world_stages.compile_behind(w):
-    job()
-after = (w.position.copy(), w.velocity.copy(), dict(w.stage_counts), w.step_count)
-unchanged = all(np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y
-                for x, y in zip(before, after))
-kernels = (softness._row_softness_kernel, rows._prepare_kernel, restitution._restitution_kernel)
-behind = [len(k.signatures) for k in kernels]
-w.step()
-print(unchanged, behind, [len(k.signatures) for k in kernels])
-"""
+def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(monkeypatch):
+    """``compile_behind``'s jobs (the contact cache's store, the reduction, the row
+    softness, the preparation, the restitution, on copies and no contacts) leave the
+    world as it was and call each kernel with the argument types its step calls it
+    with: after steps (an sdf box resting on the ground goes through the cache and the
+    reduction) each kernel has one signature."""
+    import numpy as np
 
+    import sdfphys
+    from sdfphys import world_stages
+    from sdfphys.collide import contact_cache, reduce
+    from sdfphys.solver import restitution, rows, softness
 
-@pytest.mark.slow
-def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(tmp_path):
-    """``compile_behind``'s jobs (the row softness, the preparation, the restitution, on
-    copies) leave the world as it was and compile each kernel with the argument types
-    its step then calls it with: the step adds no signature (an empty cache)."""
-    out = subprocess.run([sys.executable, "-c", BEHIND], capture_output=True, text=True,
-                         check=True, timeout=900,
-                         env={**os.environ, "SDFPHYS_COMPILE_NOTICE": "0", "SDFPHYS_WARM": "0",
-                              "NUMBA_CACHE_DIR": str(tmp_path)}).stdout.strip().split(maxsplit=1)
-    assert out == ["True", "[1, 1, 1] [1, 1, 1]"]
+    w = sdfphys.World()
+    w.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
+    w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(-1.0, 1.2), velocity=(0.5, -1.0))
+    w.add_body({"type": "sdf", "field": {"type": "box", "size": [0.8, 0.4]}}, position=(1.0, 0.7))
+    before = (w.position.copy(), w.velocity.copy(), dict(w.stage_counts), w.step_count)
+    jobs = world_stages.compile_behind(w)
+    for job in jobs:
+        job()
+    assert len(jobs) == 5
+    np.testing.assert_array_equal(w.position, before[0])
+    np.testing.assert_array_equal(w.velocity, before[1])
+    assert (dict(w.stage_counts), w.step_count) == before[2:]
+    import sdfphys.collide as collide
+
+    reductions = []
+    reduce_contacts = collide.reduce_contacts
+    monkeypatch.setattr(collide, "reduce_contacts",
+                        lambda *a: reductions.append(1) or reduce_contacts(*a))
+    for _ in range(30):
+        w.step()
+    assert w.contacts.body_b.tolist().count(2) >= 2 and reductions    # the sdf box rests
+    kernels = (contact_cache._merged, reduce._reduce, softness._row_softness_kernel,
+               rows._prepare_kernel, restitution._restitution_kernel)
+    assert [len(k.signatures) for k in kernels] == [1] * 5

@@ -59,7 +59,7 @@ from __future__ import annotations
 
 import sys
 import types
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -87,7 +87,7 @@ from .predicted import predicted_contacts, predicted_field_contacts, predicted_m
 from .reduce import reduce_contacts
 
 __all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "ContactCache", "Contacts", "collide",
-           "find_contacts", "speculative_reach"]
+           "compile_behind", "find_contacts", "speculative_reach"]
 
 #: A body's reach (extra speculative margin) is capped at this many bounding radii.
 REACH_CAP_RADII = 2.0
@@ -478,6 +478,28 @@ def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         if kinds == ("mesh", "sdf") and not _flat(shape_b.field):
             sdf_in_mesh(shape_a, shape_b, pose[a], pose[b], margin, settings)
         PAIR_FUNCTIONS[kinds](shape_a, shape_b, a, b, pose[a], pose[b], margin, settings)
+
+
+def compile_behind(n: int, settings: Settings) -> list[Callable[[], None]]:
+    """The end of a collision query of ``n`` bodies, as jobs for a cold start's parent
+    (``world_stages.compile_behind``): a contact cache's reuse and store (``_carry``,
+    ``_merged``) and the reduction (``_reduce``), on no pairs, with the argument types
+    of ``_narrowphase``'s calls. They touch no world."""
+    pose = np.zeros((n, 3))
+    bodies = (body_turns(pose), np.ones(n), np.zeros(n, np.bool_), np.zeros(n, np.int64))
+    no_pairs = np.zeros((0, 2), np.int64)
+
+    def cache() -> None:
+        kept = ContactCache()
+        kept.reuse(no_pairs, pose, bodies[0], *bodies[1:], np.zeros(0),
+                   settings.reuse_distance, settings)
+        kept.store(no_pairs, np.zeros(0), Contacts.empty(), pose, *bodies)
+
+    def reduction() -> None:
+        reduce_contacts(np.zeros(1, np.int64), np.zeros((0, 2)), np.zeros(0),
+                        np.zeros((0, 2)), settings.contacts_per_pair, settings.linear_slop)
+
+    return [cache, reduction]
 
 
 def collide(shape_a: Any, pose_a: Sequence[float], shape_b: Any, pose_b: Sequence[float],
