@@ -247,10 +247,11 @@ def compile_ahead(world: World) -> None:
     the kernels' sake: the substep kernel (alone, on no contacts); the collisions' pair
     functions that are no closed form (descents, field programs), from the last group
     to the first (``collide.compile_ahead``); then the other stages after the
-    preparation of the contact rows, on no contacts, last stage first, the row softness
-    last. The parent starts from the other end (its first frame's field evaluator, the
-    closed-form contacts, the first groups) and compiles the row softness, the
-    preparation and the restitution while it waits for the child (``compile_behind``;
+    preparation of the contact rows, on no contacts, last stage first (the restitution
+    only where some body has it), the row softness last. The parent starts from the
+    other end (its first frame's field evaluator, the closed-form contacts, the first
+    groups) and compiles the end of the collisions, the row softness, the preparation
+    and the restitution while it waits for the child (``compile_behind``;
     docs/performance.md, "Start-up and the numba cache")."""
     bodies = body_state(world)
     constraints = ContactConstraints.empty()
@@ -262,7 +263,8 @@ def compile_ahead(world: World) -> None:
         world_sleep.fall_asleep(world, bodies, constraints, bodies.com.copy(),
                                 bodies.angle.copy(), world_sleep.awake(world),
                                 world_sleep.active(world))
-    apply_restitution(bodies, constraints, world.settings)
+    if np.any(world._view("restitution") > 0.0):
+        apply_restitution(bodies, constraints, world.settings)
     substeps(world, constraints, bodies)
 
 
@@ -271,7 +273,8 @@ def compile_behind(world: World) -> list[Callable[[], None]]:
     the first step's last stages on no contacts, for the kernels' sake, while it waits
     for a kernel the compiling child holds (``_compile_lock.while_waiting``): the end of
     the collision query (``collide.compile_behind``), the row softness, the
-    preparation, the restitution, in the order a step meets them. They act on copies of
+    preparation, the restitution (where some body has it), in the order a step meets
+    them. They act on copies of
     the bodies made now: the world does not change."""
     bodies = copy.deepcopy(body_state(world))
     settings, gravity = world.settings, np.array(world._gravity, np.float64)
@@ -288,5 +291,6 @@ def compile_behind(world: World) -> list[Callable[[], None]]:
     def restitution() -> None:
         apply_restitution(bodies, ContactConstraints.empty(), settings)
 
-    return collide_behind(len(bodies.inv_mass), settings) + [softness, preparation,
-                                                             restitution]
+    bouncy = bool(np.any(world._view("restitution") > 0.0))     # else never needed
+    return collide_behind(len(bodies.inv_mass), settings) + [softness, preparation] + (
+        [restitution] if bouncy else [])
