@@ -570,7 +570,8 @@ def field_mass_properties(field: Field, cell: float, path: str = "field"
     if nx * ny > _MAX_CELLS:
         raise SpecError(path, f"spans {x_max - x_min:g} x {y_max - y_min:g} m: too large to "
                         f"integrate its mass on cells of {h:g} m ({nx * ny:.3g} cells, at "
-                        f"most {_MAX_CELLS}); give the shape a coarser cell or split it into bodies")
+                        f"most {_MAX_CELLS}); give the shape a coarser cell or split it into "
+                        "bodies")
     origin = 0.5 * (bounds[:2] + bounds[2:])
     xs = x_min + (np.arange(nx) + 0.5) * h - origin[0]
     ys = y_min + (np.arange(ny) + 0.5) * h - origin[1]

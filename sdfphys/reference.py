@@ -78,8 +78,9 @@ How the engines are matched, and what cannot be
   overlapping shapes. Only a body faster than that cap can overlap by a step's
   travel before sdfphys sees the contact; restitution is aimed at the approach
   speed on arrival. Impacts may thus land a step apart in the two engines, and
-  positions after them differ by up to |v_after - v_before| x 2 dt. Both anchor a contact differently:
-  pymunk at each body's own surface point, sdfphys (as Box2D v3) at the midpoint, so
+  positions after them differ by up to |v_after - v_before| x 2 dt. Both anchor a
+  contact differently: pymunk at each body's own surface point, sdfphys (as Box2D v3)
+  at the midpoint, so
   a ball sunk by d rolls on radius r - d / 2 in sdfphys.
 - Restitution: sdfphys applies it after the substeps, toward -e times the approach
   speed at the start of the step; pymunk inside every sweep, toward -e times the

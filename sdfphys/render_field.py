@@ -228,8 +228,9 @@ def _merge(best, code, consts, points, n, stack, frames, cur, value, grad, ii, j
 def _field_lut(pal: Palette, scale: float, spacing: float) -> tuple[np.ndarray, float, float]:
     """The field overlay's colours as a table: (2, N, 3) uint8, row 0 inside (f = -a),
     row 1 outside (f = a), for a = 0, q, 2q, ... up to ``far`` + ``spacing``, with q a
-    32nd of a pixel (colours within 4 of the formula's across the iso-lines). Beyond ``far`` = 16 spacings the shading has saturated (to 3e-4)
-    and the colours repeat every spacing (``_shade`` folds |f| back)."""
+    32nd of a pixel (colours within 4 of the formula's across the iso-lines). Beyond
+    ``far`` = 16 spacings the shading has saturated (to 3e-4) and the colours repeat
+    every spacing (``_shade`` folds |f| back)."""
     q = 1.0 / (32.0 * scale)
     far = 16.0 * spacing
     a = np.arange(int((far + spacing) / q) + 2) * q

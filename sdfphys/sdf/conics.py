@@ -208,7 +208,8 @@ class QuadraticBezier(Field):
         self.cross = cross = abs(self.A[0] * self.B[1] - self.A[1] * self.B[0])
         if cross > 0.0:
             t_min = min(max(-AB / BB, 0.0), 1.0)
-            self.min_curvature_radius = 2.0 * float(np.linalg.norm(self.A + t_min * self.B)) ** 3 / cross
+            speed = float(np.linalg.norm(self.A + t_min * self.B))
+            self.min_curvature_radius = 2.0 * speed ** 3 / cross
         else:
             self.min_curvature_radius = math.inf
         self.exact = bool(self.radius <= self.min_curvature_radius)

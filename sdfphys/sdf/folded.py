@@ -237,7 +237,8 @@ class Cross(Field):
 
 
 @primitive("rounded_cross",
-           Param("h", "positive", REQUIRED, "height of the y tips relative to the x tips, 0 < h <= 1"),
+           Param("h", "positive", REQUIRED,
+                 "height of the y tips relative to the x tips, 0 < h <= 1"),
            Param("radius", "positive", 1.0, "distance from the centre to the x tips, m"))
 class RoundedCross(Field):
     """Four-pointed star with concave circular sides (Quilez's sdRoundedCross), exact.

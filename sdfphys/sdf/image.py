@@ -32,8 +32,9 @@ pixel (a binary edge wanders by up to half a pixel); tests/test_terrain.py check
 disc 40 px wide is a 0.8 m disc within one cell.
 
 A missing or unreadable image raises SpecError naming ``path``; an image with no
-inside pixel one naming ``threshold``. Relative paths are taken from the current directory here; a scene
-file's image paths are relative to the scene file (``scene.py`` resolves them).
+inside pixel one naming ``threshold``. Relative paths are taken from the current
+directory here; a scene file's image paths are relative to the scene file (``scene.py``
+resolves them).
 """
 
 from __future__ import annotations

@@ -304,7 +304,8 @@ class IsoscelesTriangle(_SymmetricTriangle):
 
 
 @primitive("triangle",
-           Param("points", "polygon", REQUIRED, "the three vertices [[x, y], ...], m, either winding"))
+           Param("points", "polygon", REQUIRED,
+                 "the three vertices [[x, y], ...], m, either winding"))
 class Triangle(_ConvexPolygon):
     """Triangle with the three vertices ``points`` (m) in either winding, exact.
 

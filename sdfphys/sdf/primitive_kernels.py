@@ -4,10 +4,10 @@
 points; the primitives that are not a line of arithmetic are the kernels here: one
 point's value and gradient (``_shape`` dispatches on the opcode); the ellipse's solver
 over the batch is in ``ellipse_kernel``, the quadratic Bezier's cubic in
-``bezier_kernel``, the smooth blends in ``blend_kernels``. They are the primitives' one implementation
-(``Field.evaluate`` runs the program); the classes in ``sdf.curved``, ``conics``,
-``polygonal``, ``folded`` and ``grid`` keep the parameters, validation, bounds and the
-formulas' references. The numpy oracle the tests compare them with is
+``bezier_kernel``, the smooth blends in ``blend_kernels``. They are the primitives' one
+implementation (``Field.evaluate`` runs the program); the classes in ``sdf.curved``,
+``conics``, ``polygonal``, ``folded`` and ``grid`` keep the parameters, validation,
+bounds and the formulas' references. The numpy oracle the tests compare them with is
 tests/numpy_fields, operation for operation the same except where numpy's SIMD
 transcendentals round differently.
 """
