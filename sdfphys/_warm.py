@@ -5,16 +5,17 @@ serial: the field evaluator for the first frame, the collision kernels (most of 
 for fields: the descents), then the solver's. On a machine with two cores or more, the
 first world a process steps or simulates forks a child (``start``) when the solver's
 kernels are not yet in the on-disk cache. The child works through the first step's
-kernels from the other end (``world_stages.compile_ahead``: the collisions' pair
-groups that are no closed form in the reverse of their order in a step, then the
-stages after the contact rows' preparation, last stage first), calling them on its
-copy of the world with the same
-argument types, which compiles them into the same cache, and exits. The parent goes on
-as without it. Each kernel is compiled once: a process that reaches a kernel the other
-is compiling waits for it and loads it (``sdfphys._compile_lock``), so the two meet
-somewhere in the middle. At the end of its first step the parent has everything it
-needs and stops the child (``stop``). The trajectory is the same either way, only the
-wait shorter.
+kernels from the other end (``world_stages.compile_ahead``: the substep kernel, the
+collisions' pair groups that are no closed form in the reverse of their order in a step,
+then the other stages after the contact rows' preparation, last stage first), calling
+them on its copy of the world with the same argument types, which compiles them into the
+same cache, and exits. The parent goes on as without it. Each kernel is compiled once: a
+process that reaches a kernel the other is compiling waits for it and loads it
+(``sdfphys._compile_lock``), so the two meet somewhere in the middle; while the parent
+waits it compiles its step's last stages (``world_stages.compile_behind``, run by
+``_compile_lock.while_waiting``). At the end of its first step the parent has
+everything it needs and stops the child (``stop``). The trajectory is the same either
+way, only the wait shorter.
 
 The child writes nothing but cache files: its standard streams go to the null device,
 it closes every other inherited descriptor (a video encoder's pipe must see its end of

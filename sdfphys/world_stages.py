@@ -274,8 +274,7 @@ def compile_behind(world: World) -> list[Callable[[], None]]:
     for a kernel the compiling child holds (``_compile_lock.while_waiting``): the end of
     the collision query (``collide.compile_behind``), the row softness, the
     preparation, the restitution (where some body has it), in the order a step meets
-    them. They act on copies of
-    the bodies made now: the world does not change."""
+    them. They act on copies of the bodies made now: the world does not change."""
     bodies = copy.deepcopy(body_state(world))
     settings, gravity = world.settings, np.array(world._gravity, np.float64)
 
