@@ -45,7 +45,6 @@ def test_a_lock_held_by_a_live_process_is_waited_for(tmp_path):
     assert not os.path.exists(path)
 
 
-
 def test_jobs_run_once_each_while_waiting_and_not_inside_a_held_lock(tmp_path):
     """While another live process holds the lock, the waiting process runs its jobs in
     order, each once; a job that fails is dropped; a job's own wait runs no other job;

@@ -129,7 +129,6 @@ def test_the_child_compiles_the_substep_kernel_before_the_row_softness(monkeypat
                                 kernel_only=True)
 
 
-
 def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(monkeypatch):
     """``compile_behind``'s jobs (the contact cache's store, the reduction, the row
     softness, the preparation, the restitution, on copies and no contacts) leave the
