@@ -272,9 +272,10 @@ def compile_behind(world: World) -> list[Callable[[], None]]:
     """The parent's share of a cold start's compiling (``sdfphys._warm``): jobs that run
     the first step's last stages on no contacts, for the kernels' sake, while it waits
     for a kernel the compiling child holds (``_compile_lock.while_waiting``): the end of
-    the collision query (``collide.compile_behind``), the row softness, the
-    preparation, the restitution (where some body has it), in the order a step meets
-    them. They act on copies of the bodies made now: the world does not change."""
+    the collision query where some pair is no closed form (``collide.compile_behind``),
+    the row softness, the preparation, the restitution (where some body has it), in the
+    order a step meets them. They act on copies of the bodies made now: the world does
+    not change."""
     bodies = copy.deepcopy(body_state(world))
     settings, gravity = world.settings, np.array(world._gravity, np.float64)
 
@@ -291,5 +292,6 @@ def compile_behind(world: World) -> list[Callable[[], None]]:
         apply_restitution(bodies, ContactConstraints.empty(), settings)
 
     bouncy = bool(np.any(world._view("restitution") > 0.0))     # else never needed
-    return collide_behind(len(bodies.inv_mass), settings) + [softness, preparation] + (
+    shapes = collide_behind(collision_shapes(world), world._view("shape_id"), settings)
+    return shapes + [softness, preparation] + (
         [restitution] if bouncy else [])

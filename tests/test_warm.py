@@ -164,6 +164,10 @@ def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(mon
     for job in jobs:
         job()
     assert len(jobs) == 5
+    boxes = sdfphys.World()                           # closed-form pairs only: no cache
+    boxes.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
+    boxes.add_body({"type": "circle", "radius": 0.5}, position=(0.0, 1.0))
+    assert len(world_stages.compile_behind(boxes)) == 2           # softness, preparation
     np.testing.assert_array_equal(w.position, before[0])
     np.testing.assert_array_equal(w.velocity, before[1])
     assert (dict(w.stage_counts), w.step_count) == before[2:]

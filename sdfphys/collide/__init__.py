@@ -480,11 +480,20 @@ def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         PAIR_FUNCTIONS[kinds](shape_a, shape_b, a, b, pose[a], pose[b], margin, settings)
 
 
-def compile_behind(n: int, settings: Settings) -> list[Callable[[], None]]:
-    """The end of a collision query of ``n`` bodies, as jobs for a cold start's parent
-    (``world_stages.compile_behind``): a contact cache's reuse and store (``_carry``,
-    ``_merged``) and the reduction (``_reduce``), on no pairs, with the argument types
-    of ``_narrowphase``'s calls. They touch no world."""
+def compile_behind(shapes: Sequence[Shape], shape_id: np.ndarray,
+                   settings: Settings) -> list[Callable[[], None]]:
+    """The end of a collision query of bodies of these shapes (``shape_id`` (B,) into
+    ``shapes``), as jobs for a cold start's parent (``world_stages.compile_behind``): a
+    contact cache's reuse and store (``_carry``, ``_merged``) and the reduction
+    (``_reduce``), on no pairs, with the argument types of ``_narrowphase``'s calls;
+    none where every pair of them is a closed form (``analytic_contacts``: no cache, no
+    reduction). They touch no world."""
+    distinct, canonical = _distinct(shapes)
+    present = np.unique(_tables(distinct).shape_class[canonical[np.asarray(shape_id)]])
+    first, second = np.meshgrid(present, present)
+    if np.all(analytic_pair(first.ravel(), second.ravel())):
+        return []
+    n = len(shape_id)
     pose = np.zeros((n, 3))
     bodies = (body_turns(pose), np.ones(n), np.zeros(n, np.bool_), np.zeros(n, np.int64))
     no_pairs = np.zeros((0, 2), np.int64)
