@@ -484,10 +484,10 @@ def compile_behind(shapes: Sequence[Shape], shape_id: np.ndarray,
                    settings: Settings) -> list[Callable[[], None]]:
     """The end of a collision query of bodies of these shapes (``shape_id`` (B,) into
     ``shapes``), as jobs for a cold start's parent (``world_stages.compile_behind``): a
-    contact cache's reuse and store (``_carry``, ``_merged``) and the reduction
-    (``_reduce``), on no pairs, with the argument types of ``_narrowphase``'s calls;
-    none where every pair of them is a closed form (``analytic_contacts``: no cache, no
-    reduction). They touch no world."""
+    contact cache's store (``_merged``; its reuse, ``_carry``, comes first in every
+    query, before any wait) and the reduction (``_reduce``), on no pairs, with the
+    argument types of ``_narrowphase``'s calls; none where every pair of them is a
+    closed form (``analytic_contacts``: no cache, no reduction). They touch no world."""
     distinct, canonical = _distinct(shapes)
     present = np.unique(_tables(distinct).shape_class[canonical[np.asarray(shape_id)]])
     first, second = np.meshgrid(present, present)
@@ -499,10 +499,7 @@ def compile_behind(shapes: Sequence[Shape], shape_id: np.ndarray,
     no_pairs = np.zeros((0, 2), np.int64)
 
     def cache() -> None:
-        kept = ContactCache()
-        kept.reuse(no_pairs, pose, bodies[0], *bodies[1:], np.zeros(0),
-                   settings.reuse_distance, settings)
-        kept.store(no_pairs, np.zeros(0), Contacts.empty(), pose, *bodies)
+        ContactCache().store(no_pairs, np.zeros(0), Contacts.empty(), pose, *bodies)
 
     def reduction() -> None:
         reduce_contacts(np.zeros(1, np.int64), np.zeros((0, 2)), np.zeros(0),
