@@ -166,6 +166,34 @@ def test_dense_grid_of_a_jittered_pile_equals_brute_force(rng):
     np.testing.assert_array_equal(pairs, brute_force(bounds, movable))
 
 
+def test_dense_grid_big_boxes_of_every_kind_equal_brute_force(rng):
+    """The dense grid's big boxes, tested against the cells their extent reaches
+    (``_dense_big_pairs``): finite walls and a ground overlapping the pile's edge
+    cells, a slab across its middle, big boxes wholly outside the occupied cells and
+    overlapping each other, half-planes, an infinite box, inverted and NaN boxes
+    (brute force), some of them immovable."""
+    bounds = lattice(rng, 30, 30, side=1.02, jitter=0.2)
+    inf, nan = np.inf, np.nan
+    big = np.array([[-1.5, -1.5, 31.0, 0.3],          # ground, overlapping the first row
+                    [-1.5, -1.5, -0.1, 40.0],         # left wall
+                    [30.2, -1.5, 31.5, 40.0],         # right wall, touching the last column
+                    [10.0, 14.7, 20.0, 15.3],         # a slab across the middle
+                    [50.0, 50.0, 60.0, 60.0],         # outside, overlapping the next one
+                    [55.0, 55.0, 70.0, 70.0],
+                    [-inf, -inf, inf, -1.0],          # half-planes
+                    [29.9, -inf, inf, inf],
+                    [-inf, -inf, inf, inf],           # everything
+                    [inf, inf, inf, inf],             # a box at infinity
+                    [12.0, 5.0, 3.0, 9.0],            # inverted (x), pairs by the formula
+                    [nan, 0.0, 5.0, 5.0]])
+    bounds = np.concatenate([bounds[:200], big, bounds[200:]])
+    movable = rng.random(len(bounds)) < 0.8
+    movable[200:204] = False
+    dense, pairs = _dense_pairs(bounds, movable)
+    assert dense
+    np.testing.assert_array_equal(pairs, brute_force(bounds, movable))
+
+
 def test_sparse_or_mixed_boxes_take_the_hashed_grid(rng):
     """Boxes strewn over a world much larger than their cells, or many boxes far
     larger than the mean: the dense grid declines and the hashed grid gives the pairs."""

@@ -53,10 +53,11 @@ for the rest (mixed sizes, sparse worlds):
    intersection, (max lower x, max lower y): both boxes cover it, so each pair is
    found exactly once, and hash collisions of different cells are skipped.
 
-Both then test each big box against every other box (O(n) per big box: the ground
-and walls of a scene, ``_big_pairs``) and sort the pairs by their first body
-(counting sort) and by the second within it (insertion sort): (i, j) order,
-deterministic, O(n + P).
+Big boxes (the ground and walls of a scene): the hashed grid tests each against every
+other box (O(n) per big box, ``_big_pairs``); the dense grid tests a wall, a ground or
+a half-plane only against the boxes of the cells its extent reaches
+(``_dense_big_pairs``). Both then sort the pairs by their first body (counting sort)
+and by the second within it (insertion sort): (i, j) order, deterministic, O(n + P).
 
 Scenes of at most ``SWEEP_BODIES`` bodies use the sort-and-sweep on x instead
 (Baraff 1992: boxes sorted by lower x, each tested against the following ones
@@ -332,16 +333,29 @@ def _big_pairs(box: np.ndarray, movable: np.ndarray, big: np.ndarray, first: np.
                second: np.ndarray, count: int):
     """Append the pairs of each big box (``big`` (B,) bool) with every other box, by
     brute force, each pair once; returns (first, second, count) as ``_append``."""
+    for g in np.flatnonzero(big):
+        first, second, count = _brute_pairs(box, movable, big, g, first, second, count)
+    return first, second, count
+
+
+@njit(cache=True)
+def _brute_pairs(box: np.ndarray, movable: np.ndarray, big: np.ndarray, g: int,
+                 first: np.ndarray, second: np.ndarray, count: int):
+    """Append the pairs of big box g with every other box but the big ones before it
+    (``_big_pairs``' rule: each pair once). Room for every box is made first and the
+    loop writes each candidate's row, kept or not (as ``_dense_pairs``): a call that may
+    grow the arrays inside the loop makes numba count the arrays' references every
+    iteration, which cost more than the overlap tests.
+    Returns (first, second, count) as ``_append``."""
     n = box.shape[0]
-    for g in range(n):
-        if not big[g]:
-            continue
-        for k in range(n):
-            if k == g or (big[k] and k < g):
-                continue
-            if not (movable[g] or movable[k]) or not _overlap(box, g, k):
-                continue
-            first, second, count = _append(first, second, count, min(g, k), max(g, k))
+    if count + n > first.shape[0]:
+        first = _grown(first, 2 * (count + n))
+        second = _grown(second, 2 * (count + n))
+    for k in range(n):
+        first[count] = min(g, k)
+        second[count] = max(g, k)
+        count += ((k != g) & (not (big[k] and k < g)) & (movable[g] | movable[k])
+                  & _overlap(box, g, k))
     return first, second, count
 
 
@@ -439,8 +453,61 @@ def _dense_pairs(box: np.ndarray, movable: np.ndarray):
             first[count] = min(i, j)
             second[count] = max(i, j)
             count += (movable[i] | movable[j]) & _overlap(box, i, j)
-    first, second, count = _big_pairs(box, movable, big, first, second, count)
+    grid = (inv_h, gx0, gy0, gx1, gy1, width)
+    first, second, count = _dense_big_pairs(box, movable, big, grid, start, entry, first,
+                                            second, count)
     return True, _sorted_pairs(first, second, count, n)
+
+
+@njit(cache=True)
+def _clamped_cell(x: float, lo: int, hi: int) -> int:
+    """floor(x) for x in cell units, clamped to [lo - 3, hi + 3] first (x may be
+    infinite)."""
+    return int(math.floor(min(max(x, lo - 3.0), hi + 3.0)))
+
+
+@njit(cache=True)
+def _dense_big_pairs(box: np.ndarray, movable: np.ndarray, big: np.ndarray, grid, start,
+                     entry, first: np.ndarray, second: np.ndarray, count: int):
+    """``_big_pairs`` on the dense grid: a big box with no NaN side and lower <= upper
+    (a wall, a ground, a half-plane) is tested against the boxes of the cells its
+    extent reaches, not against every box: another box overlaps it only if that box's
+    lower corner, in its cell, lies within [lower - h, upper] of it (its sides are
+    under h), and floor(x / h) is monotone in x, so the cells from floor(lower / h) - 2
+    to floor(upper / h) + 1, clipped to the occupied rectangle, hold every such box.
+    Big boxes are tested against each other, and a big box with a NaN or inverted
+    side against every box, by brute force (``_big_pairs``' rule: each pair once).
+    grid: (1 / h, the rectangle's lowest and highest cell columns and rows, its
+    width in cells), start and entry: the cells' runs of boxes (``_dense_pairs``).
+    Returns (first, second, count) as ``_append``."""
+    inv_h, gx0, gy0, gx1, gy1, width = grid
+    bigs = np.flatnonzero(big)
+    for g in bigs:
+        regular = (box[g, 0] <= box[g, 2]) and (box[g, 1] <= box[g, 3])
+        if not regular:                      # a NaN side or an inverted box
+            first, second, count = _brute_pairs(box, movable, big, g, first, second, count)
+            continue
+        for k in bigs:
+            if k > g and (movable[g] or movable[k]) and _overlap(box, g, k):
+                first, second, count = _append(first, second, count, g, k)
+        if gx1 < gx0:                        # no box in the grid
+            continue
+        x0 = max(_clamped_cell(box[g, 0] * inv_h, gx0, gx1) - 2, gx0)
+        x1 = min(_clamped_cell(box[g, 2] * inv_h, gx0, gx1) + 1, gx1)
+        y0 = max(_clamped_cell(box[g, 1] * inv_h, gy0, gy1) - 2, gy0)
+        y1 = min(_clamped_cell(box[g, 3] * inv_h, gy0, gy1) + 1, gy1)
+        for cy in range(y0, y1 + 1):
+            row = (cy - gy0) * width - gx0 + 1
+            run, end = start[row + x0], start[row + x1 + 1]
+            if count + (end - run) > first.shape[0]:
+                first = _grown(first, 2 * (count + end - run))
+                second = _grown(second, 2 * (count + end - run))
+            for q in range(run, end):
+                j = entry[q]
+                first[count] = min(g, j)
+                second[count] = max(g, j)
+                count += (movable[g] | movable[j]) & _overlap(box, g, j)
+    return first, second, count
 
 
 @njit(cache=True)
