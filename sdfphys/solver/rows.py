@@ -155,12 +155,19 @@ def _prepare_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inerti
     stiff = np.empty(n, np.int64)
     pair_start = np.empty(n + 1, np.int64)
     n_pairs = 0
+    # Body a's cosine and sine, computed where body_a changes from the row before (the
+    # rows come sorted by body_a: once per body; the trigonometry was most of a row's
+    # time).
+    cos_a, sin_a = 1.0, 0.0
     for k in range(depth.shape[0]):
         a = body_a[k]
         b = body_b[k]
         if k == 0 or a != body_a[k - 1] or b != body_b[k - 1]:
             pair_start[n_pairs] = k
             n_pairs += 1
+            if k == 0 or a != body_a[k - 1]:
+                cos_a = math.cos(angle[a])
+                sin_a = math.sin(angle[a])
         nx = normal[k, 0]
         ny = normal[k, 1]
         ma = inv_mass[a]
@@ -188,8 +195,6 @@ def _prepare_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inerti
         arm_a[k, 1] = ray
         arm_b[k, 0] = rbx
         arm_b[k, 1] = rby
-        cos_a = math.cos(angle[a])
-        sin_a = math.sin(angle[a])
         local_anchor[k, 0] = cos_a * rax + sin_a * ray
         local_anchor[k, 1] = cos_a * ray - sin_a * rax
         normal_mass[k] = _effective_mass(ma, ia, mb, ib, rax, ray, rbx, rby, nx, ny)
