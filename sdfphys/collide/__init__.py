@@ -122,7 +122,9 @@ class _ShapeTables:
     bounds (S, 4) body-frame AABBs; radius (S,); shape_class (S,) int64; half (S, 2)
     box half-extents; polygons: ``polygons.polygon_table`` of the boxes and convex
     meshes; sdf, concave (S,) bool: sdf shapes, triangulated meshes that are not convex;
-    kind_rank (S,) int64: each shape's kind's place in KIND_ORDER.
+    kind_rank (S,) int64: each shape's kind's place in KIND_ORDER; mixed, any_sdf,
+    any_concave: whether the shapes hold a circle and a shape that is not one, an sdf
+    shape, a concave mesh (the predicted contacts' kinds, ``_with_predicted``).
     """
 
     def __init__(self, shapes: Sequence[Shape]):
@@ -138,6 +140,10 @@ class _ShapeTables:
                              np.float64).reshape(-1, 2)
         self.polygons = polygon_table([s.vertices if c >= BOX else None
                                        for s, c in zip(shapes, self.shape_class)])
+        circle = self.shape_class == CIRCLE
+        self.mixed = bool(np.any(circle) and not np.all(circle))
+        self.any_sdf = bool(np.any(self.sdf))
+        self.any_concave = bool(np.any(self.concave))
 
 
 _TABLES: dict[tuple[Shape, ...], _ShapeTables] = {}
@@ -382,23 +388,30 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], tables: _ShapeTable
     if not settings.predicted_contacts:
         return contacts
     is_circle = tables.shape_class[body_shape] == CIRCLE
-    pairs = _without_sensors(pairs, pair_filter)
-    extra = predicted_contacts(shapes, body_shape, pairs, is_circle, radius, position, angle,
-                               velocity, angular_velocity, float(settings.dt),
-                               float(settings.linear_slop),
-                               settings.speculative_distance + reach[pairs[:, 0]]
-                               + reach[pairs[:, 1]])
     n = np.int64(len(angle))
+    extra = Contacts.empty()
+    if tables.mixed:             # a circle and a body that is not one: their pairs
+        pairs = pairs[is_circle[pairs[:, 0]] != is_circle[pairs[:, 1]]]
+        pairs = _without_sensors(pairs, pair_filter)
+        extra = predicted_contacts(shapes, body_shape, pairs, is_circle, radius, position,
+                                   angle, velocity, angular_velocity, float(settings.dt),
+                                   float(settings.linear_slop),
+                                   settings.speculative_distance + reach[pairs[:, 0]]
+                                   + reach[pairs[:, 1]])
     if len(extra):
         extra = extra.take(~_implied(contacts, extra, n))
     # Pairs with a contact only (the others are farther apart than their margin, which
     # holds every point's travel in the step, so they cannot meet); contacts are sorted
     # by pair. Sdf pairs, and pairs of a concave (triangulated) mesh with a body that is
     # not a circle.
-    sdf, concave = tables.sdf[body_shape], tables.concave[body_shape]
     a, b = contacts.body_a, contacts.body_b
-    fields = sdf[a] & sdf[b]
-    meshes = (concave[a] | concave[b]) & ~is_circle[a] & ~is_circle[b]
+    fields = meshes = np.zeros(0, bool)
+    if tables.any_sdf:
+        sdf = tables.sdf[body_shape]
+        fields = sdf[a] & sdf[b]
+    if tables.any_concave:
+        concave = tables.concave[body_shape]
+        meshes = (concave[a] | concave[b]) & ~is_circle[a] & ~is_circle[b]
     state = (radius, position, angle, velocity, angular_velocity, reach, settings)
 
     def touching(chosen: np.ndarray) -> np.ndarray:
