@@ -206,3 +206,56 @@ def test_sparse_or_mixed_boxes_take_the_hashed_grid(rng):
         assert not _dense_pairs(bounds, movable)[0]
         np.testing.assert_array_equal(candidate_pairs(bounds, movable),
                                       brute_force(bounds, movable))
+
+
+@pytest.mark.parametrize("n", [40, 700])
+def test_kept_pairs_equal_a_search_every_step(rng, n):
+    """``PairCache`` over 60 steps of jittering, drifting and jumping boxes (sweep and
+    grid sizes): each step's pairs equal ``candidate_pairs`` of that step's boxes, in
+    order, whether the kept pairs served or a new search ran; bodies that become
+    movable, NaN and infinite boxes and a change of body count among them."""
+    from sdfphys.collide.broadphase import PairCache
+
+    cache = PairCache()
+    bounds = random_boxes(rng, n, world=15.0 if n > 100 else 6.0)
+    movable = rng.random(n) < 0.7
+    served = 0
+    for step in range(60):
+        moved = rng.random((len(bounds), 1)) < 0.9
+        bounds = bounds + rng.normal(0.0, 0.0005, (len(bounds), 4)) * moved
+        if step % 7 == 3:
+            jump = rng.choice([-0.5, 0.5], 2)                  # one box jumps
+            bounds[rng.integers(len(bounds))] += np.tile(jump, 2)
+        if step % 11 == 5:
+            movable[rng.integers(len(bounds))] = True          # a body wakes
+        if step == 20:
+            bounds[3] = np.nan
+        if step == 25:
+            bounds[3] = [-np.inf, -np.inf, np.inf, 0.2]
+        if step == 40:
+            bounds, movable = bounds[:-1], movable[:-1]        # a body removed
+        before = cache.pairs
+        pairs = cache.candidate_pairs(bounds, movable)
+        served += cache.pairs is before
+        np.testing.assert_array_equal(pairs, candidate_pairs(bounds, movable))
+        np.testing.assert_array_equal(pairs, brute_force(bounds, movable))
+    assert served > 20          # the kept pairs did serve most jitter-only steps
+
+
+@pytest.mark.parametrize("side", [(1.3, 0.0), (-1.3, 0.0), (0.0, 1.3), (0.0, -1.3)])
+@pytest.mark.parametrize("n", [2, 300])
+def test_kept_pairs_see_a_box_leave_its_grown_box(side, n):
+    """A box 0.3 m from another (beyond the 0.1 m skin) moves 0.35 m toward it, from
+    each side: it leaves its grown box through that side, and the pair is found (the
+    other boxes, if any, far away)."""
+    from sdfphys.collide.broadphase import PairCache
+
+    bounds = np.array([[0.0, 0.0, 1.0, 1.0], [side[0], side[1], side[0] + 1.0,
+                                                 side[1] + 1.0]])
+    far = np.array([[100.0 + 2.0 * k, 100.0, 101.0 + 2.0 * k, 101.0] for k in range(n - 2)])
+    bounds = np.concatenate([bounds, far.reshape(-1, 4)])
+    movable = np.ones(n, bool)
+    cache = PairCache()
+    assert len(cache.candidate_pairs(bounds, movable)) == 0
+    bounds[1] -= 0.35 * np.sign(np.array(side + side))
+    np.testing.assert_array_equal(cache.candidate_pairs(bounds, movable), [[0, 1]])

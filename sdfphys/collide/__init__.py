@@ -270,9 +270,13 @@ def _without(pairs: np.ndarray, exclude: np.ndarray | None, n: int) -> np.ndarra
 
 
 def _candidates(boxes: np.ndarray, movable: np.ndarray, exclude: np.ndarray | None, n: int,
-                pair_filter: PairFilter | None) -> np.ndarray:
-    """The broadphase's pairs (P, 2) without the excluded and the filtered ones."""
-    pairs = _without(candidate_pairs(boxes, movable), exclude, n)
+                pair_filter: PairFilter | None, cache: ContactCache | None = None
+                ) -> np.ndarray:
+    """The broadphase's pairs (P, 2) without the excluded and the filtered ones (from
+    the pairs ``cache`` keeps, ``broadphase.PairCache``, if given)."""
+    pairs = (candidate_pairs(boxes, movable) if cache is None
+             else cache.broadphase.candidate_pairs(boxes, movable))
+    pairs = _without(pairs, exclude, n)
     return pairs if pair_filter is None else pair_filter.pairs(pairs)
 
 
@@ -342,7 +346,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     reach_and_boxes(local_bounds, radius, body_shape, position, angle, velocity,
                     angular_velocity, float(settings.dt), 0.5 * margin,
                     UNBOUNDED_RADIUS, REACH_CAP_RADII, reach, boxes)
-    pairs = _candidates(boxes, movable, exclude, n, pair_filter)
+    pairs = _candidates(boxes, movable, exclude, n, pair_filter, cache)
     shape_class = tables.shape_class
     trig = np.empty((n, 4))
     box_body = shape_class[body_shape] == BOX

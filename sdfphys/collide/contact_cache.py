@@ -49,6 +49,7 @@ import numpy as np
 
 from .._jit import njit
 from ..settings import Settings
+from .broadphase import PairCache
 from .contacts import Contacts
 
 __all__ = ["BODIES", "KEPT", "ContactCache", "body_turns"]
@@ -100,7 +101,8 @@ class ContactCache:
     reference's frame from lo toward hi, feature (K,) int64. The loops over pairs and
     contacts are compiled (``_carry``, ``_merged``), which take these ten arrays as one
     tuple, ``kept`` (``KEPT``: the order), and the bodies' arrays as another,
-    ``bodies`` (``BODIES``).
+    ``bodies`` (``BODIES``). broadphase: the world's kept broadphase pairs
+    (``broadphase.PairCache``).
     """
 
     def __init__(self) -> None:
@@ -109,6 +111,7 @@ class ContactCache:
     def clear(self) -> None:
         """Forget every pair (body indices changed)."""
         self.settings: Settings | None = None
+        self.broadphase = PairCache()
         self._set(np.zeros(0, np.int64), np.zeros((0, 2), np.int64), np.zeros(0, bool),
                   np.zeros((0, 3)), np.zeros(0), np.zeros(1, np.int64), np.zeros((0, 2)),
                   np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, np.int64))
