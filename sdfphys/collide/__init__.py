@@ -350,7 +350,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     shape_class = tables.shape_class
     trig = np.empty((n, 4))
     box_body = shape_class[body_shape] == BOX
-    if np.any(box_body):
+    if tables.mixed and np.any(box_body):        # read by circle-box pairs only
         a_box = angle[box_body]
         trig[box_body] = np.column_stack([np.cos(-a_box), np.sin(-a_box), np.cos(a_box),
                                           np.sin(a_box)])
