@@ -456,6 +456,9 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
             touched[a] = True
     count = 0
     loaded = np.empty((2, 3))
+    # The stiffness r whose coefficients ``loaded[j]`` hold (NaN: none yet); piles cap
+    # most bodies' r at large_cap, so most pairs find theirs computed.
+    loaded_r = np.full(2, np.nan)
     large = np.zeros(n_pairs, np.bool_)
     for p in range(n_pairs):
         first = pair_start[p]
@@ -483,8 +486,7 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
             passes[count] = cap
             count += 1
         # A loaded pair's coefficients for its plain and its stiff rows (base stiffness
-        # omega, doubled), each computed at its first row (bit j of known), not at every row.
-        known = 0
+        # omega, doubled), computed where r differs from the last r of that kind of row.
         for k in range(first, pair_start[p + 1]):
             j = stiff[k]
             if r == 1.0:
@@ -492,14 +494,14 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
                 mass_scale[k] = base_mass_scale[j]
                 impulse_scale[k] = base_impulse_scale[j]
                 continue
-            if not known & (1 << j):
+            if r != loaded_r[j]:
                 root_r = math.sqrt(r)
                 w = omega * (2.0 if j else 1.0) * root_r
                 a1 = 2.0 * zeta * root_r + h * w
                 a2 = h * w * a1
                 a3 = 1.0 / (1.0 + a2)
                 loaded[j, 0], loaded[j, 1], loaded[j, 2] = w / a1, a2 * a3, a3
-                known |= 1 << j
+                loaded_r[j] = r
             bias_rate[k], mass_scale[k], impulse_scale[k] = \
                 loaded[j, 0], loaded[j, 1], loaded[j, 2]
     return loaded_pairs[:count], passes[:count], large
