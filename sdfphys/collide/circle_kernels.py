@@ -80,8 +80,8 @@ def reach_and_boxes(shape_bounds: np.ndarray, shape_radius: np.ndarray,
         r = radius if math.isfinite(radius) else unbounded_radius
         speed = math.hypot(velocity[i, 0], velocity[i, 1]) + abs(angular_velocity[i]) * r
         reach[i] = min(dt * speed, reach_cap * r)
-        body_box(shape_bounds[s], radius, position[i, 0], position[i, 1], angle[i],
-                 half_margin + reach[i], boxes[i])
+        body_box(shape_bounds, s, radius, position[i, 0], position[i, 1], angle[i],
+                 half_margin + reach[i], boxes, i)
 
 
 #: Shape classes of ``analytic_contacts``: handled by the general path, circle, box
