@@ -410,7 +410,10 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
     """Value (n,) and gradient (n, 2) of the program at points[:n] (m), into value, grad.
 
     One instruction at a time over the whole batch (the dispatch costs once per
-    batch, the inner loops are tight). stack, frames, cur: ``scratch`` arrays of at
+    batch, the inner loops are tight). The stacks are read and written by index
+    (stack[sp, j, 0]), never through row views (stack[sp]): numba counts a view's
+    references with atomic operations, and the descents run programs on a few points
+    at a time. stack, frames, cur: ``scratch`` arrays of at
     least the program's depth and nesting and n points. Kernels call it with start,
     sp, fp = 0, 0, 0. Returns (i, sp, fp): i = len(code) once the program has run to
     its end and written value and grad; otherwise i is the row of an EXTERNAL leaf
@@ -427,7 +430,7 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
         if op == SKIP_FAR:
             # Skip the guarded operand and its blend when every point is at least k
             # beyond the current value from the operand's box (module docstring).
-            top = stack[sp - 1]
+            top = sp - 1
             x0, y0, x1, y1, k = consts[o], consts[o + 1], consts[o + 2], consts[o + 3], \
                 consts[o + 4]
             far = n > 0
@@ -438,7 +441,7 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
                 # Outside the box b is the distance to its region, at least lower; inside
                 # it b may be anything down to minus its inradius.
                 if not (lower > 0.0
-                        and lower * (1.0 - 1e-9) >= top[j, 0] + k * (1.0 + 1e-9) + 1e-12):
+                        and lower * (1.0 - 1e-9) >= stack[top, j, 0] + k * (1.0 + 1e-9) + 1e-12):
                     far = False
                     break
             if far:
@@ -446,24 +449,26 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
         elif op == EXTERNAL:
             return i, sp, fp
         elif op == CIRCLE:
-            out = stack[sp]
+            at = sp
             r = consts[o]
             for j in range(n):
                 x, y = cur[j, 0], cur[j, 1]
                 length = math.hypot(x, y)
+                stack[at, j, 0] = length - r
                 if length > TINY:
-                    out[j, 0], out[j, 1], out[j, 2] = length - r, x / length, y / length
+                    stack[at, j, 1], stack[at, j, 2] = x / length, y / length
                 else:
-                    out[j, 0], out[j, 1], out[j, 2] = length - r, 1.0, 0.0
+                    stack[at, j, 1], stack[at, j, 2] = 1.0, 0.0
             sp += 1
         elif op == BOX:
-            out = stack[sp]
+            at = sp
             hx, hy = consts[o], consts[o + 1]
             for j in range(n):
-                out[j, 0], out[j, 1], out[j, 2] = _box(cur[j, 0], cur[j, 1], hx, hy)
+                v, gx, gy = _box(cur[j, 0], cur[j, 1], hx, hy)
+                stack[at, j, 0], stack[at, j, 1], stack[at, j, 2] = v, gx, gy
             sp += 1
         elif op == ROUNDED_BOX:
-            out = stack[sp]
+            at = sp
             hx, hy = consts[o], consts[o + 1]
             for j in range(n):
                 x, y = cur[j, 0], cur[j, 1]
@@ -472,74 +477,76 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
                 else:
                     r = consts[o + 5] if x >= 0.0 else consts[o + 4]
                 v, gx, gy = _box(x, y, hx - r, hy - r)
-                out[j, 0], out[j, 1], out[j, 2] = v - r, gx, gy
+                stack[at, j, 0], stack[at, j, 1], stack[at, j, 2] = v - r, gx, gy
             sp += 1
         elif op == HALF_PLANE:
-            out = stack[sp]
+            at = sp
             nx, ny, level = consts[o], consts[o + 1], consts[o + 2]
             for j in range(n):
-                out[j, 0] = (cur[j, 0] * nx + cur[j, 1] * ny) - level
-                out[j, 1], out[j, 2] = nx, ny
+                stack[at, j, 0] = (cur[j, 0] * nx + cur[j, 1] * ny) - level
+                stack[at, j, 1], stack[at, j, 2] = nx, ny
             sp += 1
         elif op == POLYGON:
-            out = stack[sp]
+            at = sp
             for j in range(n):
-                out[j, 0], out[j, 1], out[j, 2] = _polygon(consts, o, a, cur[j, 0], cur[j, 1])
+                v, gx, gy = _polygon(consts, o, a, cur[j, 0], cur[j, 1])
+                stack[at, j, 0], stack[at, j, 1], stack[at, j, 2] = v, gx, gy
             sp += 1
         elif op == SEGMENT:
-            out = stack[sp]
+            at = sp
             for j in range(n):
-                out[j, 0], out[j, 1], out[j, 2] = _segment(consts, o, cur[j, 0], cur[j, 1])
+                v, gx, gy = _segment(consts, o, cur[j, 0], cur[j, 1])
+                stack[at, j, 0], stack[at, j, 1], stack[at, j, 2] = v, gx, gy
             sp += 1
         elif op == ELLIPSE:
-            _ellipse(consts[o], consts[o + 1], a, cur, n, stack[sp])
+            _ellipse(consts[o], consts[o + 1], a, cur, n, stack, sp)
             sp += 1
         elif op > ELLIPSE:
-            out = stack[sp]
+            at = sp
             for j in range(n):
-                out[j, 0], out[j, 1], out[j, 2] = _shape(op, consts, o, a, b, cur[j, 0],
-                                                         cur[j, 1])
+                v, gx, gy = _shape(op, consts, o, a, b, cur[j, 0], cur[j, 1])
+                stack[at, j, 0], stack[at, j, 1], stack[at, j, 2] = v, gx, gy
             sp += 1
         elif op == PUSH_T:
-            saved = frames[fp]
+            saved = fp
             fp += 1
             ox, oy, c, s, ms = consts[o], consts[o + 1], consts[o + 2], consts[o + 3], \
                 consts[o + 4]
             for j in range(n):
                 x, y = cur[j, 0], cur[j, 1]
-                saved[j, 0], saved[j, 1] = x, y
+                frames[saved, j, 0], frames[saved, j, 1] = x, y
                 px, py = x - ox, y - oy
                 cur[j, 0], cur[j, 1] = c * px + s * py, ms * px + c * py
         elif op == POP_T:
             fp -= 1
-            saved = frames[fp]
-            top = stack[sp - 1]
+            saved = fp
+            top = sp - 1
             c, s, ms = consts[o + 2], consts[o + 3], consts[o + 4]
             for j in range(n):
-                cur[j, 0], cur[j, 1] = saved[j, 0], saved[j, 1]
-                gx, gy = top[j, 1], top[j, 2]
-                top[j, 1], top[j, 2] = c * gx + ms * gy, s * gx + c * gy
+                cur[j, 0], cur[j, 1] = frames[saved, j, 0], frames[saved, j, 1]
+                gx, gy = stack[top, j, 1], stack[top, j, 2]
+                stack[top, j, 1], stack[top, j, 2] = c * gx + ms * gy, s * gx + c * gy
         elif op == PUSH_S:
-            saved = frames[fp]
+            saved = fp
             fp += 1
             factor = consts[o]
             for j in range(n):
                 x, y = cur[j, 0], cur[j, 1]
-                saved[j, 0], saved[j, 1] = x, y
+                frames[saved, j, 0], frames[saved, j, 1] = x, y
                 cur[j, 0], cur[j, 1] = x / factor, y / factor
         elif op == POP_S:
             fp -= 1
-            saved = frames[fp]
-            top = stack[sp - 1]
+            saved = fp
+            top = sp - 1
             factor = consts[o]
             for j in range(n):
-                cur[j, 0], cur[j, 1] = saved[j, 0], saved[j, 1]
-                top[j, 0] = factor * top[j, 0]
+                cur[j, 0], cur[j, 1] = frames[saved, j, 0], frames[saved, j, 1]
+                stack[top, j, 0] = factor * stack[top, j, 0]
         elif op == SELECT:
             # min (union), max (intersection) or max(a, -b1, -b2, ...) (difference)
             # of the a operands on top; the first one wins a tie.
             first = sp - a
-            out = stack[first]
+            at = first
             for j in range(n):
                 pick = first
                 best = stack[first, j, 0]
@@ -549,15 +556,15 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
                         pick, best = k, d
                 if pick != first:
                     sign = -1.0 if b == 2 else 1.0
-                    out[j, 0] = sign * stack[pick, j, 0]
-                    out[j, 1] = sign * stack[pick, j, 1]
-                    out[j, 2] = sign * stack[pick, j, 2]
+                    stack[at, j, 0] = sign * stack[pick, j, 0]
+                    stack[at, j, 1] = sign * stack[pick, j, 1]
+                    stack[at, j, 2] = sign * stack[pick, j, 2]
             sp = first + 1
         elif op == XOR:
-            left, right = stack[sp - 2], stack[sp - 1]
+            left, right = sp - 2, sp - 1
             for j in range(n):
-                d, g0x, g0y = left[j, 0], left[j, 1], left[j, 2]
-                e, g1x, g1y = right[j, 0], right[j, 1], right[j, 2]
+                d, g0x, g0y = stack[left, j, 0], stack[left, j, 1], stack[left, j, 2]
+                e, g1x, g1y = stack[right, j, 0], stack[right, j, 1], stack[right, j, 2]
                 low, high = min(d, e), max(d, e)
                 if d <= e:
                     lx, ly = g0x, g0y
@@ -567,50 +574,49 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
                     hx, hy = g0x, g0y
                 else:
                     hx, hy = g1x, g1y
-                left[j, 0] = max(low, -high)
+                stack[left, j, 0] = max(low, -high)
                 if low >= -high:
-                    left[j, 1], left[j, 2] = lx, ly
+                    stack[left, j, 1], stack[left, j, 2] = lx, ly
                 else:
-                    left[j, 1], left[j, 2] = -hx, -hy
+                    stack[left, j, 1], stack[left, j, 2] = -hx, -hy
             sp -= 1
         elif op == SMOOTH:
-            left, right = stack[sp - 2], stack[sp - 1]
+            left, right = sp - 2, sp - 1
             k = consts[o]
             for j in range(n):
-                d, g0x, g0y = left[j, 0], left[j, 1], left[j, 2]
-                e, g1x, g1y = right[j, 0], right[j, 1], right[j, 2]
+                d, g0x, g0y = stack[left, j, 0], stack[left, j, 1], stack[left, j, 2]
+                e, g1x, g1y = stack[right, j, 0], stack[right, j, 1], stack[right, j, 2]
                 if a == 0:
                     v, w = _smooth_min(d, e, k, b)
-                    left[j, 0] = v
-                    left[j, 1] = (1.0 - w) * g0x + w * g1x
-                    left[j, 2] = (1.0 - w) * g0y + w * g1y
+                    stack[left, j, 0] = v
+                    stack[left, j, 1] = (1.0 - w) * g0x + w * g1x
+                    stack[left, j, 2] = (1.0 - w) * g0y + w * g1y
                 elif a == 1:
                     v, w = _smooth_min(-d, -e, k, b)
-                    left[j, 0] = -v
-                    left[j, 1] = (1.0 - w) * g0x + w * g1x
-                    left[j, 2] = (1.0 - w) * g0y + w * g1y
+                    stack[left, j, 0] = -v
+                    stack[left, j, 1] = (1.0 - w) * g0x + w * g1x
+                    stack[left, j, 2] = (1.0 - w) * g0y + w * g1y
                 else:
                     v, w = _smooth_min(-d, e, k, b)
-                    left[j, 0] = -v
-                    left[j, 1] = (1.0 - w) * g0x - w * g1x
-                    left[j, 2] = (1.0 - w) * g0y - w * g1y
+                    stack[left, j, 0] = -v
+                    stack[left, j, 1] = (1.0 - w) * g0x - w * g1x
+                    stack[left, j, 2] = (1.0 - w) * g0y - w * g1y
             sp -= 1
         elif op == ROUND:
-            top = stack[sp - 1]
+            top = sp - 1
             r = consts[o]
             for j in range(n):
-                top[j, 0] = top[j, 0] - r
+                stack[top, j, 0] = stack[top, j, 0] - r
         elif op == ONION:
-            top = stack[sp - 1]
+            top = sp - 1
             thickness = consts[o]
             for j in range(n):
-                v = top[j, 0]
+                v = stack[top, j, 0]
                 if v < 0.0:
-                    top[j, 1], top[j, 2] = -top[j, 1], -top[j, 2]
-                top[j, 0] = abs(v) - thickness
-    result = stack[0]
+                    stack[top, j, 1], stack[top, j, 2] = -stack[top, j, 1], -stack[top, j, 2]
+                stack[top, j, 0] = abs(v) - thickness
     for j in range(n):
-        value[j], grad[j, 0], grad[j, 1] = result[j, 0], result[j, 1], result[j, 2]
+        value[j], grad[j, 0], grad[j, 1] = stack[0, j, 0], stack[0, j, 1], stack[0, j, 2]
     return code.shape[0], sp, fp
 
 

@@ -61,8 +61,10 @@ def _ellipse_newton(big_a: float, big_b: float, e: float, u: float) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def _ellipse(a: float, b: float, swap: int, cur: np.ndarray, n: int, out: np.ndarray) -> None:
-    """conics.Ellipse at cur[:n] into out: Eberly's closest point, from
+def _ellipse(a: float, b: float, swap: int, cur: np.ndarray, n: int, stack: np.ndarray,
+             at: int) -> None:
+    """conics.Ellipse at cur[:n] into out = stack[at] (written by index: a row view
+    costs numba a reference count per call): Eberly's closest point, from
     _FAST_NEWTON Newton steps, or for the points whose last step did not settle, 12
     bisections and 6 Newton steps. Each step runs over all the points before the next
     (as vectorized code does): the points' dependency chains of divisions and square
@@ -72,16 +74,16 @@ def _ellipse(a: float, b: float, swap: int, cur: np.ndarray, n: int, out: np.nda
     e = a * a - b * b
     for j in range(n):
         big_a, big_b = _ellipse_terms(a, b, swap, cur[j, 0], cur[j, 1])
-        out[j, 0] = max(big_b, big_a - e) if big_b > 0.0 else 1.0
+        stack[at, j, 0] = max(big_b, big_a - e) if big_b > 0.0 else 1.0
     for _ in range(_FAST_NEWTON):
         for j in range(n):
             big_a, big_b = _ellipse_terms(a, b, swap, cur[j, 0], cur[j, 1])
             if not big_b > 0.0:
                 big_b = 1.0
-            out[j, 1] = out[j, 0]
-            out[j, 0] = _ellipse_newton(big_a, big_b, e, out[j, 0])
+            stack[at, j, 1] = stack[at, j, 0]
+            stack[at, j, 0] = _ellipse_newton(big_a, big_b, e, stack[at, j, 0])
     for j in range(n):
-        if abs(out[j, 0] - out[j, 1]) <= _SETTLED * out[j, 0]:
+        if abs(stack[at, j, 0] - stack[at, j, 1]) <= _SETTLED * stack[at, j, 0]:
             continue
         big_a, big_b = _ellipse_terms(a, b, swap, cur[j, 0], cur[j, 1])
         if big_b > 0.0:
@@ -101,7 +103,7 @@ def _ellipse(a: float, b: float, swap: int, cur: np.ndarray, n: int, out: np.nda
             norm = math.hypot(fx, fy)
             slope = fx * fx / (lo + e) + fy * fy / lo
             lo = lo + norm * norm * (norm - 1.0) / slope
-        out[j, 0] = lo
+        stack[at, j, 0] = lo
     for j in range(n):
         px, py = cur[j, 0], cur[j, 1]
         if swap:
@@ -110,7 +112,7 @@ def _ellipse(a: float, b: float, swap: int, cur: np.ndarray, n: int, out: np.nda
         x, y = abs(px), abs(py)
         big_a, big_b = a * x, b * y
         if big_b > 0.0:
-            u = out[j, 0]
+            u = stack[at, j, 0]
             xc = a * big_a / (u + e)
             yc = b * big_b / u
         elif big_a < e:
@@ -125,5 +127,5 @@ def _ellipse(a: float, b: float, swap: int, cur: np.ndarray, n: int, out: np.nda
         gx, gy = gx * sx, gy * sy
         if swap:
             gx, gy = gy, gx
-        out[j, 0] = -dist if ra * ra + rb * rb < 1.0 else dist
-        out[j, 1], out[j, 2] = gx, gy
+        stack[at, j, 0] = -dist if ra * ra + rb * rb < 1.0 else dist
+        stack[at, j, 1], stack[at, j, 2] = gx, gy
