@@ -117,8 +117,7 @@ def body_box(bounds: np.ndarray, row: int, radius: float, x: float, y: float, an
     pose; grow: m added all round. Where the bounds hold the disc's box (a circle's),
     the disc's box is the answer at every angle (the turned bounds hold the disc), so
     no rotation is computed. Tables and rows, not row views: a view made per body in
-    a loop costs numba its reference counts (the 2,000-circle pile's boxes: 81 us with
-    views, 28 without).
+    a loop costs numba an atomic reference count (docs/performance.md).
     """
     x0, y0, x1, y1 = bounds[row, 0], bounds[row, 1], bounds[row, 2], bounds[row, 3]
     if x0 <= -radius and y0 <= -radius and x1 >= radius and y1 >= radius:
@@ -645,6 +644,10 @@ class PairCache:
     original (and an empty cache gives the same pairs, by a search)."""
 
     def __init__(self) -> None:
+        self.clear()
+
+    def clear(self) -> None:
+        """Keep nothing: the next query searches."""
         self.grown = np.zeros((0, 4))
         self.movable = np.zeros(0, bool)
         self.pairs = np.zeros((0, 2), np.int64)
@@ -667,5 +670,5 @@ class PairCache:
         kept, pairs = _kept_pairs(self.pairs, self.grown, self.movable, bounds, movable)
         if kept:
             return pairs
-        self.__init__()                     # a NaN box is inside nothing: keep nothing
+        self.clear()                        # a NaN box is inside nothing: keep nothing
         return candidate_pairs(bounds, movable)

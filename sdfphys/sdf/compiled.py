@@ -546,7 +546,6 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
             # min (union), max (intersection) or max(a, -b1, -b2, ...) (difference)
             # of the a operands on top; the first one wins a tie.
             first = sp - a
-            at = first
             for j in range(n):
                 pick = first
                 best = stack[first, j, 0]
@@ -556,9 +555,9 @@ def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack:
                         pick, best = k, d
                 if pick != first:
                     sign = -1.0 if b == 2 else 1.0
-                    stack[at, j, 0] = sign * stack[pick, j, 0]
-                    stack[at, j, 1] = sign * stack[pick, j, 1]
-                    stack[at, j, 2] = sign * stack[pick, j, 2]
+                    stack[first, j, 0] = sign * stack[pick, j, 0]
+                    stack[first, j, 1] = sign * stack[pick, j, 1]
+                    stack[first, j, 2] = sign * stack[pick, j, 2]
             sp = first + 1
         elif op == XOR:
             left, right = sp - 2, sp - 1
