@@ -1,0 +1,184 @@
+"""Where a step's time goes inside numba's kernels: perf's samples, named by kernel.
+
+perf (Linux) samples any process, but the machine code numba makes has no symbols:
+its samples show as bare addresses. This tool runs a scene in a process of its own with
+numba's cache in a new temporary folder and the cold start's compiling child off
+(``SDFPHYS_WARM=0``), so that every kernel is compiled in that process and its LLVM
+module is at hand (a kernel loaded from the cache has none). After the warm-up steps it
+writes ``/tmp/perf-PID.map``, perf's map of JIT code (start, size and name per line),
+naming every function of every sdfphys kernel's library: the kernel, the njit functions
+compiled into it that were not inlined, and numba's ``NRT_incref`` / ``NRT_decref``
+(the reference counts of arrays, views and structrefs). Then it runs ``perf record -e
+cpu-clock`` on itself over the timed steps and prints the top symbols of ``perf
+report``. cpu-clock is a software event: no hardware counters are needed. A function's
+size in the map is the distance to the next function's start (numba does not say), so
+code placed after a library's last function is charged to it.
+
+Reading it: a share for ``NRT_incref`` / ``NRT_decref`` means views or arrays passed
+through calls in a loop (docs/performance.md, "2026-11-28, later"); Python's own
+symbols (``_PyEval_EvalFrameDefault``, numpy's) are the glue between kernels.
+
+Usage: python tools/profile_steps.py SCENE [--steps 300] [--warm 300] [--top 30]
+    [--set KNOB=VALUE ...] [--frequency 4000]
+SCENE: a ``tools/bench_vs_peers.py`` scene (pile2000, pyramid20, showcase, ...) or a
+scene file (``--set`` then sets its [sim] keys). Needs ``perf`` on the PATH and
+permission to record the process (``/proc/sys/kernel/perf_event_paranoid`` at most 2);
+``--map-only`` writes the map after the warm-up, prints its path and leaves it (for a
+``perf record -p`` of your own).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+_CHILD = "SDFPHYS_PROFILE_STEPS_CHILD"
+
+
+def short_name(symbol: str) -> str:
+    """A readable name for numba's mangled symbol: its module and function
+    (``_ZN7sdfphys6solver8substeps6_solveB2v5...`` -> ``sdfphys.solver.substeps._solve``);
+    other symbols as they are."""
+    match = re.match(r"_ZN(?:7cpython)?((?:\d+[A-Za-z_][A-Za-z_0-9]*)+)", symbol)
+    if not match:
+        return symbol
+    parts, rest = [], match.group(1)
+    while rest:
+        head = re.match(r"(\d+)", rest)
+        if not head:
+            break
+        size = int(head.group(1))
+        start = len(head.group(1))
+        parts.append(rest[start:start + size])
+        rest = rest[start + size:]
+    name = ".".join(parts)
+    return "cpython:" + name if symbol.startswith("_ZN7cpython") else name
+
+
+def map_entries() -> list[tuple[int, str]]:
+    """(address, name) of every function defined in the library of every overload of
+    every sdfphys kernel compiled in this process, sorted by address."""
+    import importlib
+    import pkgutil
+
+    from numba.core.registry import CPUDispatcher
+
+    import sdfphys
+
+    entries: set[tuple[int, str]] = set()
+    seen: set[int] = set()
+    for info in pkgutil.walk_packages(sdfphys.__path__, "sdfphys."):
+        if info.name.endswith("__main__"):
+            continue
+        module = importlib.import_module(info.name)
+        for value in vars(module).values():
+            if not isinstance(value, CPUDispatcher) or id(value) in seen:
+                continue
+            seen.add(id(value))
+            for result in value.overloads.values():
+                library = result.library
+                try:
+                    functions = [f.name for f in library._final_module.functions
+                                 if not f.is_declaration]
+                except Exception:                # loaded from a cache: no module
+                    continue
+                for name in functions:
+                    address = library.get_pointer_to_function(name)
+                    if address:
+                        entries.add((address, short_name(name)))
+    return sorted(entries)
+
+
+def write_map(path: Path, entries: list[tuple[int, str]]) -> None:
+    """perf's JIT map: one ``START SIZE NAME`` line (hex) per function, the size up to
+    the next function's start (at most 1 MiB)."""
+    with open(path, "w") as out:
+        for k, (address, name) in enumerate(entries):
+            end = entries[k + 1][0] if k + 1 < len(entries) else address + 4096
+            out.write(f"{address:x} {min(end - address, 1 << 20):x} {name}\n")
+
+
+def make_world(scene: str, knobs: list[str]):
+    """A fresh world of a bench_vs_peers scene name or a scene file."""
+    sys.path.insert(0, str(ROOT / "tools"))
+    import bench_vs_peers as bench
+
+    if Path(scene).suffix == ".toml":
+        import sdfphys
+
+        return sdfphys.load_scene(scene, [f"sim.{k}" for k in knobs])
+    kind, size = bench.parse_scene(scene)
+    return bench.sdfphys_world(bench.make_layout(kind, size),
+                               bench.sdfphys_settings(knobs, False))
+
+
+def child(args: argparse.Namespace) -> int:
+    """In the process with a fresh cache: warm up, map, record, report."""
+    world = make_world(args.scene, args.set)
+    for _ in range(args.warm):
+        world.step()
+    world = make_world(args.scene, args.set)
+    map_path = Path(f"/tmp/perf-{os.getpid()}.map")
+    write_map(map_path, map_entries())
+    if args.map_only:
+        print(map_path)
+        return 0
+    with tempfile.TemporaryDirectory(prefix="sdfphys-perf-") as folder:
+        data = Path(folder) / "perf.data"
+        perf = subprocess.Popen(["perf", "record", "-e", "cpu-clock", "-F",
+                                 str(args.frequency), "-p", str(os.getpid()), "-o", str(data)],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        time.sleep(1.0)                                    # perf attaches
+        start = time.perf_counter()
+        for _ in range(args.steps):
+            world.step()
+        seconds = time.perf_counter() - start
+        perf.send_signal(signal.SIGINT)
+        _, error = perf.communicate(timeout=60)
+        report = (subprocess.run(["perf", "report", "-i", str(data), "--no-children",
+                                  "--sort", "symbol", "--stdio"], capture_output=True,
+                                 text=True).stdout if data.exists() else "")
+    map_path.unlink(missing_ok=True)
+    if not report:
+        print(f"profile_steps: perf recorded nothing: {error.strip()[:300]}", file=sys.stderr)
+        return 2
+    print(f"{args.scene}: {args.steps} steps in {seconds:.3f} s "
+          f"({seconds / max(args.steps, 1) * 1e3:.3f} ms a step, perf attached)")
+    lines = [line for line in report.splitlines() if line.strip() and not line.startswith("#")]
+    for line in lines[:args.top]:                   # without perf's empty IPC columns
+        print(re.sub(r"(\s+-)+$", "", re.sub(r"\s+", " ", line.strip())))
+    return 0
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("scene")
+    parser.add_argument("--steps", type=int, default=300)
+    parser.add_argument("--warm", type=int, default=300)
+    parser.add_argument("--top", type=int, default=30)
+    parser.add_argument("--frequency", type=int, default=4000)
+    parser.add_argument("--set", nargs="*", default=[], metavar="KNOB=VALUE")
+    parser.add_argument("--map-only", action="store_true")
+    return parser.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    if os.environ.get(_CHILD) == "1":
+        return child(args)
+    with tempfile.TemporaryDirectory(prefix="sdfphys-profile-cache-") as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache, SDFPHYS_WARM="0", **{_CHILD: "1"})
+        return subprocess.run([sys.executable, __file__, *sys.argv[1:]] if argv is None
+                              else [sys.executable, __file__, *argv], env=env).returncode
+
+
+if __name__ == "__main__":
+    sys.exit(main())
