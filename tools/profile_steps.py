@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -173,7 +174,15 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     if os.environ.get(_CHILD) == "1":
-        return child(args)
+        try:
+            return child(args)
+        except (ValueError, OSError) as error:           # SpecError is a ValueError
+            print(f"profile_steps: {args.scene}: {error}", file=sys.stderr)
+            return 2
+    if not args.map_only and shutil.which("perf") is None:
+        print("profile_steps: perf is not on the PATH (Linux's linux-tools; or --map-only)",
+              file=sys.stderr)
+        return 2
     with tempfile.TemporaryDirectory(prefix="sdfphys-profile-cache-") as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache, SDFPHYS_WARM="0", **{_CHILD: "1"})
         return subprocess.run([sys.executable, __file__, *sys.argv[1:]] if argv is None
