@@ -1,7 +1,6 @@
 """tools/bench_startup.py: its child mode times numba's compilations; its tables count each
 kernel once."""
 
-import importlib.util
 import json
 import os
 import subprocess
@@ -9,16 +8,10 @@ import sys
 from pathlib import Path
 
 import pytest
+from tools_module import load_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 TOOL = ROOT / "tools" / "bench_startup.py"
-
-
-def load_tool():
-    spec = importlib.util.spec_from_file_location("bench_startup", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def child(tmp_path: Path, name: str) -> dict:
@@ -52,7 +45,7 @@ def record(kernel: str, seconds: float, signature: str = "(float64,)") -> dict:
 
 
 def test_tables_count_each_kernel_once_from_the_first_scene_that_compiled_it():
-    tool = load_tool()
+    tool = load_tool("bench_startup")
     runs = {"process_s": 1.0, "compiles": []}
     a = {"process_s": 9.0, "compiles": [record("sdfphys.solver._solve", 2.0),
                                         record("sdfphys.solver._solve", 1.0, "(int64,)"),

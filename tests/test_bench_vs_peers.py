@@ -2,29 +2,16 @@
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from tools_module import load_tool
 
 from sdfphys.errors import SpecError
 from sdfphys.settings import Settings
 
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "bench_vs_peers.py"
-
-
-def _load_tool():
-    spec = importlib.util.spec_from_file_location("bench_vs_peers", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-bench = _load_tool()
+bench = load_tool("bench_vs_peers")
 ENGINES = ["sdfphys", "pymunk", "box2d", "box2d-16"]
 CONFIG = bench.Config(Settings(), steps=60, every=5)
 

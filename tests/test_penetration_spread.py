@@ -2,25 +2,15 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
+from tools_module import load_tool
 
 ROOT = Path(__file__).resolve().parents[1]
-TOOL = ROOT / "tools" / "penetration_spread.py"
 
 
-def _load_tool():
-    sys.path.insert(0, str(TOOL.parent))            # it imports bench_vs_peers
-    spec = importlib.util.spec_from_file_location("penetration_spread", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-spread = _load_tool()
+spread = load_tool("penetration_spread")
 HEAD_ON = ROOT / "scenes" / "head_on.toml"
 
 

@@ -1,7 +1,6 @@
 """tools/profile_steps.py: numba's symbols demangled, its perf map names the kernels of
 a process that compiled them, and a profile prints them (where perf can record)."""
 
-import importlib.util
 import os
 import shutil
 import subprocess
@@ -9,20 +8,14 @@ import sys
 from pathlib import Path
 
 import pytest
+from tools_module import load_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 TOOL = ROOT / "tools" / "profile_steps.py"
 
 
-def load_tool():
-    spec = importlib.util.spec_from_file_location("profile_steps", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_short_name_demangles_numba_symbols():
-    tool = load_tool()
+    tool = load_tool("profile_steps")
     mangled = ("_ZN7sdfphys6solver8substeps6_solveB2v5B42c8tJTIeFIjxB2IKSgI4CrvQClUaPLJ"
                "hwEUSBJgA_3dEN5numba942_SubstepBodiesType")
     assert tool.short_name(mangled) == "sdfphys.solver.substeps._solve"
