@@ -138,11 +138,13 @@ def prepare(world: World, contacts: Contacts, bodies: BodyState) -> ContactConst
     """Stage 2: anchors (at the centre of curvature of a turning sdf body's surface,
     ``collide.curvature``), masses, base separations, warm-start impulses."""
     curvature = None
-    sdf = np.array([shape.kind == "sdf" for shape in world._shapes])
-    if world.settings.curvature_anchors and len(contacts) and np.any(sdf):
-        turning = sdf[world._view("shape_id")] & turning_bodies(
-            world._view("kind") == STATIC, bodies.angular_velocity, bodies.radius,
-            world.settings.dt)
+    if world.settings.curvature_anchors and len(contacts):
+        sdf = np.array([shape.kind == "sdf" for shape in world._shapes])
+        turning = np.zeros(0, bool)                     # no sdf shape: none turns
+        if np.any(sdf):
+            turning = sdf[world._view("shape_id")] & turning_bodies(
+                world._view("kind") == STATIC, bodies.angular_velocity, bodies.radius,
+                world.settings.dt)
         if np.any(turning):
             curvature = curvature_radii(collision_shapes(world), world._view("shape_id"),
                                         bodies.com, bodies.angle, turning, contacts)
