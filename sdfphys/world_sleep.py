@@ -27,8 +27,8 @@ from .world_bodies import DYNAMIC, KINEMATIC
 if TYPE_CHECKING:
     from .world import World
 
-__all__ = ["active", "awake", "fall_asleep", "wake_bodies", "wake_islands", "wake_reached",
-           "wake_touching"]
+__all__ = ["active", "awake", "fall_asleep", "islands_falling", "wake_bodies", "wake_islands",
+           "wake_reached", "wake_touching"]
 
 
 def awake(world: World) -> np.ndarray:
@@ -91,6 +91,17 @@ def wake_islands(world: World, islands: np.ndarray) -> None:
     world._sleep_contacts = c.take(~(woken[c.body_a] | woken[c.body_b]))
 
 
+def islands_falling(world: World, bodies: BodyState, constraints: ContactConstraints,
+                    awake: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The islands (B,) int64 roots (``islands.island_roots``: bodies tied by the
+    contacts of ``constraints`` and by joints) and the awake bodies (B,) bool whose
+    island has rested ``time_to_sleep`` in every body (``sleep.falling_asleep``)."""
+    c = constraints
+    root = island_roots(bodies.inv_mass, *world._joints.linked(c.body_a, c.body_b))
+    return root, falling_asleep(root, awake, world._view("sleep_time"),
+                                world.settings.time_to_sleep)
+
+
 def fall_asleep(world: World, bodies: BodyState, constraints: ContactConstraints,
                 start_com: np.ndarray, start_angle: np.ndarray, awake: np.ndarray,
                 active: np.ndarray) -> None:
@@ -110,8 +121,7 @@ def fall_asleep(world: World, bodies: BodyState, constraints: ContactConstraints
     sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
     if not np.any(sleep_time[awake] >= s.time_to_sleep):
         return                       # no body has rested long enough: no island can sleep
-    root = island_roots(bodies.inv_mass, *world._joints.linked(c.body_a, c.body_b))
-    falling = falling_asleep(root, awake, sleep_time, s.time_to_sleep)
+    root, falling = islands_falling(world, bodies, constraints, awake)
     if not np.any(falling):
         return
     d = world._data

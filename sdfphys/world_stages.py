@@ -29,6 +29,7 @@ from .shapes import Shape, collision_shape
 from .solver import (
     BodyState,
     ContactConstraints,
+    ImpulseCache,
     apply_restitution,
     prepare_contacts,
     solve_substeps,
@@ -43,7 +44,8 @@ if TYPE_CHECKING:
     from .world import World
 
 __all__ = ["PAIR_STAGES", "STAGES", "accelerations", "body_state", "collide",
-           "collision_shapes", "compile_ahead", "compile_behind", "pair_filter", "prepare",
+           "collision_shapes", "compile_ahead", "compile_behind", "compile_later",
+           "pair_filter", "prepare",
            "record", "restitution", "store_impulses", "substeps", "time_of_impact"]
 
 #: Narrowphase stages, one per pair kind (``collide.narrowphase.PAIR_FUNCTIONS``):
@@ -267,6 +269,7 @@ def compile_ahead(world: World) -> None:
                                 world_sleep.active(world))
     if np.any(world._view("restitution") > 0.0):
         apply_restitution(bodies, constraints, world.settings)
+    compile_later(world, bodies)
     substeps(world, constraints, bodies)
 
 
@@ -293,7 +296,28 @@ def compile_behind(world: World) -> list[Callable[[], None]]:
     def restitution() -> None:
         apply_restitution(bodies, ContactConstraints.empty(), settings)
 
+    def later() -> None:
+        compile_later(world, bodies)
+
     bouncy = bool(np.any(world._view("restitution") > 0.0))     # else never needed
     shapes = collide_behind(collision_shapes(world), world._view("shape_id"), settings)
-    return shapes + [softness, preparation] + (
-        [restitution] if bouncy else [])
+    return shapes + [softness, preparation] + ([restitution] if bouncy else []) + [later]
+
+
+def compile_later(world: World, bodies: BodyState) -> None:
+    """For a cold start's two processes (``sdfphys._warm``), once the first step's kernels
+    are done: the kernels a first step does not call and the next steps do, on one
+    made-up row with the argument types of a step's calls. The warm start's match
+    against the impulses a step left (``ImpulseCache.match``: by key, then by place;
+    with ``warm_starting``) and, with ``sleeping``, the islands falling asleep once a
+    body has rested ``time_to_sleep`` (``world_sleep.islands_falling``). Changes
+    nothing: the child compiles them while the parent ends its first step
+    (``compile_ahead``), the parent while it waits for the child (``compile_behind``)."""
+    s = world.settings
+    if s.warm_starting:
+        ints = np.zeros(1, np.int64)
+        ImpulseCache(ints, ints + 1, ints, np.zeros(1), np.zeros(1), np.zeros((1, 2))).match(
+            ints.copy(), ints + 1, ints + 1, np.zeros((1, 2)), float(s.linear_slop))
+    if s.sleeping:
+        world_sleep.islands_falling(world, bodies, ContactConstraints.empty(),
+                                    world_sleep.awake(world))

@@ -131,17 +131,18 @@ def test_the_child_compiles_the_substep_kernel_before_the_row_softness(monkeypat
 
 def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(monkeypatch):
     """``compile_behind``'s jobs (the contact cache's store, the reduction, the row
-    softness, the preparation, the restitution, on copies and no contacts) leave the
+    softness, the preparation, the restitution, on copies and no contacts; then the
+    later steps' warm-start match and falling asleep, ``compile_later``) leave the
     world as it was and call each kernel with argument types its steps call it with
-    (an sdf box resting on the ground goes through the cache and the reduction): no
-    kernel compiled for a job that a step does not use."""
+    (an sdf box resting on the ground goes through the cache and the reduction, and
+    falls asleep): no kernel compiled for a job that a step does not use."""
     import numba
     import numpy as np
 
     import sdfphys
-    from sdfphys import world_stages
+    from sdfphys import world_sleep, world_stages
     from sdfphys.collide import contact_cache, reduce
-    from sdfphys.solver import restitution, rows, softness
+    from sdfphys.solver import restitution, rows, softness, warm_start
 
     w = sdfphys.World()
     w.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
@@ -150,7 +151,9 @@ def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(mon
     w.add_body({"type": "sdf", "field": {"type": "box", "size": [0.8, 0.4]}}, position=(1.0, 0.7))
     kernels = ((contact_cache, "_merged"), (reduce, "_reduce"),
                (softness, "_row_softness_kernel"), (rows, "_prepare_kernel"),
-               (restitution, "_restitution_kernel"))
+               (restitution, "_restitution_kernel"), (warm_start, "_merge_keys"),
+               (warm_start, "_pair_ranges"), (warm_start, "_match_by_place"),
+               (world_sleep, "falling_asleep"))
     calls = {name: [] for _, name in kernels}
     for module, name in kernels:
         kernel = getattr(module, name)
@@ -163,11 +166,11 @@ def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(mon
     jobs = world_stages.compile_behind(w)
     for job in jobs:
         job()
-    assert len(jobs) == 5
+    assert len(jobs) == 6
     boxes = sdfphys.World()                           # closed-form pairs only: no cache
     boxes.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
     boxes.add_body({"type": "circle", "radius": 0.5}, position=(0.0, 1.0))
-    assert len(world_stages.compile_behind(boxes)) == 2           # softness, preparation
+    assert len(world_stages.compile_behind(boxes)) == 3      # softness, preparation, later
     np.testing.assert_array_equal(w.position, before[0])
     np.testing.assert_array_equal(w.velocity, before[1])
     assert (dict(w.stage_counts), w.step_count) == before[2:]
@@ -178,4 +181,7 @@ def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(mon
     for _ in range(30):
         w.step()
     assert w.contacts.body_b.tolist().count(2) >= 2                 # the sdf box rests
+    for _ in range(90):
+        w.step()
+    assert w.asleep[2]
     assert {n: by_jobs[n] - set(t) for n, t in calls.items() if not by_jobs[n] <= set(t)} == {}
