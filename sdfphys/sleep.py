@@ -21,8 +21,6 @@ on one of its bodies or on a body it touches, when gravity changes, or on
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ._jit import njit
@@ -47,9 +45,12 @@ def rest_times(velocity, angular_velocity, com, angle, start_com, start_angle, r
         dx = (com[i, 0] - start_com[i, 0]) / dt
         dy = (com[i, 1] - start_com[i, 1]) / dt
         turn = abs(angle[i] - start_angle[i]) / dt
-        speed = max(math.hypot(velocity[i, 0], velocity[i, 1]), math.hypot(dx, dy),
-                    max(abs(angular_velocity[i]), turn) * radius[i])
-        sleep_time[i] = sleep_time[i] + dt if speed < sleep_speed else 0.0
+        spin = max(abs(angular_velocity[i]), turn) * radius[i]
+        # Squared speeds against the squared threshold: the norms' test (up to rounding
+        # at the threshold) without a call of hypot per speed.
+        speed2 = max(velocity[i, 0] * velocity[i, 0] + velocity[i, 1] * velocity[i, 1],
+                     dx * dx + dy * dy, spin * spin)
+        sleep_time[i] = sleep_time[i] + dt if speed2 < sleep_speed * sleep_speed else 0.0
 
 
 @njit(cache=True, error_model="numpy")

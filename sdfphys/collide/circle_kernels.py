@@ -233,6 +233,12 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
             group_margin = margin + group_reach[sf, ss]
             dx = position[s, 0] - position[f, 0]
             dy = position[s, 1] - position[f, 1]
+            # Pairs clearly beyond their margin are dropped before the distance (a
+            # relative 1e-9 over the squared reach: rounding cannot turn a kept pair
+            # into a dropped one); the others take the test below.
+            gap = (rf + shape_radius[ss]) + min(group_margin, (margin + reach[f]) + reach[s])
+            if dx * dx + dy * dy > (1.0 + 1e-9) * (gap * gap):
+                continue
             distance = math.hypot(dx, dy)
             d = (rf + shape_radius[ss]) - distance
             if not (d > -group_margin and d > -((margin + reach[f]) + reach[s])):
