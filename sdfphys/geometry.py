@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ._jit import njit
+from ._jit import interpreted, njit
 from .errors import SpecError, check_number, check_points
 from .sdf.base import Field
 from .sorting import stable_argsort
@@ -254,6 +254,18 @@ def _is_counter_clockwise(p: np.ndarray) -> bool:
     return _orient(a[0], a[1], p[k, 0], p[k, 1], c[0], c[1]) > 0
 
 
+#: Outlines of at most this many vertices are checked and triangulated by the kernels
+#: run as Python (``_jit.interpreted``, the same bits): a scene's polygons take about a
+#: millisecond each that way, where compiling the kernels took 2.9 s of every cold
+#: start with a polygon; longer outlines (ear clipping is O(M^2)) take the kernels.
+INTERPRETED_VERTICES = 64
+
+
+def _run(kernel: Any, p: np.ndarray) -> Any:
+    """``kernel(p)``, interpreted for an outline p of at most INTERPRETED_VERTICES."""
+    return (interpreted(kernel) if p.shape[0] <= INTERPRETED_VERTICES else kernel)(p)
+
+
 def _as_vertex_array(points: Any, path: str) -> np.ndarray:
     """``points`` (a sequence of [x, y] or an (M, 2) array) as finite float64 (M, 2)."""
     if isinstance(points, np.ndarray):
@@ -310,17 +322,17 @@ def validate_polygon(points: Any, path: str = "points") -> np.ndarray:
         raise SpecError(path, "the closing point repeats the first and leaves fewer than "
                               "3 distinct points")
     m = p.shape[0]
-    if _all_collinear(p):
+    if _run(_all_collinear, p):
         raise SpecError(path, "all points are collinear (zero area)")
-    k = _first_fold(p)
+    k = _run(_first_fold, p)
     if k >= 0:
         raise SpecError(path, f"edges {(k - 1) % m} and {k} overlap (the outline doubles "
                               f"back at {path}[{k}])")
-    i, j, kind = _first_intersection(p)
+    i, j, kind = _run(_first_intersection, p)
     if kind != 0:
         how = "cross" if kind == 1 else "touch"
         raise SpecError(path, f"edges {i} and {j} {how} (self-intersecting polygon)")
-    if not _is_counter_clockwise(p):
+    if not _run(_is_counter_clockwise, p):
         p = np.roll(p[::-1], 1, axis=0)
     return p
 
@@ -409,7 +421,7 @@ def triangulate(points: Any, path: str = "points") -> np.ndarray:
     predicates; a 2,000-vertex outline takes 5 to 20 ms (validation included).
     """
     p = validate_polygon(points, path)
-    triangles = _ear_clip(p)
+    triangles = _run(_ear_clip, p)
     if triangles.shape[0] != p.shape[0] - 2:
         raise RuntimeError("ear clipping stalled on a validated polygon (a bug in "
                            "sdfphys.geometry)")

@@ -7,6 +7,9 @@ area_for_poly / moment_for_poly / moment_for_circle.
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import time
 from fractions import Fraction
 
@@ -15,6 +18,7 @@ import pymunk
 import pytest
 
 from sdfphys import geometry
+from sdfphys._jit import interpreted
 from sdfphys.errors import SpecError
 from sdfphys.geometry import (
     _cell_moments,
@@ -301,8 +305,9 @@ def test_triangulation_of_nearly_degenerate_decimal_collinear_points():
 
 
 def test_large_star_polygons_are_fast(rng):
-    validate_polygon(star(50, rng))  # compiled (or loaded from cache) before timing
-    triangulate(star(50, rng))
+    # compiled (or loaded from cache) before timing: longer than the interpreted outlines
+    validate_polygon(star(geometry.INTERPRETED_VERTICES + 1, rng))
+    triangulate(star(geometry.INTERPRETED_VERTICES + 1, rng))
     for _ in range(3):
         p = star(2000, rng)
         start = time.perf_counter()
@@ -322,6 +327,68 @@ def test_spiral_and_comb_of_about_2000_vertices_are_fast():
         assert elapsed < 0.25, f"{len(p)}-vertex triangulation took {elapsed:.3f} s"
         assert tri.shape == (len(p) - 2, 3)
         assert np.all(signed_areas(validate_polygon(p), tri) > 0.0)
+
+
+def test_the_interpreted_kernels_give_the_compiled_kernels_bits(rng):
+    """``_jit.interpreted``: the simplicity tests and the ear clipping run as Python (for
+    short outlines) give what their compiled kernels give, to the bit and index: on
+    random concave stars, integer-jittered hexagons (exact ties: collinear vertices,
+    folds, touching and crossing edges, both windings) and nearly collinear decimal
+    points (the exact predicate's path)."""
+    hexagon = 2.0 * np.column_stack([np.cos(np.arange(6) * np.pi / 3),
+                                     np.sin(np.arange(6) * np.pi / 3)])
+    xs = np.arange(11) * 0.1
+    outlines = ([star(n, rng) for n in (5, 12, 40, 64)]
+                + [np.round(hexagon + rng.integers(-2, 3, size=(6, 2))) for _ in range(200)]
+                + [np.vstack([np.column_stack([xs, 3.0 * xs]), [[0.5, 4.0], [-0.5, 1.0]]]),
+                   collinear_rich(), np.asarray(U_SHAPE, float)[::-1], comb(5)])
+    kernels = (geometry._all_collinear, geometry._first_fold, geometry._first_intersection)
+    valid = 0
+    for p in outlines:
+        p = np.ascontiguousarray(p, dtype=np.float64)
+        if (p == np.roll(p, 1, axis=0)).all(axis=1).any():
+            continue                        # repeated points: validation stops earlier
+        for kernel in kernels:
+            assert interpreted(kernel)(p) == kernel(p), (kernel.__name__, p)
+        try:
+            q = validate_polygon(p)
+        except SpecError:
+            continue
+        valid += 1
+        assert interpreted(geometry._is_counter_clockwise)(p) == \
+            geometry._is_counter_clockwise(p)
+        np.testing.assert_array_equal(interpreted(geometry._ear_clip)(q), geometry._ear_clip(q))
+    assert valid > 50
+    triples = rng.uniform(-1.0, 1.0, (2000, 6))
+    triples[:, 4:] = triples[:, :2] + rng.uniform(0.0, 1.0, (2000, 1)) * (
+        triples[:, 2:4] - triples[:, :2])                   # c on the line a-b, rounded
+    for t in triples:
+        assert interpreted(_orient)(*t) == _orient(*t)
+
+
+SMALL_POLYGONS = """
+import numpy as np
+from sdfphys import geometry
+kernels = (geometry._all_collinear, geometry._first_fold, geometry._first_intersection,
+           geometry._is_counter_clockwise, geometry._ear_clip)
+theta = np.linspace(0.0, 2.0 * np.pi, {n}, endpoint=False)
+radius = np.where(np.arange({n}) % 2 == 0, 1.0, 0.5)
+geometry.triangulate([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]])
+geometry.triangulate(np.column_stack([radius * np.cos(theta), radius * np.sin(theta)]))
+print(sum(len(k.signatures) for k in kernels))
+"""
+
+
+def test_short_outlines_compile_no_kernel_and_long_ones_take_the_kernels():
+    """A scene's polygons (up to INTERPRETED_VERTICES vertices) are checked and
+    triangulated with no geometry kernel compiled or loaded (a cold start skips their
+    compile); a longer outline takes the five kernels."""
+    n = geometry.INTERPRETED_VERTICES
+    counts = [subprocess.run([sys.executable, "-c", SMALL_POLYGONS.format(n=m)],
+                             capture_output=True, text=True, check=True, timeout=600,
+                             env={**os.environ, "SDFPHYS_COMPILE_NOTICE": "0"}).stdout.split()
+              for m in (n, n + 2)]
+    assert counts == [["0"], ["5"]]
 
 
 def test_triangulate_reports_errors_under_the_callers_path():
