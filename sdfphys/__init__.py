@@ -6,7 +6,7 @@ window live in ``sdfphys.render``, ``sdfphys.video`` and ``sdfphys.play``.
 
 from importlib import metadata as _metadata
 
-from . import _compile_lock, _numba_cache, _numba_literals, _shared_kernel
+from . import _compile_lock, _numba_cache, _numba_flags, _numba_literals, _shared_kernel
 
 try:
     __version__ = _metadata.version("sdfphys")      # pyproject.toml's, once installed
@@ -15,6 +15,7 @@ except _metadata.PackageNotFoundError:              # a source tree that was nev
 
 _numba_cache.install()      # before any kernel is defined: caches follow the whole package
 _numba_literals.install()   # one compilation per kernel and types, constants or not
+_numba_flags.install()      # compiler flags compared in closed form (the same keys)
 _compile_lock.install()     # processes on one cache compile each kernel once
 _shared_kernel.install()    # kernels called by name are published before their callers run
 
