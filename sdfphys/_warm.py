@@ -14,8 +14,12 @@ process that reaches a kernel the other is compiling waits for it and loads it
 (``sdfphys._compile_lock``), so the two meet somewhere in the middle; while the parent
 waits it compiles its step's last stages (``world_stages.compile_behind``, run by
 ``_compile_lock.while_waiting``). At the end of its first step the parent has
-everything it needs and stops the child (``stop``). The trajectory is the same either
-way, only the wait shorter.
+everything that step needed; the child goes on with what later steps may call
+(``compile_ahead``: the field evaluator where fields will be evaluated, the pairs that
+meet later, the stages of the steps after the first) and exits when done, or when the
+parent exits (``stop``, at exit), and the parent keeps its jobs for its later waits:
+a scene whose bodies meet after the first step no longer compiles their contacts in
+one process. The trajectory is the same either way, only the wait shorter.
 
 The child writes nothing but cache files: its standard streams go to the null device,
 it closes every other inherited descriptor (a video encoder's pipe must see its end of
@@ -28,6 +32,7 @@ in the environment turns it off.
 
 from __future__ import annotations
 
+import atexit
 import os
 import pickle
 import signal
@@ -72,7 +77,7 @@ def start(world: Any) -> int | None:
     step's last stages, compiled whenever it would wait for a kernel the child holds
     (``world_stages.compile_behind``). Returns the child's pid (None: no child)."""
     global _behind
-    pid = _fork(lambda: world)
+    pid = _fork(lambda: world, early=False)
     if _child is not None and not _done.is_set() and not _behind:
         from . import _compile_lock
         from .world_stages import compile_behind
@@ -96,7 +101,7 @@ def start_early(scene: Any) -> int | None:
     if not any(isinstance(b.shape, SdfShape) and b.shape.bounded
                and "_mass" not in b.shape.__dict__ for b in scene.bodies):
         return None
-    return _fork(lambda: placeholder_world(scene))
+    return _fork(lambda: placeholder_world(scene), early=True)
 
 
 def placeholder_world(scene: Any) -> Any:
@@ -119,8 +124,10 @@ def placeholder_world(scene: Any) -> Any:
     return scene.build()
 
 
-def _fork(make_world: Callable[[], Any]) -> int | None:
-    """``start``'s fork: the child compiles ahead for ``make_world()``, its own world."""
+def _fork(make_world: Callable[[], Any], early: bool) -> int | None:
+    """``start``'s fork: the child compiles ahead for ``make_world()``, its own world
+    (early: forked by ``start_early``, the parent compiling the field evaluator); the
+    parent stops it at exit (``stop``) if it still runs."""
     global _started, _child
     if _started:
         return None
@@ -141,12 +148,13 @@ def _fork(make_world: Callable[[], Any]) -> int | None:
             os.environ["SDFPHYS_COMPILE_NOTICE"] = "0"
             from .world_stages import compile_ahead
 
-            compile_ahead(make_world())
+            compile_ahead(make_world(), early)
         finally:
             os._exit(0)
     _child = pid
     _done.clear()
     threading.Thread(target=_reap, args=(pid,), daemon=True).start()
+    atexit.register(stop)
     return pid
 
 
@@ -165,10 +173,10 @@ def _reap(pid: int) -> None:
 
 
 def stop() -> None:
-    """The parent, at the end of its first step: ask the child (if it still runs) to
-    leave and wait until it has, at most STOP_SECONDS. Whatever the child has not
-    compiled by then the parent did not need this step; a kernel the child was
-    compiling is left for whoever needs it next."""
+    """The parent, at exit (or whenever it must not leave the child running): ask the
+    child (if it still runs) to leave and wait until it has, at most STOP_SECONDS, and
+    drop the parent's jobs left (``start``); a kernel the child was compiling is left
+    for whoever needs it next."""
     global _child
     if _child is not None and not _done.is_set():
         try:

@@ -308,8 +308,6 @@ class World(WorldJoints):
             self._data["torque"][:self._n] = 0.0
             self._forces = False
         self.time += self.settings.dt
-        if self.step_count == 0:
-            _warm.stop()
         self.step_count += 1
 
     @property

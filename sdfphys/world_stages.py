@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import world_sleep
-from .collide import Contacts, find_contacts
+from .collide import Contacts, compile_evaluator, find_contacts
 from .collide import compile_ahead as collide_ahead
 from .collide import compile_behind as collide_behind
 from .collide.curvature import curvature_radii, turning_bodies
@@ -246,23 +246,30 @@ def record(world: World, rows: WorldContacts, relative_velocity: np.ndarray) -> 
                                s.linear_slop, s.hit_speed)
 
 
-def compile_ahead(world: World) -> None:
+def compile_ahead(world: World, early: bool = False) -> None:
     """What the compiling child (``sdfphys._warm``) runs in its copy of the world, for
-    the kernels' sake: the substep kernel (alone, on no contacts); the collisions' pair
-    functions that are no closed form (descents, field programs), from the last group
-    to the first (``collide.compile_ahead``); then the other stages after the
-    preparation of the contact rows, on no contacts, last stage first (the restitution
-    only where some body has it), the row softness last. The parent starts from the
-    other end (its first frame's field evaluator, the closed-form contacts, the first
-    groups) and compiles the end of the collisions, the row softness, the preparation
-    and the restitution while it waits for the child (``compile_behind``;
-    docs/performance.md, "Start-up and the numba cache")."""
+    the kernels' sake: the substep kernel (alone, on no contacts); unless ``early`` (the
+    parent then compiles it for the SDF bodies' masses), the field evaluator where a
+    step may evaluate a field (``collide.compile_evaluator``); the collisions' pair
+    functions that are no closed form (descents, field programs) of the pairs meeting
+    now, from the last group to the first (``collide.compile_ahead``); then the other
+    stages after the preparation of the contact rows, on no contacts, last stage first
+    (the restitution only where some body has it); the later steps' kernels
+    (``compile_later``); the pairs that may meet in a later step (``compile_ahead``'s
+    ``later``); the row softness last. The parent starts from the other end (its first
+    frame's field evaluator, the closed-form contacts, the first groups) and compiles
+    the end of the collisions, the row softness, the preparation and the restitution
+    while it waits for the child (``compile_behind``; docs/performance.md, "Start-up
+    and the numba cache")."""
     bodies = body_state(world)
     constraints = ContactConstraints.empty()
     substeps(world, constraints, bodies, kernel_only=True)
+    if not early:
+        compile_evaluator(collision_shapes(world))
     movable = world._view("kind") == DYNAMIC
-    collide_ahead(collision_shapes(world), world._view("shape_id"), bodies.com, bodies.angle,
-                  movable, world.settings)
+    pairs = (collision_shapes(world), world._view("shape_id"), bodies.com, bodies.angle,
+             movable, world.settings)
+    collide_ahead(*pairs)
     if world.settings.sleeping:
         world_sleep.fall_asleep(world, bodies, constraints, bodies.com.copy(),
                                 bodies.angle.copy(), world_sleep.awake(world),
@@ -270,6 +277,7 @@ def compile_ahead(world: World) -> None:
     if np.any(world._view("restitution") > 0.0):
         apply_restitution(bodies, constraints, world.settings)
     compile_later(world, bodies)
+    collide_ahead(*pairs, later=True)
     substeps(world, constraints, bodies)
 
 

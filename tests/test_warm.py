@@ -83,7 +83,7 @@ def test_the_early_child_only_while_sdf_masses_are_unknown(monkeypatch):
     from sdfphys.scene import read_scene
 
     forks = []
-    monkeypatch.setattr(_warm, "_fork", lambda make_world: forks.append(make_world))
+    monkeypatch.setattr(_warm, "_fork", lambda make_world, early: forks.append(make_world))
     scene = read_scene({"version": 1, "body": [{"shape": {"type": "sdf", "field": {
         "type": "circle", "radius": 0.3125}}}]})
     scene.build()                               # forks (here: recorded), then integrates
@@ -98,9 +98,9 @@ def test_the_early_child_only_while_sdf_masses_are_unknown(monkeypatch):
 
 def test_the_child_compiles_the_substep_kernel_before_the_row_softness(monkeypatch):
     """``compile_ahead`` runs the substep kernel alone first, then the collisions that
-    are no closed form, then the row softness, which the parent meets first in its step
-    (and compiles while it waits: ``compile_behind``); the substep kernel alone is
-    refused for rows it would run without their softness."""
+    are no closed form meeting now, later, then the row softness, which the parent
+    meets first in its step (and compiles while it waits: ``compile_behind``); the
+    substep kernel alone is refused for rows it would run without their softness."""
     import numpy as np
 
     import sdfphys
@@ -115,12 +115,13 @@ def test_the_child_compiles_the_substep_kernel_before_the_row_softness(monkeypat
                         lambda *a: calls.append("softness") or loaded(*a))
     ahead = world_stages.collide_ahead
     monkeypatch.setattr(world_stages, "collide_ahead",
-                        lambda *a: calls.append("collide") or ahead(*a))
+                        lambda *a, later=False: calls.append(("collide", later))
+                        or ahead(*a, later=later))
     w = sdfphys.World()
     w.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
     w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 0.9))
     world_stages.compile_ahead(w)
-    assert calls == ["kernel", "collide", "softness", "kernel"]
+    assert calls == ["kernel", ("collide", False), ("collide", True), "softness", "kernel"]
     bodies = world_stages.body_state(w)
     rows = world_stages.prepare(w, world_stages.collide(w, bodies, None), bodies)
     assert len(rows) > 0                            # the box rests on the ground
@@ -130,9 +131,10 @@ def test_the_child_compiles_the_substep_kernel_before_the_row_softness(monkeypat
 
 
 def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(monkeypatch):
-    """``compile_behind``'s jobs (the contact cache's store, the reduction, the row
-    softness, the preparation, the restitution, on copies and no contacts; then the
-    later steps' warm-start match and falling asleep, ``compile_later``) leave the
+    """``compile_behind``'s jobs (the contact cache's store, the reduction, the end of
+    the mesh-in-field path, the row softness, the preparation, the restitution, on
+    copies and no contacts; then the later steps' warm-start match and falling asleep,
+    ``compile_later``) leave the
     world as it was and call each kernel with argument types its steps call it with
     (an sdf box resting on the ground goes through the cache and the reduction, and
     falls asleep): no kernel compiled for a job that a step does not use."""
@@ -141,7 +143,7 @@ def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(mon
 
     import sdfphys
     from sdfphys import world_sleep, world_stages
-    from sdfphys.collide import contact_cache, reduce
+    from sdfphys.collide import contact_cache, mesh_contacts, reduce
     from sdfphys.solver import restitution, rows, softness, warm_start
 
     w = sdfphys.World()
@@ -149,7 +151,7 @@ def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(mon
     w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(-1.0, 1.2), velocity=(0.5, -1.0),
                restitution=0.5)
     w.add_body({"type": "sdf", "field": {"type": "box", "size": [0.8, 0.4]}}, position=(1.0, 0.7))
-    kernels = ((contact_cache, "_merged"), (reduce, "_reduce"),
+    kernels = ((contact_cache, "_merged"), (reduce, "_reduce"), (mesh_contacts, "_finish"),
                (softness, "_row_softness_kernel"), (rows, "_prepare_kernel"),
                (restitution, "_restitution_kernel"), (warm_start, "_merge_keys"),
                (warm_start, "_pair_ranges"), (warm_start, "_match_by_place"),
@@ -166,7 +168,7 @@ def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(mon
     jobs = world_stages.compile_behind(w)
     for job in jobs:
         job()
-    assert len(jobs) == 6
+    assert len(jobs) == 7
     boxes = sdfphys.World()                           # closed-form pairs only: no cache
     boxes.add_body({"type": "box", "size": [4.0, 1.0]}, kind="static")
     boxes.add_body({"type": "circle", "radius": 0.5}, position=(0.0, 1.0))
@@ -185,3 +187,72 @@ def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(mon
         w.step()
     assert w.asleep[2]
     assert {n: by_jobs[n] - set(t) for n, t in calls.items() if not by_jobs[n] <= set(t)} == {}
+
+
+def test_the_child_compiles_the_field_evaluator_where_a_step_may_evaluate_a_field(
+        monkeypatch):
+    """``collide.compile_evaluator``: one field evaluated (the evaluator compiled) where a
+    circle's predicted contacts, an sdf body or a concave mesh will evaluate fields,
+    none for circles alone or boxes alone; ``compile_ahead`` runs it after the substep
+    kernel unless the child was forked early (the parent compiles it then)."""
+    import sdfphys
+    from sdfphys import collide, world_stages
+    from sdfphys.sdf import compiled
+
+    evaluated = []
+    evaluate = compiled.evaluate
+    monkeypatch.setattr(compiled, "evaluate",
+                        lambda f, p, *a: evaluated.append(len(p)) or evaluate(f, p, *a))
+
+    def world(*specs):
+        w = sdfphys.World()
+        for i, spec in enumerate(specs):
+            w.add_body(spec, position=(3.0 * i, 5.0))
+        return w
+
+    circle, box = {"type": "circle", "radius": 0.5}, {"type": "box", "size": [1.0, 1.0]}
+    l_shape = {"type": "polygon", "points": [[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]]}
+    for specs, expected in (((circle, circle), []), ((box, box), []), ((circle, box), [1]),
+                            ((l_shape, box), [1]),
+                            (({"type": "sdf", "field": {"type": "circle", "radius": 0.5}},),
+                             [1])):
+        evaluated.clear()
+        collide.compile_evaluator(world_stages.collision_shapes(world(*specs)))
+        assert evaluated == expected, specs
+    calls = []
+    monkeypatch.setattr(world_stages, "compile_evaluator", lambda shapes: calls.append(1))
+    world_stages.compile_ahead(world(circle, box), early=True)
+    assert calls == []
+    world_stages.compile_ahead(world(circle, box))
+    assert calls == [1]
+
+
+def test_the_child_runs_one_pair_of_each_path_that_meets_only_later(monkeypatch):
+    """Concave polygons falling apart onto a box ground: no pair meets at the start, so
+    ``compile_ahead`` runs no pair function for now; with ``later`` it runs one pair of
+    each path (a concave polygon on the ground box, two concave polygons), the second
+    body placed on the first, and nothing for the closed forms (two boxes)."""
+    import numpy as np
+
+    import sdfphys
+    from sdfphys import collide, world_stages
+
+    calls = []
+    for kinds, function in list(collide.PAIR_FUNCTIONS.items()):
+        monkeypatch.setitem(collide.PAIR_FUNCTIONS, kinds, lambda *a, _f=function, _k=kinds:
+                            calls.append((_k, len(a[2]), a[4].copy(), a[5].copy()))
+                            or _f(*a))
+    w = sdfphys.World()
+    w.add_body({"type": "box", "size": [20.0, 1.0]}, kind="static")
+    l_shape = {"type": "polygon", "points": [[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]]}
+    for x in (-6.0, -2.0, 2.0, 6.0):
+        w.add_body(l_shape, position=(x, 4.0))
+    w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(0.0, 8.0))
+    shapes = (world_stages.collision_shapes(w), w.shape_id, w.position,
+              np.asarray(w.angle), np.array([False] + [True] * 5), w.settings)
+    collide.compile_ahead(*shapes)
+    assert calls == []
+    collide.compile_ahead(*shapes, later=True)
+    assert [(kinds, n) for kinds, n, _, _ in calls] == [(("mesh", "mesh"), 1)] * 3
+    for _, _, pose_a, pose_b in calls:
+        np.testing.assert_array_equal(pose_a, pose_b)

@@ -64,6 +64,7 @@ from typing import Any
 
 import numpy as np
 
+from ..sdf import compiled
 from ..sdf.polygonal import Box
 from ..settings import Settings
 from ..shapes import Shape, shape_from_spec
@@ -87,7 +88,7 @@ from .predicted import predicted_contacts, predicted_field_contacts, predicted_m
 from .reduce import reduce_contacts
 
 __all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "ContactCache", "Contacts", "collide",
-           "compile_behind", "find_contacts", "speculative_reach"]
+           "compile_behind", "compile_evaluator", "find_contacts", "speculative_reach"]
 
 #: A body's reach (extra speculative margin) is capped at this many bounding radii.
 REACH_CAP_RADII = 2.0
@@ -464,14 +465,18 @@ def _implied(contacts: Contacts, extra: Contacts, n: np.int64) -> np.ndarray:
 
 
 def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.ndarray,
-                  angle: np.ndarray, movable: np.ndarray, settings: Settings) -> None:
+                  angle: np.ndarray, movable: np.ndarray, settings: Settings,
+                  later: bool = False) -> None:
     """The collisions' part of a cold start's compiling child (``sdfphys._warm``): the
     pair functions of the pairs whose boxes meet at these poses (arguments as
     ``find_contacts``; margin the speculative distance), group by group in the reverse
     of ``find_contacts``'s order, and a mesh-sdf group's second direction
     (``mesh_sdf.sdf_in_mesh``) before the whole pair function, whose first direction
-    is the other end's start. What it finds is dropped: it runs for the kernels it
-    compiles."""
+    is the other end's start. With ``later``, instead, the pairs that may meet in a
+    later step: for each set of kernels (``path``) that no pair meeting at these poses
+    runs, one pair of bodies of two shapes (one body movable) with its second body
+    placed on its first (the same pose: they overlap). What it finds is dropped: it
+    runs for the kernels it compiles."""
     from .mesh_sdf import sdf_in_mesh
     from .narrowphase import _flat
 
@@ -480,21 +485,66 @@ def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     tables = _tables(distinct)
     position = np.ascontiguousarray(position, np.float64).reshape(-1, 2)
     angle = np.ascontiguousarray(angle, np.float64).reshape(-1)
+    movable = np.asarray(movable, bool)
     margin = settings.speculative_distance
     boxes = world_bounds(tables.bounds[body_shape], tables.radius[body_shape], position,
                          angle, 0.5 * margin)
-    pairs = candidate_pairs(boxes, np.asarray(movable, bool))
+    pairs = candidate_pairs(boxes, movable)
     shape_class = tables.shape_class[body_shape]
-    rest = pairs[~analytic_pair(shape_class[pairs[:, 0]], shape_class[pairs[:, 1]])]
     pose = np.column_stack([position, angle])
-    first, second, groups = _groups(distinct, body_shape, rest)
-    for lo, hi in reversed(groups):
-        a, b = first[lo:hi], second[lo:hi]
+
+    def path(a: int, b: int) -> tuple:
+        """What sets the kernels a pair (a, b) of ``_groups``' order runs."""
+        shape_a, shape_b = distinct[body_shape[a]], distinct[body_shape[b]]
+        return (shape_a.kind, shape_b.kind, bool(tables.concave[body_shape[a]]),
+                bool(tables.concave[body_shape[b]]),
+                shape_b.kind == "sdf" and _flat(shape_b.field))
+
+    def run(a: np.ndarray, b: np.ndarray, pose_a: np.ndarray, pose_b: np.ndarray) -> None:
         shape_a, shape_b = distinct[body_shape[a[0]]], distinct[body_shape[b[0]]]
         kinds = (shape_a.kind, shape_b.kind)
         if kinds == ("mesh", "sdf") and not _flat(shape_b.field):
-            sdf_in_mesh(shape_a, shape_b, pose[a], pose[b], margin, settings)
-        PAIR_FUNCTIONS[kinds](shape_a, shape_b, a, b, pose[a], pose[b], margin, settings)
+            sdf_in_mesh(shape_a, shape_b, pose_a, pose_b, margin, settings)
+        PAIR_FUNCTIONS[kinds](shape_a, shape_b, a, b, pose_a, pose_b, margin, settings)
+
+    rest = pairs[~analytic_pair(shape_class[pairs[:, 0]], shape_class[pairs[:, 1]])]
+    first, second, groups = _groups(distinct, body_shape, rest)
+    if not later:
+        for lo, hi in reversed(groups):
+            a, b = first[lo:hi], second[lo:hi]
+            run(a, b, pose[a], pose[b])
+        return
+    # Among two bodies of each shape (movable ones first), every pair with a movable
+    # body whose path no pair meeting now runs.
+    seen = {path(first[lo], second[lo]) for lo, _ in groups}
+    order = np.lexsort((~movable, body_shape))
+    run_start = np.r_[True, body_shape[order][1:] != body_shape[order][:-1]]
+    some = order[run_start | (np.r_[False, run_start[:-1]] & ~run_start)]
+    i, j = np.triu_indices(len(some), 1)
+    later = np.column_stack([some[i], some[j]])
+    later = later[movable[later[:, 0]] | movable[later[:, 1]]]
+    later = later[~analytic_pair(shape_class[later[:, 0]], shape_class[later[:, 1]])]
+    first, second, groups = _groups(distinct, body_shape, later)
+    for lo, _ in groups:
+        key = path(first[lo], second[lo])
+        if key not in seen:
+            seen.add(key)
+            a, b = first[lo:lo + 1], second[lo:lo + 1]
+            run(a, b, pose[a], pose[a])
+
+
+def compile_evaluator(shapes: Sequence[Shape]) -> None:
+    """The field program's evaluator (``sdf.compiled.run``), compiled or loaded, where a
+    query of bodies of these shapes may evaluate a field: a circle's predicted contacts
+    against a body that is not one, sdf shapes, concave meshes (``_ShapeTables``'
+    ``mixed``, ``any_sdf``, ``any_concave``). For a cold start's compiling child
+    (``world_stages.compile_ahead``): the first step of bodies that start apart
+    evaluates none, a later one does."""
+    distinct, _ = _distinct(shapes)
+    tables = _tables(distinct)
+    if tables.mixed or tables.any_sdf or tables.any_concave:
+        field = next(shape.field for shape in distinct if shape.kind != "circle")
+        compiled.evaluate(field, np.zeros((1, 2)))
 
 
 def compile_behind(shapes: Sequence[Shape], shape_id: np.ndarray,
@@ -503,10 +553,16 @@ def compile_behind(shapes: Sequence[Shape], shape_id: np.ndarray,
     ``shapes``), as jobs for a cold start's parent (``world_stages.compile_behind``): a
     contact cache's store (``_merged``; its reuse, ``_carry``, comes first in every
     query, before any wait) and the reduction (``_reduce``), on no pairs, with the
-    argument types of ``_narrowphase``'s calls; none where every pair of them is a
-    closed form (``analytic_contacts``: no cache, no reduction). They touch no world."""
+    argument types of ``_narrowphase``'s calls; then, where a mesh meets a field
+    through ``mesh_contacts.mesh_in_field`` (a concave mesh and a body that is not a
+    circle, a mesh and an sdf body), the end of that path (``compile_finish``), which
+    the compiling child reaches last. None where every pair of them is a closed form
+    (``analytic_contacts``: no cache, no reduction). They touch no world."""
+    from .mesh_contacts import compile_finish
+
     distinct, canonical = _distinct(shapes)
-    present = np.unique(_tables(distinct).shape_class[canonical[np.asarray(shape_id)]])
+    tables = _tables(distinct)
+    present = np.unique(tables.shape_class[canonical[np.asarray(shape_id)]])
     first, second = np.meshgrid(present, present)
     if np.all(analytic_pair(first.ravel(), second.ravel())):
         return []
@@ -522,7 +578,15 @@ def compile_behind(shapes: Sequence[Shape], shape_id: np.ndarray,
         reduce_contacts(np.zeros(1, np.int64), np.zeros((0, 2)), np.zeros(0),
                         np.zeros((0, 2)), settings.contacts_per_pair, settings.linear_slop)
 
-    return [cache, reduction]
+    jobs = [cache, reduction]
+    count = np.bincount(canonical[np.asarray(shape_id)], minlength=len(distinct))
+    mesh = np.array([s.kind == "mesh" for s in distinct]) & (count > 0)
+    sdf, concave = tables.sdf & (count > 0), tables.concave & (count > 0)
+    if (np.any(sdf) and np.any(mesh)) or (np.any(concave) and count[mesh].sum() >= 2):
+        mesh_shape = distinct[np.flatnonzero(mesh)[0]]
+        field_shape = distinct[np.flatnonzero(sdf | concave)[0]]
+        jobs.append(lambda: compile_finish(mesh_shape, field_shape, settings))
+    return jobs
 
 
 def collide(shape_a: Any, pose_a: Sequence[float], shape_b: Any, pose_b: Sequence[float],

@@ -351,6 +351,25 @@ _STARTS = {k: np.ascontiguousarray(descent.START_BARYCENTRIC[_START_PRIORITY[:k]
            for k in range(1, len(_START_PRIORITY) + 1)}
 
 
+def compile_finish(mesh: Shape, other: Shape, settings: Settings) -> None:
+    """``_finish`` compiled (or loaded) with the argument types of ``mesh_in_field``'s
+    call, on no pairs (one compilation serves every mesh and field: the types do not
+    depend on them): a cold start's parent compiles the end of the path while it waits
+    for the compiling child, which compiles its start (``collide.compile_behind``).
+    Nothing where the path does not call it (a field that does not compile, sampled
+    starts)."""
+    program = compiled.compile_field(other.field)
+    if program is None or settings.descent_lattice > 0:
+        return
+    start_ids = _START_PRIORITY[:max(1, min(settings.descent_starts, len(_START_PRIORITY)))]
+    starts = len(start_ids)
+    _finish(mesh.triangles, mesh.outline_edges, np.zeros((0, len(mesh.vertices), 2)),
+            np.zeros(0, np.int64), np.zeros((0, starts, 2)), np.zeros((0, starts)),
+            np.zeros((0, starts), np.bool_), start_ids, program.code, program.consts,
+            program.depth, program.nesting, 0.0, True, float(settings.linear_slop),
+            np.zeros(0), np.zeros(0), np.zeros((0, 3)))
+
+
 def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: np.ndarray,
                   margin: float, settings: Settings, polygon_pair: bool
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
