@@ -47,7 +47,8 @@ from pathlib import Path
 
 from numba.core import dispatcher, sigutils
 
-__all__ = ["POLL_SECONDS", "STALE_SECONDS", "install", "lock_path", "while_waiting"]
+__all__ = ["POLL_SECONDS", "STALE_SECONDS", "held_elsewhere", "install", "lock_path",
+           "while_waiting"]
 
 #: Seconds between two looks at a lock another process holds.
 POLL_SECONDS = 0.02
@@ -105,6 +106,14 @@ def lock_path(kernel) -> str | None:
     if module.split(".")[0] != _PACKAGE or index is None:
         return None
     return index + ".lock"
+
+
+def held_elsewhere(kernel) -> bool:
+    """Whether another live process holds a dispatcher's lock now (it is compiling the
+    kernel): a process with other work may do that first instead of waiting."""
+    path = lock_path(kernel)
+    return (path is not None and path not in _held and os.path.exists(path)
+            and not _stale(path))
 
 
 def _stale(path: str) -> bool:

@@ -95,6 +95,23 @@ def test_a_lock_whose_owner_died_is_taken_over_at_once(tmp_path):
     assert not os.path.exists(path)
 
 
+def test_held_elsewhere_tells_a_live_other_owner_from_this_process_and_the_dead(
+        monkeypatch, tmp_path):
+    """``held_elsewhere``: True while another live process holds a kernel's lock; False
+    without a lock file, for a lock this process holds, and for a dead owner's."""
+    path = str(tmp_path / "kernel.nbi.lock")
+    monkeypatch.setattr(_compile_lock, "lock_path", lambda kernel: path)
+    assert not _compile_lock.held_elsewhere(stable_argsort)
+    Path(path).write_text(str(os.getppid()))
+    assert _compile_lock.held_elsewhere(stable_argsort)
+    Path(path).write_text(str(_dead_pid()))
+    assert not _compile_lock.held_elsewhere(stable_argsort)
+    os.unlink(path)
+    assert _compile_lock._acquire(path)
+    assert not _compile_lock.held_elsewhere(stable_argsort)
+    _compile_lock._release(path)
+
+
 def test_the_lock_is_reentrant_within_a_process(tmp_path):
     path = str(tmp_path / "kernel.nbi.lock")
     assert _compile_lock._acquire(path) and _compile_lock._acquire(path)

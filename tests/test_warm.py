@@ -193,10 +193,11 @@ def test_the_child_compiles_the_field_evaluator_where_a_step_may_evaluate_a_fiel
         monkeypatch):
     """``collide.compile_evaluator``: one field evaluated (the evaluator compiled) where a
     circle's predicted contacts, an sdf body or a concave mesh will evaluate fields,
-    none for circles alone or boxes alone; ``compile_ahead`` runs it after the substep
-    kernel unless the child was forked early (the parent compiles it then)."""
+    none for circles alone or boxes alone, nor while another process compiles it;
+    ``compile_ahead`` runs it after the substep kernel unless the child was forked early
+    (the parent compiles it then)."""
     import sdfphys
-    from sdfphys import collide, world_stages
+    from sdfphys import _compile_lock, collide, world_stages
     from sdfphys.sdf import compiled
 
     evaluated = []
@@ -219,6 +220,10 @@ def test_the_child_compiles_the_field_evaluator_where_a_step_may_evaluate_a_fiel
         evaluated.clear()
         collide.compile_evaluator(world_stages.collision_shapes(world(*specs)))
         assert evaluated == expected, specs
+    evaluated.clear()                       # another process compiles it: no wait
+    monkeypatch.setattr(_compile_lock, "held_elsewhere", lambda kernel: kernel is compiled.run)
+    collide.compile_evaluator(world_stages.collision_shapes(world(circle, box)))
+    assert evaluated == []
     calls = []
     monkeypatch.setattr(world_stages, "compile_evaluator", lambda shapes: calls.append(1))
     world_stages.compile_ahead(world(circle, box), early=True)

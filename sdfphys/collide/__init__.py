@@ -64,6 +64,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _compile_lock
 from ..sdf import compiled
 from ..sdf.polygonal import Box
 from ..settings import Settings
@@ -539,10 +540,13 @@ def compile_evaluator(shapes: Sequence[Shape]) -> None:
     against a body that is not one, sdf shapes, concave meshes (``_ShapeTables``'
     ``mixed``, ``any_sdf``, ``any_concave``). For a cold start's compiling child
     (``world_stages.compile_ahead``): the first step of bodies that start apart
-    evaluates none, a later one does."""
+    evaluates none, a later one does. Nothing while another process compiles it (the
+    parent, whose first step evaluates a field): the child goes on with its other
+    kernels rather than wait."""
     distinct, _ = _distinct(shapes)
     tables = _tables(distinct)
-    if tables.mixed or tables.any_sdf or tables.any_concave:
+    if ((tables.mixed or tables.any_sdf or tables.any_concave)
+            and not _compile_lock.held_elsewhere(compiled.run)):
         field = next(shape.field for shape in distinct if shape.kind != "circle")
         compiled.evaluate(field, np.zeros((1, 2)))
 
