@@ -45,8 +45,8 @@ if TYPE_CHECKING:
 
 __all__ = ["PAIR_STAGES", "STAGES", "accelerations", "body_state", "collide",
            "collision_shapes", "compile_ahead", "compile_behind", "compile_later",
-           "pair_filter", "prepare",
-           "record", "restitution", "store_impulses", "substeps", "time_of_impact"]
+           "pair_filter", "prepare", "record", "restitution", "store_impulses", "substeps",
+           "time_of_impact"]
 
 #: Narrowphase stages, one per pair kind (``collide.narrowphase.PAIR_FUNCTIONS``):
 #: ``circle_circle``, ``circle_mesh``, ..., ``sdf_sdf``, counted once per step in which

@@ -522,10 +522,10 @@ def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     run_start = np.r_[True, body_shape[order][1:] != body_shape[order][:-1]]
     some = order[run_start | (np.r_[False, run_start[:-1]] & ~run_start)]
     i, j = np.triu_indices(len(some), 1)
-    later = np.column_stack([some[i], some[j]])
-    later = later[movable[later[:, 0]] | movable[later[:, 1]]]
-    later = later[~analytic_pair(shape_class[later[:, 0]], shape_class[later[:, 1]])]
-    first, second, groups = _groups(distinct, body_shape, later)
+    maybe = np.column_stack([some[i], some[j]])
+    maybe = maybe[movable[maybe[:, 0]] | movable[maybe[:, 1]]]
+    maybe = maybe[~analytic_pair(shape_class[maybe[:, 0]], shape_class[maybe[:, 1]])]
+    first, second, groups = _groups(distinct, body_shape, maybe)
     for lo, _ in groups:
         key = path(first[lo], second[lo])
         if key not in seen:
