@@ -566,7 +566,8 @@ def compile_behind(shapes: Sequence[Shape], shape_id: np.ndarray,
 
     distinct, canonical = _distinct(shapes)
     tables = _tables(distinct)
-    present = np.unique(tables.shape_class[canonical[np.asarray(shape_id)]])
+    body_shape = canonical[np.asarray(shape_id)]
+    present = np.unique(tables.shape_class[body_shape])
     first, second = np.meshgrid(present, present)
     if np.all(analytic_pair(first.ravel(), second.ravel())):
         return []
@@ -583,7 +584,7 @@ def compile_behind(shapes: Sequence[Shape], shape_id: np.ndarray,
                         np.zeros((0, 2)), settings.contacts_per_pair, settings.linear_slop)
 
     jobs = [cache, reduction]
-    count = np.bincount(canonical[np.asarray(shape_id)], minlength=len(distinct))
+    count = np.bincount(body_shape, minlength=len(distinct))
     mesh = np.array([s.kind == "mesh" for s in distinct]) & (count > 0)
     sdf, concave = tables.sdf & (count > 0), tables.concave & (count > 0)
     if (np.any(sdf) and np.any(mesh)) or (np.any(concave) and count[mesh].sum() >= 2):
