@@ -6,7 +6,7 @@ window live in ``sdfphys.render``, ``sdfphys.video`` and ``sdfphys.play``.
 
 from importlib import metadata as _metadata
 
-from . import _compile_lock, _numba_cache, _numba_flags, _numba_literals, _shared_kernel
+from . import _compile_lock, _heap, _numba_cache, _numba_flags, _numba_literals, _shared_kernel
 
 try:
     __version__ = _metadata.version("sdfphys")      # pyproject.toml's, once installed
@@ -18,6 +18,7 @@ _numba_literals.install()   # one compilation per kernel and types, constants or
 _numba_flags.install()      # compiler flags compared in closed form (the same keys)
 _compile_lock.install()     # processes on one cache compile each kernel once
 _shared_kernel.install()    # kernels called by name are published before their callers run
+_heap.install()             # a step's large arrays reuse the heap (no page faults each step)
 
 from . import sdf  # noqa: E402
 from . import collide  # noqa: E402  (the subpackage, callable: collide.collide)
