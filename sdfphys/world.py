@@ -291,7 +291,7 @@ class World(WorldJoints):
                 if not np.all(keep):
                     self._contacts = contacts = contacts.take(keep)
             constraints = stage.prepare(self, contacts, bodies)
-            stage.substeps(self, constraints, bodies)
+            islands = stage.substeps(self, constraints, bodies)
             stage.restitution(self, constraints, bodies)
             stage.time_of_impact(self, bodies, start_com, start_angle, contacts)
             stage.store_impulses(self, constraints)
@@ -299,7 +299,7 @@ class World(WorldJoints):
                                                      constraints.total_tangent_impulse)
             if sleeping:
                 world_sleep.fall_asleep(self, bodies, constraints, start_com, start_angle,
-                                        awake, active)
+                                        awake, active, islands)
             stage.record(self, rows, constraints.relative_velocity)
         else:
             self._report = self._report.idle()

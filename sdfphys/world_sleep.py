@@ -92,24 +92,33 @@ def wake_islands(world: World, islands: np.ndarray) -> None:
 
 
 def islands_falling(world: World, bodies: BodyState, constraints: ContactConstraints,
-                    awake: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                    awake: np.ndarray, contact_islands: np.ndarray | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
     """The islands (B,) int64 roots (``islands.island_roots``: bodies tied by the
     contacts of ``constraints`` and by joints) and the awake bodies (B,) bool whose
-    island has rested ``time_to_sleep`` in every body (``sleep.falling_asleep``)."""
+    island has rested ``time_to_sleep`` in every body (``sleep.falling_asleep``).
+    contact_islands: the contacts' own roots for ``bodies.inv_mass`` if known (the step's
+    row softness found them: ``solve_substeps``), the answer when no joint links two
+    bodies; None: found here."""
     c = constraints
-    root = island_roots(bodies.inv_mass, *world._joints.linked(c.body_a, c.body_b))
+    body_a, body_b = world._joints.linked(c.body_a, c.body_b)
+    if contact_islands is not None and len(body_a) == len(c.body_a):   # no joint links
+        root = contact_islands
+    else:
+        root = island_roots(bodies.inv_mass, body_a, body_b)
     return root, falling_asleep(root, awake, world._view("sleep_time"),
                                 world.settings.time_to_sleep)
 
 
 def fall_asleep(world: World, bodies: BodyState, constraints: ContactConstraints,
                 start_com: np.ndarray, start_angle: np.ndarray, awake: np.ndarray,
-                active: np.ndarray) -> None:
+                active: np.ndarray, contact_islands: np.ndarray | None = None) -> None:
     """Stage 7: count each awake body's rest (``sleep.rest_times``) and put to sleep the
     islands that have rested ``time_to_sleep``: velocities zeroed, their contacts and
     impulses moved to the sleeping caches. start_com, start_angle: the poses at the
     start of the step (a body pushed out of overlap moves without velocity); awake,
-    active: (B,) bool, ``awake()`` and ``active()`` of this step."""
+    active: (B,) bool, ``awake()`` and ``active()`` of this step; contact_islands: the
+    contacts' islands if the step found them (``islands_falling``)."""
     s = world.settings
     sleep_time = world._view("sleep_time")
     rest_times(bodies.velocity, bodies.angular_velocity, bodies.com, bodies.angle,
@@ -121,7 +130,7 @@ def fall_asleep(world: World, bodies: BodyState, constraints: ContactConstraints
     sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
     if not np.any(sleep_time[awake] >= s.time_to_sleep):
         return                       # no body has rested long enough: no island can sleep
-    root, falling = islands_falling(world, bodies, constraints, awake)
+    root, falling = islands_falling(world, bodies, constraints, awake, contact_islands)
     if not np.any(falling):
         return
     d = world._data

@@ -160,7 +160,7 @@ def prepare(world: World, contacts: Contacts, bodies: BodyState) -> ContactConst
 
 
 def substeps(world: World, constraints: ContactConstraints, bodies: BodyState,
-             kernel_only: bool = False) -> None:
+             kernel_only: bool = False) -> np.ndarray | None:
     """Stage 3: per substep integrate v, warm start, solve, integrate x, relax; loaded
     islands (mass ratios, heavy loads: ``solver.row_softness``) get extra passes until
     converged, counted one by one as ``converge``; ``push_out`` counts the substeps
@@ -168,10 +168,11 @@ def substeps(world: World, constraints: ContactConstraints, bodies: BodyState,
     pseudo-velocities, solver "Split push-out"); ``joints`` the solve and relax passes
     over the joints (each a Gauss-Seidel pass over the rows the islands' direct solves
     do not take, then those solves; ``solver.joint_direct``). kernel_only: see
-    ``solve_substeps`` (``compile_ahead``)."""
+    ``solve_substeps`` (``compile_ahead``). Returns the contacts' islands (B,) int64
+    (``solve_substeps``; None with kernel_only)."""
     s = world.settings
     use_friction = bool(np.any(constraints.friction > 0.0))
-    extra, push_outs, joint_runs = solve_substeps(
+    extra, push_outs, joint_runs, root = solve_substeps(
         bodies, constraints, world._gravity, s, use_friction,
         (world._joints.rows, world._joints.stiffness_cap), accelerations(world), kernel_only)
     counts = world.stage_counts
@@ -186,6 +187,7 @@ def substeps(world: World, constraints: ContactConstraints, bodies: BodyState,
         counts["relax"] += s.substeps * s.relax_passes
     if use_friction:
         counts["friction"] += s.substeps * (1 + s.relax_passes)
+    return root
 
 
 def restitution(world: World, constraints: ContactConstraints, bodies: BodyState) -> None:

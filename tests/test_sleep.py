@@ -162,3 +162,31 @@ def test_a_rolling_ball_and_sleeping_off_never_sleep():
     run(world, 120)
     assert not world.asleep[ball]
     assert not run(pyramid(3, sleeping=False), 200).asleep.any()
+
+
+def test_falling_asleep_takes_the_islands_the_row_softness_found_unless_joints_link_them():
+    """The substep stage returns the contacts' islands (the row softness kernel's union-
+    find); they are ``island_roots`` of the same rows, and falling asleep uses them only
+    while no joint ties two bodies (a joint joins the islands it links)."""
+    from sdfphys import world_sleep
+    from sdfphys import world_stages as stage
+    from sdfphys.islands import island_roots
+
+    world = ground(sleeping=True)
+    for x in (-6.0, 6.0):                                       # two stacks: two islands
+        for i in range(3):
+            world.add_body(BOX, position=(x, 0.5 + i), friction=0.6)
+    run(world, 30)
+    bodies = stage.body_state(world)
+    constraints = stage.prepare(world, stage.collide(world, bodies, world_sleep.active(world)),
+                                bodies)
+    islands = stage.substeps(world, constraints, bodies)
+    expected = island_roots(bodies.inv_mass, constraints.body_a, constraints.body_b)
+    np.testing.assert_array_equal(islands, expected)
+    assert len(np.unique(islands[1:])) == 2
+    awake = world_sleep.awake(world)
+    root, _ = world_sleep.islands_falling(world, bodies, constraints, awake, islands)
+    np.testing.assert_array_equal(root, expected)
+    world.add_joint({"type": "distance", "bodies": [3, 6]})   # the stacks' tops
+    root, _ = world_sleep.islands_falling(world, bodies, constraints, awake, islands)
+    assert len(np.unique(root[1:])) == 1

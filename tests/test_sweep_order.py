@@ -55,8 +55,8 @@ def test_pairs_are_flagged_large_by_their_island_s_size():
     constraints = prepare(world, world.contacts, bodies)
     k = len(constraints.feature)
     rows = substep_rows(constraints, np.empty(k), np.empty(k), np.empty(k))
-    _, _, large = loaded_rows(bodies.inv_mass, rows,
-                              row_softness_params(settings, world._gravity))
+    _, _, large, _ = loaded_rows(bodies.inv_mass, rows,
+                                 row_softness_params(settings, world._gravity))
     first = constraints.pair_start[:-1]
     in_pyramid = np.maximum(constraints.body_a[first], constraints.body_b[first]) >= 4
     assert in_pyramid.any() and (~in_pyramid).any()

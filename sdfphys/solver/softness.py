@@ -360,9 +360,10 @@ def row_softness_params(settings: Settings, gravity: np.ndarray) -> RowSoftnessP
 def _row_softness_kernel(inv_mass, moving, rows, params):
     """Fill the rows' coefficients bias_rate, mass_scale, impulse_scale (K,); returns
     the loaded pairs (L,) int64 (indices into pair_start, in order), their extra
-    passes per phase, at most (L,) int64, and whether each pair (P,) bool belongs to an
+    passes per phase, at most (L,) int64, whether each pair (P,) bool belongs to an
     island of more than rest_limit dynamic bodies (one pass per phase, whatever else
-    holds: ``substeps``, "Sweep order").
+    holds: ``substeps``, "Sweep order"), and the contacts' islands (B,) int64
+    (``islands.island_roots``; falling asleep reuses them: ``solve_substeps``).
 
     inv_mass: (B,) 1/kg. moving: (B,) bool, bodies faster than REST_SPEED (their islands
     are not at rest). rows: ``bundles.SubstepRows`` (separation (K,) m at the start of
@@ -504,7 +505,7 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
                 loaded_r[j] = r
             bias_rate[k], mass_scale[k], impulse_scale[k] = \
                 loaded[j, 0], loaded[j, 1], loaded[j, 2]
-    return loaded_pairs[:count], passes[:count], large
+    return loaded_pairs[:count], passes[:count], large, root
 
 
 def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity: np.ndarray,
@@ -525,7 +526,7 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
     c = constraints
     k = len(c.feature)
     bias_rate, mass_scale, impulse_scale = np.empty(k), np.empty(k), np.empty(k)
-    loaded_pairs, passes, _ = loaded_rows(
+    loaded_pairs, passes, _, _ = loaded_rows(
         inv_mass, SoftnessRows(c.body_a, c.body_b, c.pair_start, c.normal, c.normal_impulse,
                                c.stiff, c.separation, c.relative_velocity, c.feature,
                                bias_rate, mass_scale, impulse_scale),
@@ -535,9 +536,10 @@ def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity:
 
 def loaded_rows(inv_mass: np.ndarray, rows: SubstepRows | SoftnessRows,
                 params: RowSoftnessParams, moving: np.ndarray | None = None
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``row_softness`` into the coefficient arrays of ``rows``; returns loaded_pairs,
-    passes and the pairs of islands over rest_island_limit ((P,) bool). rows: the
+    passes, the pairs of islands over rest_island_limit ((P,) bool) and the islands of
+    the rows' contacts ((B,) int64 roots, ``islands.island_roots``). rows: the
     step's ``bundles.substep_rows`` (the bundle the substep kernel then
     takes; ``solve_substeps``), or a ``SoftnessRows`` (``row_softness``: any object with
     the constraints' arrays it reads). params: ``row_softness_params(settings, gravity)``."""

@@ -626,7 +626,8 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
                    settings: Settings, use_friction: bool,
                    joints: tuple[JointRows, np.ndarray] | None = None,
                    accel: tuple[np.ndarray, np.ndarray] | None = None,
-                   kernel_only: bool = False) -> tuple[int, int, int]:
+                   kernel_only: bool = False
+                   ) -> tuple[int, int, int, np.ndarray | None]:
     """Run every substep of one step in place (one compiled call).
 
     accel: None, or (linear (B, 2) m/s^2, angular (B,) rad/s^2): each dynamic body's
@@ -641,7 +642,11 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     friction rows (the caller passes False when every contact's friction is 0).
     Returns (the number of extra passes run over loaded islands, ``row_softness``; the
     number of substeps with a row deeper than ``soft_depth``, "Split push-out"; the
-    number of solve and relax passes over the joints, ``joint_direct.joint_passes``).
+    number of solve and relax passes over the joints, ``joint_direct.joint_passes``; the
+    islands of the contacts, (B,) int64 roots as ``islands.island_roots`` gives them for
+    ``bodies.inv_mass`` and the rows' bodies, found by the row softness kernel (falling
+    asleep takes them when no joint links islands: ``world_sleep.islands_falling``), or
+    None with ``kernel_only``).
 
     kernel_only: for ``constraints`` with no rows only (the compiling child of a cold
     start, ``world_stages.compile_ahead``): the substep kernel without the row softness
@@ -673,8 +678,9 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
             raise ValueError("kernel_only: only for constraints with no rows")
         loaded_pairs, caps = np.zeros(0, np.int64), np.zeros(0, np.int64)
         large = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
+        root = None
     else:
-        loaded_pairs, caps, large = loaded_rows(bodies.inv_mass, row_ref,
+        loaded_pairs, caps, large, root = loaded_rows(bodies.inv_mass, row_ref,
                                                 row_softness_params(settings, gravity),
                                                 moving)
     measured = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
@@ -693,4 +699,4 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     # the warm starts added l_0 .. l_(S-1), and l_S - l_0 completes the sum l_1 .. l_S
     # (no extra work in the friction rows' passes).
     c.total_tangent_impulse += c.tangent_impulse - start_tangent
-    return int(passes), int(push_outs), int(joint_runs)
+    return int(passes), int(push_outs), int(joint_runs), root
