@@ -77,20 +77,24 @@ def polygon_table(polygons: list[np.ndarray | None]) -> tuple[np.ndarray, ...]:
     return vertices, normals, start, count
 
 
-@njit(cache=True)
-def _max_separation(v1, n1, c1, v2, c2):
-    """(largest face separation, its face) of polygon 1 (vertices v1, normals n1, c1
-    of them) against the vertices v2 (c2 of them): max_i min_j n_i . (w_j - v_i)."""
+@njit(cache=True, inline="always")
+def _max_separation(v1, o1, n1, m1, c1, v2, o2, c2):
+    """(largest face separation, its face) of polygon 1 (vertices v1[o1:o1 + c1],
+    normals n1[m1:m1 + c1]) against the vertices v2[o2:o2 + c2]:
+    max_i min_j n_i . (w_j - v_i). Offsets rather than slices, and inlined as
+    ``_incident_face`` and ``_write`` are: a slice is a new array and a call takes its
+    arrays as new references, each reference count raised and dropped through numba's
+    runtime, and ``clip_pair`` runs for every pair of polygons."""
     best = -np.inf
     face = 0
     for i in range(c1):
-        nx = n1[i, 0]
-        ny = n1[i, 1]
-        px = v1[i, 0]
-        py = v1[i, 1]
+        nx = n1[m1 + i, 0]
+        ny = n1[m1 + i, 1]
+        px = v1[o1 + i, 0]
+        py = v1[o1 + i, 1]
         low = np.inf
         for j in range(c2):
-            s = nx * (v2[j, 0] - px) + ny * (v2[j, 1] - py)
+            s = nx * (v2[o2 + j, 0] - px) + ny * (v2[o2 + j, 1] - py)
             if s < low:
                 low = s
         if low > best:
@@ -99,13 +103,13 @@ def _max_separation(v1, n1, c1, v2, c2):
     return best, face
 
 
-@njit(cache=True)
-def _incident_face(direction_x, direction_y, n, c):
-    """The face of a polygon (normals n, c of them) most anti-parallel to a direction."""
+@njit(cache=True, inline="always")
+def _incident_face(direction_x, direction_y, n, m, c):
+    """The face of a polygon (normals n[m:m + c]) most anti-parallel to a direction."""
     low = np.inf
     face = 0
     for i in range(c):
-        d = direction_x * n[i, 0] + direction_y * n[i, 1]
+        d = direction_x * n[m + i, 0] + direction_y * n[m + i, 1]
         if d < low:
             low = d
             face = i
@@ -155,10 +159,7 @@ def clip_pair(vertices, normals, start_a, count_a, start_b, count_b, xa, ya, ang
     the world: out_point (K, 2) m midway between the surfaces, out_normal (K, 2) unit
     a -> b, out_depth (K,) m > 0 overlapping, out_feature (K,) int64 keys.
     """
-    va = vertices[start_a:start_a + count_a]
-    na = normals[start_a:start_a + count_a]
-    vb = work[:count_b]
-    nb = work[count_b:2 * count_b]
+    # b's vertices and normals in a's frame: work[j] and work[count_b + j].
     ca = math.cos(angle_a)
     sa = math.sin(angle_a)
     dx = xb - xa
@@ -170,29 +171,38 @@ def clip_pair(vertices, normals, start_a, count_a, start_b, count_b, xa, ya, ang
     for j in range(count_b):
         px = vertices[start_b + j, 0]
         py = vertices[start_b + j, 1]
-        vb[j, 0] = cr * px - sr * py + ox
-        vb[j, 1] = sr * px + cr * py + oy
+        work[j, 0] = cr * px - sr * py + ox
+        work[j, 1] = sr * px + cr * py + oy
         qx = normals[start_b + j, 0]
         qy = normals[start_b + j, 1]
-        nb[j, 0] = cr * qx - sr * qy
-        nb[j, 1] = sr * qx + cr * qy
+        work[count_b + j, 0] = cr * qx - sr * qy
+        work[count_b + j, 1] = sr * qx + cr * qy
 
-    separation_a, face_a = _max_separation(va, na, count_a, vb, count_b)
+    separation_a, face_a = _max_separation(vertices, start_a, normals, start_a, count_a, work,
+                                           0, count_b)
     if separation_a > margin:
         return k
-    separation_b, face_b = _max_separation(vb, nb, count_b, va, count_a)
+    separation_b, face_b = _max_separation(work, 0, work, count_b, count_b, vertices,
+                                           start_a, count_a)
     flip = separation_b > separation_a + 0.1 * slop
     # Every contact lies at least the reference face's separation away.
     if flip and separation_b > margin:
         return k
     if flip:
-        face_a = _incident_face(nb[face_b, 0], nb[face_b, 1], na, count_a)
+        face_a = _incident_face(work[count_b + face_b, 0], work[count_b + face_b, 1], normals,
+                                start_a, count_a)
     else:
-        face_b = _incident_face(na[face_a, 0], na[face_a, 1], nb, count_b)
+        face_b = _incident_face(normals[start_a + face_a, 0], normals[start_a + face_a, 1],
+                                work, count_b, count_b)
     a1 = face_a
     a2 = face_a + 1 if face_a + 1 < count_a else 0
     b1 = face_b
     b2 = face_b + 1 if face_b + 1 < count_b else 0
+    # The two faces' ends (b's in a's frame).
+    a1x, a1y = vertices[start_a + a1, 0], vertices[start_a + a1, 1]
+    a2x, a2y = vertices[start_a + a2, 0], vertices[start_a + a2, 1]
+    b1x, b1y = work[b1, 0], work[b1, 1]
+    b2x, b2y = work[b2, 0], work[b2, 1]
 
     n_found = 0
     # Vertex-vertex: the corners' own contact, then the far clip end (step 4 of the
@@ -200,13 +210,14 @@ def clip_pair(vertices, normals, start_a, count_a, start_b, count_b, xa, ya, ang
     corner_a = -1
     corner_b = -1
     if max(separation_a, separation_b) > 0.1 * slop:
-        s, t = _segment_fractions(va[a1, 0], va[a1, 1], va[a2, 0], va[a2, 1],
-                                  vb[b1, 0], vb[b1, 1], vb[b2, 0], vb[b2, 1])
+        s, t = _segment_fractions(a1x, a1y, a2x, a2y, b1x, b1y, b2x, b2y)
         if (s == 0.0 or s == 1.0) and (t == 0.0 or t == 1.0):
             corner_a = a1 if s == 0.0 else a2
             corner_b = b1 if t == 0.0 else b2
-            ux = vb[corner_b, 0] - va[corner_a, 0]
-            uy = vb[corner_b, 1] - va[corner_a, 1]
+            cax, cay = (a1x, a1y) if s == 0.0 else (a2x, a2y)
+            cbx, cby = (b1x, b1y) if t == 0.0 else (b2x, b2y)
+            ux = cbx - cax
+            uy = cby - cay
             distance = math.hypot(ux, uy)
             if not -distance > -margin:
                 return k
@@ -217,21 +228,20 @@ def clip_pair(vertices, normals, start_a, count_a, start_b, count_b, xa, ya, ang
                 ux = 1.0
                 uy = 0.0
             _write(out_point, out_normal, out_depth, out_feature, k,
-                   0.5 * (va[corner_a, 0] + vb[corner_b, 0]),
-                   0.5 * (va[corner_a, 1] + vb[corner_b, 1]), ux, uy, distance, corner_a,
+                   0.5 * (cax + cbx), 0.5 * (cay + cby), ux, uy, distance, corner_a,
                    corner_b, xa, ya, ca, sa)
             n_found = 1
 
     # Clip the incident edge (w1 -> w2, running against the reference edge) to the
     # reference face's side planes.
     if flip:
-        r1x, r1y, r2x, r2y = vb[b1, 0], vb[b1, 1], vb[b2, 0], vb[b2, 1]
-        nx, ny = nb[b1, 0], nb[b1, 1]
-        w1x, w1y, w2x, w2y = va[a1, 0], va[a1, 1], va[a2, 0], va[a2, 1]
+        r1x, r1y, r2x, r2y = b1x, b1y, b2x, b2y
+        nx, ny = work[count_b + b1, 0], work[count_b + b1, 1]
+        w1x, w1y, w2x, w2y = a1x, a1y, a2x, a2y
     else:
-        r1x, r1y, r2x, r2y = va[a1, 0], va[a1, 1], va[a2, 0], va[a2, 1]
-        nx, ny = na[a1, 0], na[a1, 1]
-        w1x, w1y, w2x, w2y = vb[b1, 0], vb[b1, 1], vb[b2, 0], vb[b2, 1]
+        r1x, r1y, r2x, r2y = a1x, a1y, a2x, a2y
+        nx, ny = normals[start_a + a1, 0], normals[start_a + a1, 1]
+        w1x, w1y, w2x, w2y = b1x, b1y, b2x, b2y
     tx = -ny
     ty = nx
     upper_ref = (r2x - r1x) * tx + (r2y - r1y) * ty
@@ -291,7 +301,7 @@ def clip_pair(vertices, normals, start_a, count_a, start_b, count_b, xa, ya, ang
     return k + n_found
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _write(out_point, out_normal, out_depth, out_feature, k, px, py, nx, ny, separation,
            vertex_a, vertex_b, xa, ya, ca, sa):
     """Row k: a's frame point (px, py) and normal (nx, ny) turned to the world, depth
