@@ -1,7 +1,7 @@
 """The C heap kept for reuse (sdfphys._heap): a step's large arrays fault no fresh pages.
 
 Each case runs in a fresh interpreter, where the allocator has its default thresholds:
-twenty arrays of 320 to 470 kB (a step's contacts and rows of a large scene) allocated,
+twenty arrays of 320 to 472 kB (a step's contacts and rows of a large scene) allocated,
 written and freed twenty times. With glibc's defaults every round maps and faults about
 1,900 pages (measured: 1,903 a round); once ``import sdfphys`` has set the thresholds,
 the rounds reuse the heap.

@@ -6,6 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from sdfphys import world_sleep
+from sdfphys import world_stages as stage
+from sdfphys.islands import island_roots
 from sdfphys.settings import Settings
 from sdfphys.world import World
 
@@ -168,10 +171,6 @@ def test_falling_asleep_takes_the_islands_the_row_softness_found_unless_joints_l
     """The substep stage returns the contacts' islands (the row softness kernel's union-
     find); they are ``island_roots`` of the same rows, and falling asleep uses them only
     while no joint ties two bodies (a joint joins the islands it links)."""
-    from sdfphys import world_sleep
-    from sdfphys import world_stages as stage
-    from sdfphys.islands import island_roots
-
     world = ground(sleeping=True)
     for x in (-6.0, 6.0):                                       # two stacks: two islands
         for i in range(3):

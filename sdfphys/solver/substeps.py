@@ -680,9 +680,8 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         large = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
         root = None
     else:
-        loaded_pairs, caps, large, root = loaded_rows(bodies.inv_mass, row_ref,
-                                                row_softness_params(settings, gravity),
-                                                moving)
+        loaded_pairs, caps, large, root = loaded_rows(
+            bodies.inv_mass, row_ref, row_softness_params(settings, gravity), moving)
     measured = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
     measured[loaded_pairs] = True
     start_tangent = c.tangent_impulse.copy()
