@@ -9,7 +9,16 @@ from __future__ import annotations
 
 from .._jit import njit
 from ..settings import Settings
-from .pair_rows import along, apply_impulse, cross, load_pair, pair_bodies, store_pair
+from .pair_rows import (
+    along,
+    apply_impulse,
+    cross,
+    load_pair,
+    pair_bodies,
+    pair_count,
+    store_pair,
+    unsigned,
+)
 from .rows import BodyState, ContactConstraints
 
 __all__ = ["apply_restitution"]
@@ -26,8 +35,9 @@ def _restitution_kernel(velocity, angular_velocity, inv_mass, inv_inertia, body_
     step (vn0 < -threshold) and received normal impulse during the step (a speculative
     point that never touched did not collide). d_l = -m_n (vn + e vn0), l_n >= 0.
     """
+    body_a, body_b, pair_start = unsigned(body_a), unsigned(body_b), unsigned(pair_start)
     for _ in range(passes):
-        for p in range(pair_start.shape[0] - 1):
+        for p in range(pair_count(pair_start)):
             first, last, a, b, ma, ia, mb, ib = pair_bodies(p, pair_start, body_a, body_b,
                                                             inv_mass, inv_inertia)
             vax, vay, wa, vbx, vby, wb = load_pair(velocity, angular_velocity, a, b)

@@ -83,7 +83,9 @@ from .pair_rows import (
     cross,
     load_pair,
     pair_bodies,
+    pair_count,
     store_pair,
+    unsigned,
 )
 from .rows import BodyState, ContactConstraints
 from .softness import CONVERGED, REST_SPEED, loaded_rows, row_softness_params
@@ -203,6 +205,7 @@ def _update_anchors(com, com0, angle, angle0, round_body, cos_d, sin_d, inv_mass
         else:
             cos_d[i] = math.cos(angle[i] - angle0[i])
             sin_d[i] = math.sin(angle[i] - angle0[i])
+    body_a, body_b = unsigned(body_a), unsigned(body_b)
     for k in range(body_a.shape[0]):
         a = body_a[k]
         b = body_b[k]
@@ -235,7 +238,8 @@ def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_
                 total_tangent_impulse):
     """Apply the accumulated impulses P = l_n n + l_t t at the current anchors; add them to
     the step's totals (the tangent total is completed by ``solve_substeps``)."""
-    for p in range(pair_start.shape[0] - 1):
+    body_a, body_b, pair_start = unsigned(body_a), unsigned(body_b), unsigned(pair_start)
+    for p in range(pair_count(pair_start)):
         first, last, a, b, ma, ia, mb, ib = pair_bodies(p, pair_start, body_a, body_b,
                                                         inv_mass, inv_inertia)
         vax, vay, wa, vbx, vby, wb = load_pair(velocity, angular_velocity, a, b)
@@ -349,7 +353,8 @@ def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_dept
     """
     velocity, angular_velocity = bodies.velocity, bodies.angular_velocity
     inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
-    body_a, body_b, pair_start, normal = rows.body_a, rows.body_b, rows.pair_start, rows.normal
+    body_a, body_b = unsigned(rows.body_a), unsigned(rows.body_b)
+    pair_start, normal = unsigned(rows.pair_start), rows.normal
     anchor_a, anchor_b, separation = rows.anchor_a, rows.anchor_b, rows.separation
     normal_mass, tangent_mass, friction = rows.normal_mass, rows.tangent_mass, rows.friction
     bias_rate, mass_scale, impulse_scale = rows.bias_rate, rows.mass_scale, rows.impulse_scale
@@ -358,7 +363,7 @@ def _solve(bodies, rows, pseudo, pairs, measured, inv_h, max_push_out, soft_dept
     pseudo_velocity, pseudo_angular, pseudo_impulse = pseudo
     largest_change = 0.0
     largest_impulse = 0.0
-    for p in pairs:
+    for p in unsigned(pairs):
         first, last, a, b, ma, ia, mb, ib = pair_bodies(p, pair_start, body_a, body_b,
                                                         inv_mass, inv_inertia)
         vax, vay, wa, vbx, vby, wb = load_pair(velocity, angular_velocity, a, b)
