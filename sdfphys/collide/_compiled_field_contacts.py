@@ -27,7 +27,7 @@ __all__ = ["field_contacts", "patch_ends"]
 # The patch search of field-field contacts
 # --------------------------------------------------------------------------------------
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _h(code_a: np.ndarray, consts_a: np.ndarray, work_a, code_b: np.ndarray,
        consts_b: np.ndarray, work_b, rotation: np.ndarray, offset: np.ndarray, k: int,
        ox: float, oy: float, dx: float, dy: float, sx: float, sy: float, s: np.ndarray,

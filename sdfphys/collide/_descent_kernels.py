@@ -176,7 +176,7 @@ def _moving(kind: int, v: tuple, steep: tuple, sigma: float) -> tuple[bool, floa
     return _norm(dqx, dqy) > STATIONARY, dqx, dqy
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _most_candidates(kind: int, owner: np.ndarray, shape: np.ndarray, state: np.ndarray,
                      flags: np.ndarray, i: int) -> int:
     """Most candidates ``propose`` can write for start i next round."""

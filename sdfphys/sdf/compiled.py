@@ -403,7 +403,7 @@ def scratch(depth: int, nesting: int, n: int
     return np.empty((depth, n, 3)), np.empty((nesting, n, 2)), np.empty((n, 2))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def run(code: np.ndarray, consts: np.ndarray, points: np.ndarray, n: int, stack: np.ndarray,
         frames: np.ndarray, cur: np.ndarray, value: np.ndarray, grad: np.ndarray, start: int,
         sp: int, fp: int) -> tuple[int, int, int]:

@@ -49,7 +49,7 @@ from .opcodes import (
 # The primitives with their own loops in ``compiled.run``.
 # --------------------------------------------------------------------------------------
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _box(x: float, y: float, hx: float, hy: float) -> tuple[float, float, float]:
     """Quilez's sdgBox at one point: value and gradient of the box of half-extents h.
 
@@ -73,7 +73,7 @@ def _box(x: float, y: float, hx: float, hy: float) -> tuple[float, float, float]
     return out_len + inner, gx * sx, gy * sy
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _polygon(consts: np.ndarray, o: int, m: int, px: float, py: float
              ) -> tuple[float, float, float]:
     """polygonal.Polygon at one point (edges from consts[o + 1:])."""
@@ -114,7 +114,7 @@ def _polygon(consts: np.ndarray, o: int, m: int, px: float, py: float
     return s * math.sqrt(best), nx, ny
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _segment(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
     """Distance to the segment a -> a + ba (Quilez's sdSegment) minus the capsule radius.
 
@@ -151,7 +151,7 @@ def _segment(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, f
 _EDGE = 7
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _nearest(consts: np.ndarray, e0: int, m: int, qx: float, qy: float
              ) -> tuple[float, float, float, float, float, bool]:
     """Nearest of the m edges at consts[e0:] to q (Quilez's sdSegment): distance,
@@ -174,7 +174,7 @@ def _nearest(consts: np.ndarray, e0: int, m: int, qx: float, qy: float
     return math.sqrt(best), bvx, bvy, bnx, bny, binterior
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _signed(dist: float, vx: float, vy: float, nx: float, ny: float, interior: bool,
             inside: bool, eps: float) -> tuple[float, float, float]:
     """Value and gradient from ``_nearest``'s data (polygonal's module docstring):
@@ -190,12 +190,12 @@ def _signed(dist: float, vx: float, vy: float, nx: float, ny: float, interior: b
     return s * dist, nx, ny
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _sign(x: float) -> float:
     return -1.0 if x < 0.0 else 1.0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _ring(consts: np.ndarray, o: int, full: int, px: float, py: float
           ) -> tuple[float, float, float]:
     """curved.Ring."""
@@ -224,7 +224,7 @@ def _ring(consts: np.ndarray, o: int, full: int, px: float, py: float
     return d_face, (lx * nx + ly * cx) * sx, lx * ny + ly * cy
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _pie(consts: np.ndarray, o: int, full: int, px: float, py: float
          ) -> tuple[float, float, float]:
     """curved.Pie."""
@@ -248,7 +248,7 @@ def _pie(consts: np.ndarray, o: int, full: int, px: float, py: float
     return d_edge, gx * sx, gy
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _horseshoe(consts: np.ndarray, o: int, px: float, py: float
                ) -> tuple[float, float, float]:
     """curved.Horseshoe."""
@@ -284,7 +284,7 @@ def _horseshoe(consts: np.ndarray, o: int, px: float, py: float
     return d_ann, gx * sx, gy
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _moon(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
     """conics.Moon."""
     ra, rb, dc = consts[o], consts[o + 1], consts[o + 2]
@@ -314,7 +314,7 @@ def _moon(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, floa
     return s * d_b, gbx, gby * sy
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _heart(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
     """conics.Heart (unit heart at p / scale, value times scale)."""
     scale = consts[o]
@@ -342,7 +342,7 @@ def _heart(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, flo
     return s * d_cusp * scale, gx * sx, gy
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _star(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, float, float]:
     """folded.Star: polar reduction to one sector and back."""
     an, period, eps = consts[o], consts[o + 1], consts[o + 2]
@@ -364,7 +364,7 @@ def _star(consts: np.ndarray, o: int, px: float, py: float) -> tuple[float, floa
     return d, (g_r * st - g_t * ct) * _sign(px), g_r * ct + g_t * st
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _mirrored(consts: np.ndarray, o: int, k: int, abs_y: int, px: float, py: float
               ) -> tuple[float, float, float]:
     """folded._MirrorFolded: |p|, k mirrors, one edge on y = radius."""
@@ -390,7 +390,7 @@ def _mirrored(consts: np.ndarray, o: int, k: int, abs_y: int, px: float, py: flo
     return d, gx * sx, gy * sy
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _grid(consts: np.ndarray, o: int, nx: int, ny: int, px: float, py: float
           ) -> tuple[float, float, float]:
     """grid.GridField: bilinear inside the grid, the extension outside (with the
@@ -431,7 +431,7 @@ def _grid(consts: np.ndarray, o: int, nx: int, ny: int, px: float, py: float
     return value, gx, gy
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", refcounts=False)
 def _shape(op: int, consts: np.ndarray, o: int, a: int, b: int, px: float, py: float
            ) -> tuple[float, float, float]:
     """Value and gradient at one point of the primitive instruction (op, o, a, b)."""
