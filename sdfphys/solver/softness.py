@@ -19,6 +19,7 @@ from .._jit import njit
 from ..islands import island_roots
 from ..settings import Settings
 from .bundles import PlainFields, SubstepRows
+from .pair_rows import ONE, pair_count, unsigned
 
 if TYPE_CHECKING:
     from .rows import ContactConstraints
@@ -252,14 +253,14 @@ def _exact_rows(pair_start, feature):
     sources 0, a circle's contact; 5, a clipped manifold of two convex polygons; 6
     without FIELD_PAIR, a circle's predicted row), none from a descent."""
     exact = np.zeros(feature.shape[0], np.bool_)
-    for p in range(pair_start.shape[0] - 1):
+    for p in range(pair_count(pair_start)):
         same = True
-        for k in range(pair_start[p], pair_start[p + 1]):
+        for k in range(pair_start[p], pair_start[p + ONE]):
             source = feature[k] >> 52          # the source (3 bits) and FIELD_PAIR's bit
             if source != 0 and source != 5 << 4 and source != 6 << 4:
                 same = False
                 break
-        for k in range(pair_start[p], pair_start[p + 1]):
+        for k in range(pair_start[p], pair_start[p + ONE]):
             exact[k] = same
     return exact
 
@@ -374,7 +375,10 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
     bodies they touch through pairs that are not exact, or of an impact in such a pair),
     rest_passes (the islands at rest up to rest_limit).
     """
-    body_a, body_b, pair_start, normal = rows.body_a, rows.body_b, rows.pair_start, rows.normal
+    # Indices through unsigned views (``pair_rows.unsigned``): no wraparound select at
+    # each access.
+    body_a, body_b = unsigned(rows.body_a), unsigned(rows.body_b)
+    pair_start, normal = unsigned(rows.pair_start), rows.normal
     normal_impulse, stiff, separation = rows.normal_impulse, rows.stiff, rows.separation
     relative_velocity, feature = rows.relative_velocity, rows.feature
     bias_rate, mass_scale, impulse_scale = rows.bias_rate, rows.mass_scale, rows.impulse_scale
@@ -389,7 +393,7 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
     loaded_pairs = np.empty(max(pair_start.shape[0] - 1, 0), np.int64)
     passes = np.empty(loaded_pairs.shape[0], np.int64)
     nb = inv_mass.shape[0]
-    n_pairs = pair_start.shape[0] - 1
+    n_pairs = pair_count(pair_start)
     ratio = np.ones(nb)
     if stiffen and weight_impulse > 0.0:
         for k in range(body_a.shape[0]):
@@ -402,7 +406,8 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
                 ratio[b] -= lift * inv_mass[b] / weight_impulse
             elif lift > 0.0 and inv_mass[b] > 0.0:
                 ratio[a] += lift * inv_mass[a] / weight_impulse
-    root = island_roots(inv_mass, body_a, body_b)
+    islands = island_roots(inv_mass, rows.body_a, rows.body_b)
+    root = unsigned(islands)
     size = np.zeros(nb, np.int64)
     hot = np.zeros(nb, np.bool_)
     for i in range(nb):
@@ -488,7 +493,7 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
             count += 1
         # A loaded pair's coefficients for its plain and its stiff rows (base stiffness
         # omega, doubled), computed where r differs from the last r of that kind of row.
-        for k in range(first, pair_start[p + 1]):
+        for k in range(first, pair_start[p + ONE]):
             j = stiff[k]
             if r == 1.0:
                 bias_rate[k] = base_bias_rate[j]
@@ -505,7 +510,7 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
                 loaded_r[j] = r
             bias_rate[k], mass_scale[k], impulse_scale[k] = \
                 loaded[j, 0], loaded[j, 1], loaded[j, 2]
-    return loaded_pairs[:count], passes[:count], large, root
+    return loaded_pairs[:count], passes[:count], large, islands
 
 
 def row_softness(inv_mass: np.ndarray, constraints: ContactConstraints, gravity: np.ndarray,
