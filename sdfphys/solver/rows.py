@@ -16,6 +16,7 @@ import numpy as np
 
 from .._jit import njit
 from ..collide.contacts import Contacts
+from .pair_rows import unsigned
 from .warm_start import ImpulseCache
 
 __all__ = ["BodyState", "ContactConstraints", "prepare_contacts", "store_impulses"]
@@ -159,13 +160,14 @@ def _prepare_kernel(com, angle, velocity, angular_velocity, inv_mass, inv_inerti
     # rows come sorted by body_a: once per body; the trigonometry was most of a row's
     # time).
     cos_a, sin_a = 1.0, 0.0
+    rows_a, rows_b = unsigned(body_a), unsigned(body_b)
     for k in range(depth.shape[0]):
-        a = body_a[k]
-        b = body_b[k]
-        if k == 0 or a != body_a[k - 1] or b != body_b[k - 1]:
+        a = rows_a[k]
+        b = rows_b[k]
+        if k == 0 or a != rows_a[k - 1] or b != rows_b[k - 1]:
             pair_start[n_pairs] = k
             n_pairs += 1
-            if k == 0 or a != body_a[k - 1]:
+            if k == 0 or a != rows_a[k - 1]:
                 cos_a = math.cos(angle[a])
                 sin_a = math.sin(angle[a])
         nx = normal[k, 0]
