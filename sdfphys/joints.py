@@ -336,7 +336,7 @@ class JointTable:
         turns off (collide_connected false, two bodies), or None if there are none."""
         r = self.rows
         off = ~r.collide_connected & (r.body_a >= 0) & (r.body_b >= 0)
-        if not np.any(off):
+        if not off.any():
             return None
         lo = np.minimum(r.body_a[off], r.body_b[off])
         hi = np.maximum(r.body_a[off], r.body_b[off])
@@ -347,7 +347,7 @@ class JointTable:
         joined to through joints between bodies (itself if none); None without such joints."""
         r = self.rows
         both = (r.body_a >= 0) & (r.body_b >= 0)
-        if not np.any(both):
+        if not both.any():
             return None
         return island_roots(np.ones(count), r.body_a[both], r.body_b[both])
 
@@ -370,7 +370,7 @@ class JointTable:
         joints between two bodies: what ties bodies into islands (``islands``)."""
         r = self.rows
         both = (r.body_a >= 0) & (r.body_b >= 0)
-        if not np.any(both):
+        if not both.any():
             return body_a, body_b
         return np.r_[body_a, r.body_a[both]], np.r_[body_b, r.body_b[both]]
 

@@ -202,7 +202,7 @@ def _vertex_fractions(fields: list[Field], vertices: list[np.ndarray | None],
     """
     fraction = np.ones(len(fast))
     count = np.array([0 if v is None else len(v) for v in vertices], np.int64)
-    if len(pairs[0]) == 0 or not np.any(count):
+    if len(pairs[0]) == 0 or not count.any():
         return fraction
     table = np.concatenate([v for v in vertices if v is not None])
     offset = np.cumsum(count) - count

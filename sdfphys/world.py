@@ -275,7 +275,7 @@ class World(WorldJoints):
         # What moves this step (awake dynamic bodies, moving kinematic ones), None
         # without sleeping: changed within a step only by waking islands.
         active = world_sleep.active(self) if sleeping else None
-        if not sleeping or np.any(active):
+        if not sleeping or active.any():
             bodies = stage.body_state(self)
             start_com, start_angle = bodies.com.copy(), bodies.angle.copy()
             contacts = stage.collide(self, bodies, active)

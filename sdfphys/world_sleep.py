@@ -47,7 +47,7 @@ def wake_reached(world: World, contacts: Contacts, active: np.ndarray) -> bool:
     """Wake the sleeping islands that an active body (``active`` (B,) bool,
     ``active()``) has a contact with; True if any."""
     asleep = world._view("asleep")
-    if len(contacts) == 0 or not np.any(asleep):
+    if len(contacts) == 0 or not asleep.any():
         return False
     a, b = contacts.body_a, contacts.body_b
     reached = np.r_[b[active[a] & asleep[b]], a[asleep[a] & active[b]]]
@@ -70,7 +70,7 @@ def wake_touching(world: World, index: int) -> None:
 def wake_bodies(world: World, idx: np.ndarray) -> None:
     """Wake the sleeping islands of bodies ``idx``."""
     asleep = world._view("asleep")[idx]
-    if np.any(asleep):
+    if asleep.any():
         wake_islands(world, world._view("island")[idx[asleep]])
 
 
@@ -128,10 +128,10 @@ def fall_asleep(world: World, bodies: BodyState, constraints: ContactConstraints
     kinematic = active & (world._view("kind") == KINEMATIC)
     sleep_time[c.body_b[kinematic[c.body_a]]] = 0.0
     sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
-    if not np.any(sleep_time[awake] >= s.time_to_sleep):
+    if not (sleep_time[awake] >= s.time_to_sleep).any():
         return                       # no body has rested long enough: no island can sleep
     root, falling = islands_falling(world, bodies, constraints, awake, contact_islands)
-    if not np.any(falling):
+    if not falling.any():
         return
     d = world._data
     n = world._n

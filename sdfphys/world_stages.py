@@ -65,7 +65,7 @@ def body_state(world: World) -> BodyState:
     v = world._view
     inv_mass, inv_inertia = v("inv_mass"), v("inv_inertia")
     asleep = v("asleep")
-    if np.any(asleep):
+    if asleep.any():
         inv_mass = np.where(asleep, 0.0, inv_mass)
         inv_inertia = np.where(asleep, 0.0, inv_inertia)
     return BodyState(v("com"), v("angle"), v("velocity"), v("angular_velocity"),
@@ -143,11 +143,11 @@ def prepare(world: World, contacts: Contacts, bodies: BodyState) -> ContactConst
     if world.settings.curvature_anchors and len(contacts):
         sdf = np.array([shape.kind == "sdf" for shape in world._shapes])
         turning = np.zeros(0, bool)                     # no sdf shape: none turns
-        if np.any(sdf):
+        if sdf.any():
             turning = sdf[world._view("shape_id")] & turning_bodies(
                 world._view("kind") == STATIC, bodies.angular_velocity, bodies.radius,
                 world.settings.dt)
-        if np.any(turning):
+        if turning.any():
             curvature = curvature_radii(collision_shapes(world), world._view("shape_id"),
                                         bodies.com, bodies.angle, turning, contacts)
     constraints = prepare_contacts(contacts, bodies, world._view("friction"),
@@ -171,7 +171,7 @@ def substeps(world: World, constraints: ContactConstraints, bodies: BodyState,
     ``solve_substeps`` (``compile_ahead``). Returns the contacts' islands (B,) int64
     (``solve_substeps``; None with kernel_only)."""
     s = world.settings
-    use_friction = bool(np.any(constraints.friction > 0.0))
+    use_friction = bool((constraints.friction > 0.0).any())
     extra, push_outs, joint_runs, root = solve_substeps(
         bodies, constraints, world._gravity, s, use_friction,
         (world._joints.rows, world._joints.stiffness_cap), accelerations(world), kernel_only)
@@ -194,7 +194,7 @@ def restitution(world: World, constraints: ContactConstraints, bodies: BodyState
     """Stage 4: restitution passes, if some contact has restitution and approached fast."""
     needed = (constraints.restitution > 0.0) & (
         constraints.relative_velocity < -world.settings.restitution_threshold)
-    if np.any(needed):
+    if needed.any():
         apply_restitution(bodies, constraints, world.settings)
         world.stage_counts["restitution"] += world.settings.restitution_passes
 
@@ -276,7 +276,7 @@ def compile_ahead(world: World, early: bool = False) -> None:
         world_sleep.fall_asleep(world, bodies, constraints, bodies.com.copy(),
                                 bodies.angle.copy(), world_sleep.awake(world),
                                 world_sleep.active(world))
-    if np.any(world._view("restitution") > 0.0):
+    if (world._view("restitution") > 0.0).any():
         apply_restitution(bodies, constraints, world.settings)
     compile_later(world, bodies)
     collide_ahead(*pairs, later=True)

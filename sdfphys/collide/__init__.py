@@ -352,7 +352,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     shape_class = tables.shape_class
     trig = np.empty((n, 4))
     box_body = shape_class[body_shape] == BOX
-    if tables.mixed and np.any(box_body):        # read by circle-box pairs only
+    if tables.mixed and box_body.any():        # read by circle-box pairs only
         a_box = angle[box_body]
         trig[box_body] = np.column_stack([np.cos(-a_box), np.sin(-a_box), np.cos(a_box),
                                           np.sin(a_box)])
@@ -426,10 +426,10 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], tables: _ShapeTable
         key = key[np.concatenate([[True], key[1:] != key[:-1]])]
         return _without_sensors(np.column_stack([key // n, key % n]), pair_filter)
 
-    if np.any(fields):
+    if fields.any():
         extra = Contacts.concatenate([extra, predicted_field_contacts(
             shapes, body_shape, touching(fields), *state)])
-    if np.any(meshes):
+    if meshes.any():
         extra = Contacts.concatenate([extra, predicted_mesh_contacts(
             shapes, body_shape, contacts, touching(meshes), *state)])
     if len(extra) == 0:

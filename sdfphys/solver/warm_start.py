@@ -103,7 +103,7 @@ class ImpulseCache:
         source = np.full(k, -1, np.int64)
         if _merge_keys(self.body_a, self.body_b, self.feature, body_a, body_b, feature,
                        source):
-            if by_place and np.any(source < 0):
+            if by_place and (source < 0).any():
                 # Both sorted by pair: each new row's pair is a range of the old rows.
                 lo, hi = np.empty(k, np.int64), np.empty(k, np.int64)
                 _pair_ranges(self.body_a, self.body_b, body_a, body_b, lo, hi)
@@ -122,7 +122,7 @@ class ImpulseCache:
             where = np.minimum(np.searchsorted(sorted_key, new_key), len(sorted_key) - 1)
             hit = sorted_key[where] == new_key
             source[hit] = order[where[hit]]
-            if by_place and np.any(source < 0):
+            if by_place and (source < 0).any():
                 old_pair = self.body_a * nb + self.body_b
                 pair_order = np.argsort(old_pair, kind="stable")
                 new_pair = body_a * nb + body_b
