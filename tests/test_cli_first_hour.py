@@ -198,6 +198,14 @@ def _after(seconds: float):
 SIGNALS = [(signal.SIGINT, 130, "SIGINT"), (signal.SIGTERM, 143, "SIGTERM")]
 
 
+def _pairwise(cases, slow):
+    """``cases`` as pytest params, those in ``slow`` marked slow: each signal and each
+    moment stays in the default run once, the other combinations (the same handler,
+    whole seconds of waiting each) run with the slow studies."""
+    return [pytest.param(*case, marks=pytest.mark.slow) if case in slow else case
+            for case in cases]
+
+
 @pytest.mark.parametrize("sig, status, name", SIGNALS)
 def test_a_signal_while_writing_a_video_leaves_no_file(tmp_path, sig, status, name):
     """The issue: SIGTERM left a hidden ``.NAME.mp4.XXXX.partial`` (949 KB)."""
@@ -217,8 +225,9 @@ def test_a_signal_while_writing_a_video_leaves_no_file(tmp_path, sig, status, na
 STARTED = 6.0
 
 
-@pytest.mark.parametrize("sig, status, name", SIGNALS)
-@pytest.mark.parametrize("delay", [STARTED, STARTED + 3.0])
+@pytest.mark.parametrize("sig, status, name, delay", _pairwise(
+    [(*s, d) for d in (STARTED, STARTED + 3.0) for s in SIGNALS],
+    slow=[(*SIGNALS[1], STARTED), (*SIGNALS[0], STARTED + 3.0)]))
 def test_a_signal_at_any_moment_of_a_record_is_one_line(tmp_path, sig, status, name, delay):
     """In the build, a first step's compilation or the steps: one line, no traceback, no
     file."""
@@ -229,7 +238,7 @@ def test_a_signal_at_any_moment_of_a_record_is_one_line(tmp_path, sig, status, n
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("sig, status, name", SIGNALS)
+@pytest.mark.parametrize("sig, status, name", _pairwise(SIGNALS, slow=[SIGNALS[0]]))
 def test_a_signal_during_bench_leaves_no_output(tmp_path, sig, status, name):
     out = tmp_path / "bench"
     code, err = _interrupt(["bench", "-o", str(out)], sig, _after(STARTED))
