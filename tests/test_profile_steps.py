@@ -59,3 +59,34 @@ def test_a_profile_names_the_solver():
                          capture_output=True, text=True, timeout=600, check=True)
     assert "ms a step" in out.stdout
     assert "sdfphys.solver.substeps._solve" in out.stdout
+
+
+def test_callers_charge_each_return_address_to_the_function_below_it():
+    tool = load_tool("profile_steps")
+    entries = [(0x1000, "a"), (0x2000, "b"), (0x3000, "NRT_incref")]
+    calls = {0x1000: 2, 0x1fff: 3, 0x2004: 5, 0x0fff: 7}
+    assert tool.callers(entries, calls) == {"a": 5, "b": 5, "?": 7}
+
+
+def _gdb_attaches() -> bool:
+    if shutil.which("gdb") is None:
+        return False
+    scope = Path("/proc/sys/kernel/yama/ptrace_scope")
+    return not scope.exists() or scope.read_text().strip() == "0" or os.geteuid() == 0
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not _gdb_attaches(), reason="gdb cannot attach here")
+def test_refcounts_are_counted_by_caller():
+    """``--refcounts`` on the base-20 pyramid: a step's NRT calls are counted and charged
+    to the kernels that made them; the solve's are there, and the box pairs' clipping
+    makes none (compiled without reference counts)."""
+    out = subprocess.run([sys.executable, str(TOOL), "pyramid20", "--warm", "20",
+                          "--refcounts", "--set", "sleeping=false", "--top", "200"],
+                         capture_output=True, text=True, timeout=600, check=True)
+    lines = out.stdout.strip().splitlines()
+    head = next(line for line in lines if "calls a step" in line)
+    assert float(head.split()[0].replace(",", "")) > 0
+    named = {line.split(maxsplit=1)[1] for line in lines[lines.index(head) + 1:]}
+    assert "sdfphys.solver.substeps._solve" in named
+    assert not any("clip_pair" in name for name in named)

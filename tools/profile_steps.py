@@ -18,8 +18,19 @@ Reading it: a share for ``NRT_incref`` / ``NRT_decref`` means views or arrays pa
 through calls in a loop (docs/performance.md, "2026-11-28, later"); Python's own
 symbols (``_PyEval_EvalFrameDefault``, numpy's) are the glue between kernels.
 
+Reference counts by caller (``--refcounts``): perf cannot say who calls NRT_incref /
+NRT_decref (numba's code keeps no frame pointers), so gdb counts them. It attaches to
+the process, breaks on both functions and on libc's ``getpid``, which the process calls
+between two steps, reads each call's return address (the top of the stack: both are
+leaves) and looks it up in the map, and detaches after ``--steps`` steps (default 3
+with this option: each call stops the process, about 30 us). Printed: the calls a
+step, and per function of the map the calls a step its code made. Needs gdb on the
+PATH and permission to attach (``/proc/sys/kernel/yama/ptrace_scope`` 0, or root).
+Found so: ``polygons.clip_pair``'s 269,100 calls a step of the base-100 pyramid
+(docs/performance.md, "2026-11-28, session 26").
+
 Usage: python tools/profile_steps.py SCENE [--steps 300] [--warm 300] [--top 30]
-    [--set KNOB=VALUE ...] [--frequency 4000]
+    [--set KNOB=VALUE ...] [--frequency 4000] [--refcounts]
 SCENE: a ``tools/bench_vs_peers.py`` scene (pile2000, pyramid20, showcase, ...) or a
 scene file (``--set`` then sets its [sim] keys). Needs ``perf`` on the PATH and
 permission to record the process (``/proc/sys/kernel/perf_event_paranoid`` at most 2);
@@ -121,14 +132,103 @@ def make_world(scene: str, knobs: list[str]):
                                bench.sdfphys_settings(knobs, False))
 
 
+#: gdb's side of ``--refcounts``: counts return addresses into NRT_incref / NRT_decref
+#: between step marks (getpid), writes {"steps": n, "calls": {address: count}} as JSON.
+_GDB_SCRIPT = """
+import gdb, json
+incref, decref, mark, steps, out = {args}
+state = {{"steps": -1, "calls": {{}}}}
+
+
+class Count(gdb.Breakpoint):
+    def stop(self):
+        if state["steps"] >= 0:
+            ret = int(gdb.parse_and_eval("*(unsigned long *)$sp"))
+            state["calls"][ret] = state["calls"].get(ret, 0) + 1
+        return False
+
+
+class Mark(gdb.Breakpoint):
+    def stop(self):
+        state["steps"] += 1
+        return state["steps"] >= steps
+
+
+Count("*" + hex(incref))
+Count("*" + hex(decref))
+Mark("*" + hex(mark))
+gdb.execute("continue")
+with open(out, "w") as f:
+    json.dump({{"steps": state["steps"], "calls": state["calls"]}}, f)
+gdb.execute("detach")
+"""
+
+
+def callers(entries: list[tuple[int, str]], calls: dict[int, int]) -> dict[str, int]:
+    """Calls per function of the map: each return address charged to the function whose
+    start is the last one at or below it (``entries`` sorted by address); addresses
+    below every start as ``?``."""
+    import bisect
+
+    starts = [address for address, _ in entries]
+    total: dict[str, int] = {}
+    for address, count in calls.items():
+        k = bisect.bisect_right(starts, int(address)) - 1
+        name = entries[k][1] if k >= 0 else "?"
+        total[name] = total.get(name, 0) + count
+    return total
+
+
+def count_refcounts(world, entries: list[tuple[int, str]], steps: int, top: int) -> int:
+    """``--refcounts``: gdb counts NRT_incref / NRT_decref calls by caller over ``steps``
+    steps of ``world`` (module docstring)."""
+    import ctypes
+    import json
+
+    names = {name: address for address, name in entries}
+    if "NRT_incref" not in names or "NRT_decref" not in names:
+        print("profile_steps: no NRT_incref / NRT_decref in the map", file=sys.stderr)
+        return 2
+    libc = ctypes.CDLL(None)
+    mark = ctypes.cast(libc.getpid, ctypes.c_void_p).value
+    with tempfile.TemporaryDirectory(prefix="sdfphys-refcounts-") as folder:
+        out = Path(folder) / "calls.json"
+        script = Path(folder) / "count.py"
+        script.write_text(_GDB_SCRIPT.format(args=repr(
+            (names["NRT_incref"], names["NRT_decref"], mark, steps, str(out)))))
+        gdb = subprocess.Popen(["gdb", "-p", str(os.getpid()), "-batch", "-nx", "-iex",
+                                "set auto-solib-add off", "-x", str(script)],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        while not out.exists() and gdb.poll() is None:
+            libc.getpid()
+            world.step()
+        _, error = gdb.communicate(timeout=120)
+        if not out.exists():
+            print(f"profile_steps: gdb counted nothing: {error.strip()[-300:]}",
+                  file=sys.stderr)
+            return 2
+        result = json.loads(out.read_text())
+    n = max(result["steps"], 1)
+    calls = {int(address): count for address, count in result["calls"].items()}
+    print(f"{sum(calls.values()) / n:,.0f} NRT_incref / NRT_decref calls a step "
+          f"({n} steps counted)")
+    ranked = sorted(callers(entries, calls).items(), key=lambda item: -item[1])
+    for name, count in ranked[:top]:
+        print(f"{count / n:12,.0f} {name[:100]}")
+    return 0
+
+
 def child(args: argparse.Namespace) -> int:
     """In the process with a fresh cache: warm up, map, record, report."""
     world = make_world(args.scene, args.set)
     for _ in range(args.warm):
         world.step()
     world = make_world(args.scene, args.set)
+    entries = map_entries()
+    if args.refcounts:
+        return count_refcounts(world, entries, args.steps, args.top)
     map_path = Path(f"/tmp/perf-{os.getpid()}.map")
-    write_map(map_path, map_entries())
+    write_map(map_path, entries)
     if args.map_only:
         print(map_path)
         return 0
@@ -162,13 +262,19 @@ def child(args: argparse.Namespace) -> int:
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("scene")
-    parser.add_argument("--steps", type=int, default=300)
+    parser.add_argument("--steps", type=int, default=None,
+                        help="timed steps (default 300; 3 with --refcounts)")
     parser.add_argument("--warm", type=int, default=300)
     parser.add_argument("--top", type=int, default=30)
     parser.add_argument("--frequency", type=int, default=4000)
     parser.add_argument("--set", nargs="*", default=[], metavar="KNOB=VALUE")
     parser.add_argument("--map-only", action="store_true")
-    return parser.parse_args(argv)
+    parser.add_argument("--refcounts", action="store_true",
+                        help="count NRT_incref / NRT_decref calls by caller with gdb")
+    args = parser.parse_args(argv)
+    if args.steps is None:
+        args.steps = 3 if args.refcounts else 300
+    return args
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -179,7 +285,10 @@ def main(argv: list[str] | None = None) -> int:
         except (ValueError, OSError) as error:           # SpecError is a ValueError
             print(f"profile_steps: {args.scene}: {error}", file=sys.stderr)
             return 2
-    if not args.map_only and shutil.which("perf") is None:
+    if args.refcounts and shutil.which("gdb") is None:
+        print("profile_steps: gdb is not on the PATH (needed by --refcounts)", file=sys.stderr)
+        return 2
+    if not args.map_only and not args.refcounts and shutil.which("perf") is None:
         print("profile_steps: perf is not on the PATH (Linux's linux-tools; or --map-only)",
               file=sys.stderr)
         return 2
