@@ -240,31 +240,43 @@ def plan(rows, inv_mass, inv_inertia):
 
 
 @njit(cache=True)
-def _impulse(rows, j, code):
-    """Row ``code``'s accumulated impulse of joint j (N s per substep)."""
+def _impulses(rows):
+    """The rows' accumulated impulses as the tuple ``_impulse`` and ``_add_impulse`` take
+    (linear (J, 2), angular, perp, axial (J,)): read from the bundle once per island,
+    not at each row (every read of a structref's field is a reference count)."""
+    return rows.linear_impulse, rows.angular_impulse, rows.perp_impulse, rows.axial_impulse
+
+
+@njit(cache=True, refcounts=False)
+def _impulse(impulses, j, code):
+    """Row ``code``'s accumulated impulse of joint j (N s per substep); impulses:
+    ``_impulses``."""
+    linear, angular, perp, axial = impulses
     if code == _X:
-        return rows.linear_impulse[j, 0]
+        return linear[j, 0]
     if code == _Y:
-        return rows.linear_impulse[j, 1]
+        return linear[j, 1]
     if code == _ANGLE:
-        return rows.angular_impulse[j]
+        return angular[j]
     if code == _PERP:
-        return rows.perp_impulse[j]
-    return rows.axial_impulse[j]
+        return perp[j]
+    return axial[j]
 
 
-@njit(cache=True)
-def _add_impulse(rows, j, code, value):
+@njit(cache=True, refcounts=False)
+def _add_impulse(impulses, j, code, value):
+    """Add ``value`` to row ``code``'s accumulated impulse of joint j."""
+    linear, angular, perp, axial = impulses
     if code == _X:
-        rows.linear_impulse[j, 0] += value
+        linear[j, 0] += value
     elif code == _Y:
-        rows.linear_impulse[j, 1] += value
+        linear[j, 1] += value
     elif code == _ANGLE:
-        rows.angular_impulse[j] += value
+        angular[j] += value
     elif code == _PERP:
-        rows.perp_impulse[j] += value
+        perp[j] += value
     else:
-        rows.axial_impulse[j] += value
+        axial[j] += value
 
 
 @njit(cache=True)
@@ -420,6 +432,7 @@ def island_pass(p, c, velocity, angular_velocity, inv_mass, inv_inertia, rows, p
     s, e = p.start[c], p.start[c + 1]
     n = e - s
     m = p.matrix[p.offset[c]:p.offset[c + 1]].reshape((n, n))
+    impulses = _impulses(rows)
     x = np.empty(n)
     for i in range(n):
         r = s + i
@@ -439,11 +452,11 @@ def island_pass(p, c, velocity, angular_velocity, inv_mass, inv_inertia, rows, p
         if p.scale[r] == 0.0:
             continue
         j, code = p.row_joint[r], p.row_code[r]
-        x[i] -= p.soft_diag[r] * _impulse(rows, j, code)
+        x[i] -= p.soft_diag[r] * _impulse(impulses, j, code)
         if _point_pair(p, r):
             off = p.soft_off[r]
-            x[i] -= off * _impulse(rows, j, _Y)
-            x[i + 1] -= off * _impulse(rows, j, _X)
+            x[i] -= off * _impulse(impulses, j, _Y)
+            x[i + 1] -= off * _impulse(impulses, j, _X)
     # L y = x, then L^T d = y, over the envelopes.
     for i in range(n):
         total = x[i]
@@ -458,9 +471,9 @@ def island_pass(p, c, velocity, angular_velocity, inv_mass, inv_inertia, rows, p
         r = s + i
         j, code = p.row_joint[r], p.row_code[r]
         d = x[i]
-        _add_impulse(rows, j, code, d)
+        _add_impulse(impulses, j, code, d)
         progress[0] = max(progress[0], abs(d))
-        progress[1] = max(progress[1], abs(_impulse(rows, j, code)))
+        progress[1] = max(progress[1], abs(_impulse(impulses, j, code)))
         a, b = rows.body_a[j], rows.body_b[j]
         if a >= 0:
             velocity[a, 0] -= inv_mass[a] * d * p.jac[r, 0]
