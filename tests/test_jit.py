@@ -12,6 +12,7 @@ from sdfphys.collide._descent_kernels import _most_candidates
 from sdfphys.collide.polygons import clip_pair
 from sdfphys.sdf.compiled import run
 from sdfphys.sdf.primitive_kernels import _shape
+from sdfphys.solver.joint_direct import _add_impulse, _impulse
 
 
 def _sum_rows(a, rows):
@@ -38,8 +39,9 @@ def test_numba_refuses_a_kernel_without_reference_counts_that_allocates():
         fresh(3)
 
 
-@pytest.mark.parametrize("kernel", [clip_pair, run, _shape, _h, _most_candidates])
+@pytest.mark.parametrize("kernel", [clip_pair, run, _shape, _h, _most_candidates, _impulse,
+                                    _add_impulse])
 def test_the_per_pair_and_per_point_kernels_count_no_references(kernel):
-    """The kernels called once per polygon pair, per batch of field points or per
-    descent start (``sdfphys._jit``, "Reference counts")."""
+    """The kernels called once per polygon pair, per batch of field points, per descent
+    start or per joint row of a direct pass (``sdfphys._jit``, "Reference counts")."""
     assert kernel.targetoptions.get("_nrt") is False
