@@ -13,6 +13,7 @@ from sdfphys.collide.polygons import clip_pair
 from sdfphys.sdf.compiled import run
 from sdfphys.sdf.primitive_kernels import _shape
 from sdfphys.solver.joint_direct import _add_impulse, _impulse
+from sdfphys.solver.joints import _point, _row
 
 
 def _sum_rows(a, rows):
@@ -40,7 +41,7 @@ def test_numba_refuses_a_kernel_without_reference_counts_that_allocates():
 
 
 @pytest.mark.parametrize("kernel", [clip_pair, run, _shape, _h, _most_candidates, _impulse,
-                                    _add_impulse])
+                                    _add_impulse, _row, _point])
 def test_the_per_pair_and_per_point_kernels_count_no_references(kernel):
     """The kernels called once per polygon pair, per batch of field points, per descent
     start or per joint row of a direct pass (``sdfphys._jit``, "Reference counts")."""

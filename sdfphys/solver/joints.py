@@ -355,13 +355,13 @@ class Output(NamedTuple):
     progress: np.ndarray
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def _progress(progress, change, total):
     progress[0] = max(progress[0], change)
     progress[1] = max(progress[1], total)
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def _apply(v, m, ux, uy, a1, a2, impulse):
     """Velocities (vax, vay, wa, vbx, vby, wb) after the row impulse (module docstring)."""
     vax, vay, wa, vbx, vby, wb = v
@@ -370,7 +370,7 @@ def _apply(v, m, ux, uy, a1, a2, impulse):
             vbx + mb * impulse * ux, vby + mb * impulse * uy, wb + ib * impulse * a2)
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def _row(v, m, ux, uy, a1, a2, acc, j, phase, bias, m_scale, i_scale, lo, hi, out):
     """One row with Jacobian (u, a1, a2) and accumulated impulse acc[j] (module docstring).
 
@@ -401,7 +401,7 @@ def _row(v, m, ux, uy, a1, a2, acc, j, phase, bias, m_scale, i_scale, lo, hi, ou
     return _apply(v, m, ux, uy, a1, a2, impulse)
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def _point(v, m, rax, ray, rbx, rby, acc, j, phase, bx, by, m_scale, i_scale, largest, out):
     """The 2x2 block of a shared point, accumulated impulse acc[j] (2,) on b, |acc| <=
     largest (N s). bias (bx, by) m/s as in ``_row``; REACTION adds acc[j] to out.force[j]."""
@@ -436,7 +436,7 @@ def _point(v, m, rax, ray, rbx, rby, acc, j, phase, bx, by, m_scale, i_scale, la
             vbx + mb * px, vby + mb * py, wb + ib * (rbx * py - rby * px))
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def _equality(c, soft, phase):
     """(bias, mass_scale, impulse_scale) of an equality row at error c: soft with the joint
     softness while solving, rigid while relaxing."""
@@ -445,7 +445,7 @@ def _equality(c, soft, phase):
     return 0.0, 1.0, 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def _limit(c, soft, phase, inv_h):
     """(bias, mass_scale, impulse_scale) of a one-sided row at error c (>= 0 allowed)."""
     if c > 0.0:
@@ -453,7 +453,7 @@ def _limit(c, soft, phase, inv_h):
     return _equality(c, soft, phase)
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def _spring(c, spring):
     """(bias, mass_scale, impulse_scale) of a spring row at stretch c (both passes)."""
     return spring[1] * spring[0] * c, spring[1], spring[2]
