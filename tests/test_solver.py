@@ -333,6 +333,45 @@ def test_impulse_cache_falls_back_to_the_nearest_unused_contact_of_the_pair():
     np.testing.assert_array_equal(by_key, [3.0, 0.0, 0.0, 0.0, 0.0])
 
 
+def test_the_sorted_match_equals_a_brute_force_one_with_places():
+    """The one-pass match of sorted lists (``warm_start._match_sorted``: key merge, pair
+    ranges, match by place, gather) against a brute force: keys by a dict, then each
+    unmatched new contact in order takes the nearest unused old contact of its pair
+    within the tolerance (the last of equal distances, as the kernel's <=)."""
+    rng = np.random.default_rng(11)
+    for trial in range(20):
+        def keys(n):
+            k = np.unique(rng.integers(0, 4, (n, 3)), axis=0)
+            return k[:, 0], k[:, 0] + 1 + k[:, 1], k[:, 2] - 1
+        a, b, f = keys(40)
+        old = ImpulseCache(a, b, f, rng.uniform(0, 1, len(f)), rng.uniform(-1, 1, len(f)),
+                           rng.uniform(0, 0.01, (len(f), 2)))
+        na, nb, nf = keys(40)
+        anchor = rng.uniform(0, 0.01, (len(nf), 2))
+        normal, tangent = old.match(na, nb, nf, anchor, 0.004)
+        index = {(x, y, z): r for r, (x, y, z) in enumerate(zip(a, b, f))}
+        source = [index.get(key, -1) for key in zip(na, nb, nf)]
+        used = {r for r in source if r >= 0}
+        for j, r in enumerate(source):
+            if r >= 0:
+                continue
+            best, best_d2 = -1, 0.004 ** 2
+            for q in range(len(f)):
+                if (a[q], b[q]) == (na[j], nb[j]) and q not in used:
+                    d2 = float(np.sum((old.anchor[q] - anchor[j]) ** 2))
+                    if d2 <= best_d2:
+                        best, best_d2 = q, d2
+            if best >= 0:
+                source[j] = best
+                used.add(best)
+        source = np.array(source)
+        found = source >= 0
+        assert found.any() and not found.all()
+        np.testing.assert_array_equal(normal, np.where(found, old.normal_impulse[source], 0.0))
+        np.testing.assert_array_equal(tangent,
+                                      np.where(found, old.tangent_impulse[source], 0.0))
+
+
 def test_a_box_resting_on_a_box_keeps_its_warm_start_every_step(monkeypatch):
     """The patch between two unit boxes is seen from both sides (a's corners in b, b's
     corners in a: near-coincident candidates with different keys), and which of them

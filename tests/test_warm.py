@@ -153,8 +153,7 @@ def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(mon
     w.add_body({"type": "sdf", "field": {"type": "box", "size": [0.8, 0.4]}}, position=(1.0, 0.7))
     kernels = ((contact_cache, "_merged"), (reduce, "_reduce"), (mesh_contacts, "_finish"),
                (softness, "_row_softness_kernel"), (rows, "_prepare_kernel"),
-               (restitution, "_restitution_kernel"), (warm_start, "_merge_keys"),
-               (warm_start, "_pair_ranges"), (warm_start, "_match_by_place"),
+               (restitution, "_restitution_kernel"), (warm_start, "_match_sorted"),
                (world_sleep, "falling_asleep"))
     calls = {name: [] for _, name in kernels}
     for module, name in kernels:

@@ -100,80 +100,107 @@ class ImpulseCache:
         if k == 0 or len(self) == 0:
             return normal, tangent
         by_place = anchor is not None and tolerance > 0.0 and len(self.anchor) == len(self)
-        source = np.full(k, -1, np.int64)
-        if _merge_keys(self.body_a, self.body_b, self.feature, body_a, body_b, feature,
-                       source):
-            if by_place and (source < 0).any():
-                # Both sorted by pair: each new row's pair is a range of the old rows.
-                lo, hi = np.empty(k, np.int64), np.empty(k, np.int64)
-                _pair_ranges(self.body_a, self.body_b, body_a, body_b, lo, hi)
-                _match_by_place(source, lo, hi, np.arange(len(self)),
-                                np.ascontiguousarray(self.anchor, dtype=np.float64),
-                                np.ascontiguousarray(anchor, dtype=np.float64), tolerance)
+        if by_place:
+            old_anchor = np.ascontiguousarray(self.anchor, dtype=np.float64)
+            new_anchor = np.ascontiguousarray(anchor, dtype=np.float64)
         else:
-            nb = int(max(self.body_b.max(), body_b.max(), self.body_a.max(),
-                         body_a.max())) + 1
-            ranks = np.unique(np.concatenate([self.feature, feature]), return_inverse=True)[1]
-            nf = int(ranks.max()) + 1
-            old_key = (self.body_a * nb + self.body_b) * nf + ranks[:len(self)]
-            new_key = (body_a * nb + body_b) * nf + ranks[len(self):]
-            order = np.argsort(old_key, kind="stable")
-            sorted_key = old_key[order]
-            where = np.minimum(np.searchsorted(sorted_key, new_key), len(sorted_key) - 1)
-            hit = sorted_key[where] == new_key
-            source[hit] = order[where[hit]]
-            if by_place and (source < 0).any():
-                old_pair = self.body_a * nb + self.body_b
-                pair_order = np.argsort(old_pair, kind="stable")
-                new_pair = body_a * nb + body_b
-                lo = np.searchsorted(old_pair[pair_order], new_pair, side="left")
-                hi = np.searchsorted(old_pair[pair_order], new_pair, side="right")
-                _match_by_place(source, lo, hi, pair_order,
-                                np.ascontiguousarray(self.anchor, dtype=np.float64),
-                                np.ascontiguousarray(anchor, dtype=np.float64), tolerance)
+            old_anchor = new_anchor = _NO_ANCHOR
+        if _match_sorted(self.body_a, self.body_b, self.feature, self.normal_impulse,
+                         self.tangent_impulse, old_anchor, body_a, body_b, feature,
+                         new_anchor, tolerance if by_place else 0.0, normal, tangent):
+            return normal, tangent
+        # Not both sorted: the vectorized lookup.
+        source = np.full(k, -1, np.int64)
+        nb = int(max(self.body_b.max(), body_b.max(), self.body_a.max(),
+                     body_a.max())) + 1
+        ranks = np.unique(np.concatenate([self.feature, feature]), return_inverse=True)[1]
+        nf = int(ranks.max()) + 1
+        old_key = (self.body_a * nb + self.body_b) * nf + ranks[:len(self)]
+        new_key = (body_a * nb + body_b) * nf + ranks[len(self):]
+        order = np.argsort(old_key, kind="stable")
+        sorted_key = old_key[order]
+        where = np.minimum(np.searchsorted(sorted_key, new_key), len(sorted_key) - 1)
+        hit = sorted_key[where] == new_key
+        source[hit] = order[where[hit]]
+        if by_place and (source < 0).any():
+            old_pair = self.body_a * nb + self.body_b
+            pair_order = np.argsort(old_pair, kind="stable")
+            new_pair = body_a * nb + body_b
+            lo = np.searchsorted(old_pair[pair_order], new_pair, side="left")
+            hi = np.searchsorted(old_pair[pair_order], new_pair, side="right")
+            _match_by_place(source, lo, hi, pair_order, old_anchor, new_anchor, tolerance)
         found = source >= 0
         normal[found] = self.normal_impulse[source[found]]
         tangent[found] = self.tangent_impulse[source[found]]
         return normal, tangent
 
 
+#: The anchors' placeholder when there is no match by place.
+_NO_ANCHOR = np.zeros((0, 2))
+
+
 @njit(cache=True)
-def _merge_keys(old_a, old_b, old_f, new_a, new_b, new_f, source):
-    """Key match as a merge join when both lists are sorted by (body_a, body_b, feature)
-    (``find_contacts``' order): source[k] = the old row with new row k's key. Returns
-    False, leaving ``source`` untouched, if either list is not sorted."""
-    for k in range(1, old_a.shape[0]):
-        if (old_a[k], old_b[k], old_f[k]) < (old_a[k - 1], old_b[k - 1], old_f[k - 1]):
-            return False
-    for k in range(1, new_a.shape[0]):
-        if (new_a[k], new_b[k], new_f[k]) < (new_a[k - 1], new_b[k - 1], new_f[k - 1]):
-            return False
-    u = 0
-    n_old = old_a.shape[0]
-    for k in range(new_a.shape[0]):
-        key = (new_a[k], new_b[k], new_f[k])
-        while u < n_old and (old_a[u], old_b[u], old_f[u]) < key:
-            u += 1
-        if u < n_old and (old_a[u], old_b[u], old_f[u]) == key:
-            source[k] = u
+def _match_sorted(old_a, old_b, old_f, old_normal, old_tangent, old_anchor, new_a, new_b,
+                  new_f, new_anchor, tolerance, normal, tangent):
+    """``ImpulseCache.match`` when both lists are sorted by (body_a, body_b, feature)
+    (``find_contacts``' order), in one pass: the key match as a merge join (O(K)), each
+    new row's pair's old rows [lo, hi) found by the same merge, then, if tolerance > 0,
+    the match by place (``_match_by_place``), and the impulses gathered into normal and
+    tangent (K,), zeros where unmatched. Returns False, leaving them untouched, if either
+    list is not sorted.
+
+    A pair (a, b) is compared as the one integer (a << 32) | b (body indices < 2^31), and
+    the merge's cursors are unsigned (numba wraps signed indices around: a compare and a
+    select per access, ``solver.pair_rows``)."""
+    n_old, k = old_a.shape[0], new_a.shape[0]
+    if not (_sorted(old_a, old_b, old_f) and _sorted(new_a, new_b, new_f)):
+        return False
+    source = np.full(k, -1, np.int64)
+    lo, hi = np.empty(k, np.int64), np.empty(k, np.int64)
+    unmatched = False
+    end = np.uint64(n_old)
+    first = np.uint64(0)                    # the first old row of new row j's pair or after
+    u = np.uint64(0)                        # the first old row of key >= new row j's
+    for j in range(k):
+        pair, f = (new_a[j] << _HIGH) | new_b[j], new_f[j]
+        while first < end and (old_a[first] << _HIGH) | old_b[first] < pair:
+            first += np.uint64(1)
+        u = max(u, first)
+        while u < end and (old_a[u] << _HIGH) | old_b[u] == pair and old_f[u] < f:
+            u += np.uint64(1)
+        if u < end and (old_a[u] << _HIGH) | old_b[u] == pair and old_f[u] == f:
+            source[j] = u
+        else:
+            unmatched = True
+        last = u
+        while last < end and (old_a[last] << _HIGH) | old_b[last] == pair:
+            last += np.uint64(1)
+        lo[j], hi[j] = first, last
+    if unmatched and tolerance > 0.0:
+        _match_by_place(source, lo, hi, np.arange(n_old), old_anchor, new_anchor, tolerance)
+    for j in range(k):
+        if source[j] >= 0:
+            normal[j], tangent[j] = old_normal[source[j]], old_tangent[source[j]]
     return True
 
 
+#: The shift that packs a pair (a, b) into one int64 key, (a << 32) | b.
+_HIGH = np.int64(32)
+
+
 @njit(cache=True)
-def _pair_ranges(old_a, old_b, new_a, new_b, lo, hi):
-    """lo[k], hi[k]: the old rows [lo, hi) of new row k's pair (body_a, body_b), both
-    lists sorted by pair (a merge; an empty range where the old list has no such pair)."""
-    u = 0
-    n_old = old_a.shape[0]
-    for k in range(new_a.shape[0]):
-        pair = (new_a[k], new_b[k])
-        while u < n_old and (old_a[u], old_b[u]) < pair:
-            u += 1
-        lo[k] = u
-        end = u
-        while end < n_old and old_a[end] == pair[0] and old_b[end] == pair[1]:
-            end += 1
-        hi[k] = end
+def _sorted(a, b, f):
+    """Whether the rows (a, b, f) are in lexicographic order."""
+    for u in range(1, a.shape[0]):
+        if a[u] != a[u - 1]:
+            if a[u] < a[u - 1]:
+                return False
+        elif b[u] != b[u - 1]:
+            if b[u] < b[u - 1]:
+                return False
+        elif f[u] < f[u - 1]:
+            return False
+    return True
 
 
 @njit(cache=True)
