@@ -23,7 +23,7 @@ def query(position, angle, velocity, spin, margin=0.5, specs=(PADDLE, BALL)):
         shapes, np.arange(2), np.array([[0, 1]]),
         np.array([s.kind == "circle" for s in shapes]), np.array([s.radius for s in shapes]),
         np.array(position, float), np.array(angle, float), np.array(velocity, float),
-        np.array(spin, float), DT, SLOP, np.array([margin]))
+        np.array(spin, float), DT, SLOP, margin, np.zeros(2))
 
 
 def test_the_row_is_the_pair_at_its_end_poses_carried_back_to_the_start():

@@ -397,13 +397,11 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], tables: _ShapeTable
     n = np.int64(len(angle))
     extra = Contacts.empty()
     if tables.mixed:             # a circle and a body that is not one: their pairs
-        pairs = pairs[is_circle[pairs[:, 0]] != is_circle[pairs[:, 1]]]
-        pairs = _without_sensors(pairs, pair_filter)
-        extra = predicted_contacts(shapes, body_shape, pairs, is_circle, radius, position,
-                                   angle, velocity, angular_velocity, float(settings.dt),
+        extra = predicted_contacts(shapes, body_shape, _without_sensors(pairs, pair_filter),
+                                   is_circle, radius, position, angle, velocity,
+                                   angular_velocity, float(settings.dt),
                                    float(settings.linear_slop),
-                                   settings.speculative_distance + reach[pairs[:, 0]]
-                                   + reach[pairs[:, 1]])
+                                   float(settings.speculative_distance), reach)
     if len(extra):
         extra = extra.take(~_implied(contacts, extra, n))
     # Pairs with a contact only (the others are farther apart than their margin, which

@@ -85,6 +85,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .._jit import njit
 from ..sdf import compiled, safe_normalize
 from ..settings import Settings
 from ..shapes import Shape
@@ -121,36 +122,29 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
                        is_circle: np.ndarray, radius: np.ndarray, position: np.ndarray,
                        angle: np.ndarray, velocity: np.ndarray,
                        angular_velocity: np.ndarray, dt: float, slop: float,
-                       pair_margin: np.ndarray) -> Contacts:
+                       margin: float, reach: np.ndarray) -> Contacts:
     """The predicted contacts (module docstring) of the candidate ``pairs`` (P, 2), i < j.
 
     shapes: distinct Shape objects, body_shape (B,) index into them; is_circle (B,)
     bool; radius (B,) m, bounding radii about the centres of mass (a circle's is its
     radius); position (B, 2) m, angle (B,) rad, velocity (B, 2) m/s, angular_velocity
     (B,) rad/s: the step's start values; dt s; slop m (``Settings.linear_slop``);
-    pair_margin (P,) m, each pair's margin. Returns body_a < body_b contacts, sorted by
-    pair, at most one per pair.
+    margin m, the speculative distance, and reach (B,) m, the bodies' reach: a pair's
+    margin is margin + reach_i + reach_j. Pairs of two circles or of two bodies that
+    are not circles are skipped. Returns body_a < body_b contacts, sorted by pair, at
+    most one per pair.
     """
-    mixed = np.flatnonzero(is_circle[pairs[:, 0]] != is_circle[pairs[:, 1]])
-    i, j = pairs[mixed, 0], pairs[mixed, 1]
-    circle_first = is_circle[i]
-    circle = np.where(circle_first, i, j)
-    other = np.where(circle_first, j, i)
-    turning = _turns(angular_velocity[other], radius[other], dt, slop)
-    with np.errstate(invalid="ignore"):
-        relative = velocity[circle] - velocity[other]
-        fast = (relative[:, 0] ** 2 + relative[:, 1] ** 2) * dt * dt > slop * slop
-    chosen = np.flatnonzero(turning | fast)
-    if len(chosen) == 0:
+    c, b, turning, pair_margin = _circle_pairs(
+        np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2), is_circle, radius,
+        velocity, angular_velocity, dt, slop, margin, reach)
+    if len(c) == 0:
         return Contacts.empty()
-    rows, turning = mixed[chosen], turning[chosen]
-    c, b = circle[chosen], other[chosen]
     turn = angular_velocity[b] * dt
     centre_end = position[c] + velocity[c] * dt
     body_end = position[b] + velocity[b] * dt
     local = rotate(centre_end - body_end, -(angle[b] + turn))
-    d = np.empty(len(rows))
-    g = np.empty((len(rows), 2))
+    d = np.empty(len(c))
+    g = np.empty((len(c), 2))
     for sid in np.unique(body_shape[b]):
         at = np.flatnonzero(body_shape[b] == sid)
         d[at], g[at] = compiled.evaluate(shapes[sid].field, local[at])
@@ -160,7 +154,7 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
     normal = -out                                                      # circle -> b
     arm = material - position[c]
     gap = normal[:, 0] * arm[:, 0] + normal[:, 1] * arm[:, 1] - radius[c]
-    keep = (gap < pair_margin[rows]) & (turning | (gap > 0.0))
+    keep = (gap < pair_margin) & (turning | (gap > 0.0))
     gap = np.maximum(gap, 0.0)
     # The row's point: on b's material point q0 against a turning body; otherwise on
     # the line through the circle's centre along n, as every contact of a circle (its
@@ -174,6 +168,34 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
     return Contacts(np.minimum(c, b)[keep], np.maximum(c, b)[keep], point[keep],
                     normal[keep], -gap[keep],
                     np.full(len(keep), np.int64(SOURCE_PREDICTED) << np.int64(56)))
+
+
+@njit(cache=True)
+def _circle_pairs(pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray,
+                  velocity: np.ndarray, angular_velocity: np.ndarray, dt: float, slop: float,
+                  margin: float, reach: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The candidate ``pairs`` (P, 2) of a circle and a body that is not one, where the
+    body turns by more than ``slop`` at its bounding radius this step (``_turns``) or the
+    circle moves against it by more than that (|v_c - v_b| dt > slop), in pair order:
+    the circle (M,), the other body (M,), whether it turns (M,) bool, and the pair's
+    margin (M,) m, margin + reach_i + reach_j (``collide`` module doc)."""
+    n = pairs.shape[0]
+    circle, other = np.empty(n, np.int64), np.empty(n, np.int64)
+    turning, pair_margin = np.empty(n, np.bool_), np.empty(n)
+    m = 0
+    for k in range(n):
+        i, j = pairs[k, 0], pairs[k, 1]
+        if is_circle[i] == is_circle[j]:
+            continue
+        c, b = (i, j) if is_circle[i] else (j, i)
+        turns = abs(angular_velocity[b]) * radius[b] * dt > slop
+        rx, ry = velocity[c, 0] - velocity[b, 0], velocity[c, 1] - velocity[b, 1]
+        if turns or (rx * rx + ry * ry) * dt * dt > slop * slop:
+            circle[m], other[m], turning[m] = c, b, turns
+            pair_margin[m] = margin + reach[i] + reach[j]
+            m += 1
+    return circle[:m], other[:m], turning[:m], pair_margin[:m]
 
 
 def predicted_field_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
