@@ -15,16 +15,27 @@ import numpy as np
 
 from ._jit import njit
 
-__all__ = ["island_roots"]
+__all__ = ["island_roots", "join", "root_of"]
 
 
-@njit(cache=True, error_model="numpy")
-def _root(parent, i):
+@njit(cache=True, error_model="numpy", refcounts=False)
+def root_of(parent, i):
     """Union-find root of i, halving the path on the way."""
     while parent[i] != i:
         parent[i] = parent[parent[i]]
         i = parent[i]
     return i
+
+
+@njit(cache=True, error_model="numpy", refcounts=False)
+def join(parent, inv_mass, a, b):
+    """Union of the islands of bodies a and b in ``parent`` (B,) int64 when both are
+    dynamic (inv_mass (B,) > 0), the lower root kept."""
+    if inv_mass[a] > 0.0 and inv_mass[b] > 0.0:
+        ra = root_of(parent, a)
+        rb = root_of(parent, b)
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)
 
 
 @njit(cache=True, error_model="numpy")
@@ -37,14 +48,8 @@ def island_roots(inv_mass, body_a, body_b):
     n = inv_mass.shape[0]
     parent = np.arange(n)
     for k in range(body_a.shape[0]):
-        a = body_a[k]
-        b = body_b[k]
-        if inv_mass[a] > 0.0 and inv_mass[b] > 0.0:
-            ra = _root(parent, a)
-            rb = _root(parent, b)
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
+        join(parent, inv_mass, body_a[k], body_b[k])
     root = np.empty(n, np.int64)
     for i in range(n):
-        root[i] = _root(parent, i)
+        root[i] = root_of(parent, i)
     return root

@@ -16,7 +16,7 @@ import numpy as np
 from numba.experimental import structref
 
 from .._jit import njit
-from ..islands import island_roots
+from ..islands import join, root_of
 from ..settings import Settings
 from .bundles import PlainFields, SubstepRows
 from .pair_rows import ONE, pair_count, unsigned
@@ -192,7 +192,7 @@ IMPACT_HOPS = 4
 # scene, start poses moved by 1e-6 m: 5.0-11.4 mm; 5.0-5.4 mm with the jam depth).
 # Exact pairs only: pairs whose rows all come from closed forms (a circle's contacts and
 # predicted rows, each through its centre; a clipped manifold of two convex polygons,
-# one normal: ``_exact_rows``). A concave polygon's or an sdf body's rows are per
+# one normal: ``_closed_form``). A concave polygon's or an sdf body's rows are per
 # feature, each along its own face, from a descent;
 # with them in the region the concave polygons' scene went from 13.1 mm deepest to 14,
 # 17, 32 and 160 mm (2, 3, 4 and 8 passes; 43 mm with its end-pose rows): converging
@@ -215,7 +215,7 @@ IMPACT_HOPS = 4
 def _impact_region(inv_mass, body_a, body_b, separation, relative_velocity, dt, soft_depth,
                    root, size, rest_limit, exact, jammed):
     """(B,) bool: the dynamic bodies within IMPACT_HOPS exact contacts (``exact`` (K,)
-    bool: the row's pair is exact, ``_exact_rows``) of an impact in an exact pair
+    bool: the row's pair is exact, ``_closed_form``) of an impact in an exact pair
     (section above), in islands (``root``, ``size`` (B,): dynamic bodies per root) of 2
     to ``rest_limit`` bodies (a body alone has no column to stop) not ``jammed`` (per
     root: a row deeper than one step's push-out clears, a jam, not an impact).
@@ -247,22 +247,14 @@ def _impact_region(inv_mass, body_a, body_b, separation, relative_velocity, dt, 
     return region
 
 
-@njit(cache=True)
-def _exact_rows(pair_start, feature):
-    """(K,) bool: whether each row's pair is exact: all its rows closed forms (feature
-    sources 0, a circle's contact; 5, a clipped manifold of two convex polygons; 6
-    without FIELD_PAIR, a circle's predicted row), none from a descent."""
-    exact = np.zeros(feature.shape[0], np.bool_)
-    for p in range(pair_count(pair_start)):
-        same = True
-        for k in range(pair_start[p], pair_start[p + ONE]):
-            source = feature[k] >> 52          # the source (3 bits) and FIELD_PAIR's bit
-            if source != 0 and source != 5 << 4 and source != 6 << 4:
-                same = False
-                break
-        for k in range(pair_start[p], pair_start[p + ONE]):
-            exact[k] = same
-    return exact
+@njit(cache=True, inline="always")
+def _closed_form(key):
+    """Whether a row of feature ``key`` comes from a closed form (sources 0, a circle's
+    contact; 5, a clipped manifold of two convex polygons; 6 without FIELD_PAIR, a
+    circle's predicted row), not from a descent. A pair is exact when all its rows
+    are."""
+    source = key >> 52                  # the source (3 bits) and FIELD_PAIR's bit
+    return source == 0 or source == 5 << 4 or source == 6 << 4
 
 
 class SoftnessRows(NamedTuple):
@@ -368,7 +360,7 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
 
     inv_mass: (B,) 1/kg. moving: (B,) bool, bodies faster than REST_SPEED (their islands
     are not at rest). rows: ``bundles.SubstepRows`` (separation (K,) m at the start of
-    the step, relative_velocity (K,) m/s, feature (K,) int64 keys: ``_exact_rows``).
+    the step, relative_velocity (K,) m/s, feature (K,) int64 keys: ``_closed_form``).
     params: ``RowSoftnessParams``. A pair's passes are the largest that applies of:
     stiff_passes (islands of at most ``limit`` bodies), impact_passes (the pairs of an
     impact's region (``_impact_region``) and the static rows of its bodies and of the
@@ -394,51 +386,69 @@ def _row_softness_kernel(inv_mass, moving, rows, params):
     passes = np.empty(loaded_pairs.shape[0], np.int64)
     nb = inv_mass.shape[0]
     n_pairs = pair_count(pair_start)
+    # One pass over the pairs and their rows, then one over the bodies (each island's
+    # facts gathered at its root once the roots are known).
     ratio = np.ones(nb)
-    if stiffen and weight_impulse > 0.0:
-        for k in range(body_a.shape[0]):
-            a = body_a[k]
-            b = body_b[k]
-            # The impulse pushes b along +n and a along -n; count the push down, from a
-            # dynamic body only (the ground's reaction is not a load).
-            lift = normal_impulse[k] * (normal[k, 0] * up[0] + normal[k, 1] * up[1])
-            if lift < 0.0 and inv_mass[a] > 0.0:
-                ratio[b] -= lift * inv_mass[b] / weight_impulse
-            elif lift > 0.0 and inv_mass[b] > 0.0:
-                ratio[a] += lift * inv_mass[a] / weight_impulse
-    islands = island_roots(inv_mass, rows.body_a, rows.body_b)
-    root = unsigned(islands)
-    size = np.zeros(nb, np.int64)
-    hot = np.zeros(nb, np.bool_)
-    for i in range(nb):
-        if inv_mass[i] > 0.0:
-            size[root[i]] += 1
-            if ratio[i] > LOADED:
-                hot[root[i]] = True
-    # An island pushing out overlap deeper than soft_depth (split rows), or with a body
-    # faster than REST_SPEED, is not at rest.
-    # One deeper than jam_depth, more than a step's capped push-out clears, is jammed.
-    pushing = np.zeros(nb, np.bool_)
-    jammed = np.zeros(nb, np.bool_)
-    for k in range(body_a.shape[0]):
-        if separation[k] < -soft_depth:
-            for i in (body_a[k], body_b[k]):
-                if inv_mass[i] > 0.0:
-                    pushing[root[i]] = True
-                    if separation[k] < -jam_depth:
-                        jammed[root[i]] = True
-    largest = np.full(nb, max(limit, rest_limit), np.int64)
-    for i in range(nb):
-        if inv_mass[i] > 0.0 and (moving[i] or pushing[root[i]]):
-            largest[root[i]] = limit
+    weigh = stiffen and weight_impulse > 0.0
+    parent = np.arange(nb)                       # union-find (``islands``)
+    signed_a, signed_b = rows.body_a, rows.body_b
+    exact = np.empty(feature.shape[0], np.bool_)   # each row's pair exact
+    heavy = np.zeros(nb, np.bool_)      # body a of a pair of dynamic bodies of mass ratio
+    deep = np.zeros(nb, np.bool_)       # a dynamic body of a row deeper than soft_depth
+    jam = np.zeros(nb, np.bool_)        # ... than jam_depth
     for p in range(n_pairs):
-        a = body_a[pair_start[p]]
-        b = body_b[pair_start[p]]
+        first, last = pair_start[p], pair_start[p + ONE]
+        a = body_a[first]
+        b = body_b[first]
         ma = inv_mass[a]
         mb = inv_mass[b]
         if ma > 0.0 and mb > 0.0 and (ma >= MASS_RATIO * mb or mb >= MASS_RATIO * ma):
-            hot[root[a]] = True
-    exact = _exact_rows(pair_start, feature)
+            heavy[a] = True
+        same = True
+        for k in range(first, last):
+            a = body_a[k]
+            b = body_b[k]
+            if weigh:
+                # The impulse pushes b along +n and a along -n; count the push down,
+                # from a dynamic body only (the ground's reaction is not a load).
+                lift = normal_impulse[k] * (normal[k, 0] * up[0] + normal[k, 1] * up[1])
+                if lift < 0.0 and inv_mass[a] > 0.0:
+                    ratio[b] -= lift * inv_mass[b] / weight_impulse
+                elif lift > 0.0 and inv_mass[b] > 0.0:
+                    ratio[a] += lift * inv_mass[a] / weight_impulse
+            join(parent, inv_mass, signed_a[k], signed_b[k])     # signed: int64 roots
+            # An island pushing out overlap deeper than soft_depth (split rows), or with
+            # a body faster than REST_SPEED, is not at rest. One deeper than jam_depth,
+            # more than a step's capped push-out clears, is jammed.
+            if separation[k] < -soft_depth:
+                for i in (a, b):
+                    if inv_mass[i] > 0.0:
+                        deep[i] = True
+                        if separation[k] < -jam_depth:
+                            jam[i] = True
+            same = same and _closed_form(feature[k])
+        for k in range(first, last):
+            exact[k] = same
+    islands = np.empty(nb, np.int64)
+    root = unsigned(islands)
+    size = np.zeros(nb, np.int64)
+    hot = np.zeros(nb, np.bool_)
+    pushing = np.zeros(nb, np.bool_)
+    jammed = np.zeros(nb, np.bool_)
+    largest = np.full(nb, max(limit, rest_limit), np.int64)
+    for i in range(nb):
+        r = root_of(parent, i)
+        islands[i] = r
+        if inv_mass[i] > 0.0:
+            size[r] += 1
+            if ratio[i] > LOADED or heavy[i]:
+                hot[r] = True
+            if deep[i]:
+                pushing[r] = True
+            if jam[i]:
+                jammed[r] = True
+            if moving[i] or deep[i]:
+                largest[r] = limit
     region = _impact_region(inv_mass, body_a, body_b, separation, relative_velocity, dt,
                             soft_depth, root, size, rest_limit, exact, jammed)
     stiff_passes, impact_passes, rest_passes = extra_passes
