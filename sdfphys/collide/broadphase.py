@@ -441,21 +441,22 @@ def _dense_pairs(box: np.ndarray, movable: np.ndarray):
         if not big[i]:
             entry[fill[cell[i]]] = i
             fill[cell[i]] += 1
-    first = np.empty(4 * n + 16, np.int64)
-    second = np.empty(4 * n + 16, np.int64)
+    # Candidates of entry p: the rest of its cell and the next cell (one run), then the
+    # three cells of the next row (another); each takes a row, kept or not (branchless,
+    # as in ``_grid_pairs``). Their number first, so that the rows are allocated once
+    # (an array rebound in the loop costs its reference counts every pass).
+    capacity = 16
+    for p in range(n - n_big):
+        c = cell[entry[p]]
+        capacity += (start[c + 2] - p - 1) + (start[c + width + 2] - start[c + width - 1])
+    first = np.empty(capacity, np.int64)
+    second = np.empty(capacity, np.int64)
     count = 0
     for p in range(n - n_big):
         i = entry[p]
         c = cell[i]
-        # Candidates: the rest of its cell and the next cell (one run), then the three
-        # cells of the next row (another); each takes a row, kept or not (branchless,
-        # as in ``_grid_pairs``).
         run, end = p + 1, start[c + 2]
         above, above_end = start[c + width - 1], start[c + width + 2]
-        need = count + (end - run) + (above_end - above)
-        if need > first.shape[0]:
-            first = _grown(first, 2 * need)
-            second = _grown(second, 2 * need)
         for q in range(run, end):
             j = entry[q]
             first[count] = min(i, j)
