@@ -30,15 +30,18 @@ __all__ = ["falling_asleep", "rest_times"]
 
 @njit(cache=True, error_model="numpy")
 def rest_times(velocity, angular_velocity, com, angle, start_com, start_angle, radius, awake,
-               sleep_time, dt, sleep_speed):
+               sleep_time, dt, sleep_speed, time_to_sleep):
     """Advance ``sleep_time`` (B,) s in place: + dt for each awake body whose sleep
-    speed is under ``sleep_speed`` (m/s), 0 for the others that are awake.
+    speed is under ``sleep_speed`` (m/s), 0 for the others that are awake. Returns
+    whether some awake body has now rested ``time_to_sleep`` s (else no island can
+    fall asleep this step).
 
     Sleep speed: the larger of max(|v|, |w| r) (velocity (B, 2) m/s, angular_velocity
     (B,) rad/s, radius (B,) m) and the same of the step's displacement over dt (com,
     angle against start_com, start_angle): overlap pushed out by the split rows moves a
     body without velocity ("Split push-out" in ``solver``), and such a body is not at rest.
     """
+    rested = False
     for i in range(awake.shape[0]):
         if not awake[i]:
             continue
@@ -51,6 +54,8 @@ def rest_times(velocity, angular_velocity, com, angle, start_com, start_angle, r
         speed2 = max(velocity[i, 0] * velocity[i, 0] + velocity[i, 1] * velocity[i, 1],
                      dx * dx + dy * dy, spin * spin)
         sleep_time[i] = sleep_time[i] + dt if speed2 < sleep_speed * sleep_speed else 0.0
+        rested = rested or sleep_time[i] >= time_to_sleep
+    return rested
 
 
 @njit(cache=True, error_model="numpy")

@@ -288,7 +288,7 @@ class World(WorldJoints):
                 # movable for the wake test, carry no row.
                 awake = world_sleep.awake(self)
                 keep = awake[contacts.body_a] | awake[contacts.body_b]
-                if not np.all(keep):
+                if not keep.all():
                     self._contacts = contacts = contacts.take(keep)
             constraints = stage.prepare(self, contacts, bodies)
             islands = stage.substeps(self, constraints, bodies)

@@ -38,9 +38,12 @@ def awake(world: World) -> np.ndarray:
 
 def active(world: World) -> np.ndarray:
     """(B,) bool: awake dynamic bodies and moving kinematic ones (what a step moves)."""
+    kinematic = world._view("kind") == KINEMATIC
+    if not kinematic.any():
+        return awake(world)
     v, w = world._view("velocity"), world._view("angular_velocity")
     moving = (v[:, 0] != 0.0) | (v[:, 1] != 0.0) | (w != 0.0)
-    return awake(world) | ((world._view("kind") == KINEMATIC) & moving)
+    return awake(world) | (kinematic & moving)
 
 
 def wake_reached(world: World, contacts: Contacts, active: np.ndarray) -> bool:
@@ -121,14 +124,16 @@ def fall_asleep(world: World, bodies: BodyState, constraints: ContactConstraints
     contacts' islands if the step found them (``islands_falling``)."""
     s = world.settings
     sleep_time = world._view("sleep_time")
-    rest_times(bodies.velocity, bodies.angular_velocity, bodies.com, bodies.angle,
-               start_com, start_angle, world._view("radius"), awake, sleep_time, s.dt,
-               s.sleep_speed)
+    rested = rest_times(bodies.velocity, bodies.angular_velocity, bodies.com, bodies.angle,
+                        start_com, start_angle, world._view("radius"), awake, sleep_time,
+                        s.dt, s.sleep_speed, s.time_to_sleep)
     c = constraints
     kinematic = active & (world._view("kind") == KINEMATIC)
-    sleep_time[c.body_b[kinematic[c.body_a]]] = 0.0
-    sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
-    if not (sleep_time[awake] >= s.time_to_sleep).any():
+    if kinematic.any():
+        sleep_time[c.body_b[kinematic[c.body_a]]] = 0.0
+        sleep_time[c.body_a[kinematic[c.body_b]]] = 0.0
+        rested = bool((sleep_time[awake] >= s.time_to_sleep).any())
+    if not rested:
         return                       # no body has rested long enough: no island can sleep
     root, falling = islands_falling(world, bodies, constraints, awake, contact_islands)
     if not falling.any():
