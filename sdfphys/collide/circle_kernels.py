@@ -50,6 +50,7 @@ import math
 import numpy as np
 
 from .._jit import njit
+from ..solver.pair_rows import unsigned
 from ..vec2 import TINY
 from .broadphase import body_box
 from .polygons import clip_pair
@@ -167,13 +168,16 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     n_circles = 0
     n_boxes = 0
     n_polygons = 0
+    # Unsigned indices (``solver.pair_rows.unsigned``: no wraparound select per access);
+    # the polygons' helpers take int64 ones.
+    upairs, ushape = unsigned(pairs), unsigned(body_shape)
     for p in range(n_pairs):
-        i = pairs[p, 0]
-        j = pairs[p, 1]
-        ci = shape_class[body_shape[i]]
-        cj = shape_class[body_shape[j]]
+        i = upairs[p, 0]
+        j = upairs[p, 1]
+        ci = shape_class[ushape[i]]
+        cj = shape_class[ushape[j]]
         if ci == CIRCLE and cj == CIRCLE:
-            swap = body_shape[i] > body_shape[j]
+            swap = ushape[i] > ushape[j]
             n_circles += 1
         elif ci == CIRCLE and cj == BOX:
             swap = False
@@ -182,7 +186,7 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
             swap = True
             n_boxes += 1
         elif ci >= BOX and cj >= BOX:
-            swap = body_shape[i] > body_shape[j]
+            swap = ushape[i] > ushape[j]
             n_polygons += 1
         else:
             rest[n_rest] = p
@@ -193,8 +197,8 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
         code[n_fast] = -p - 1 if swap else p
         n_fast += 1
         value = reach[f] + reach[s]
-        if value > group_reach[body_shape[f], body_shape[s]]:
-            group_reach[body_shape[f], body_shape[s]] = value
+        if value > group_reach[ushape[f], ushape[s]]:
+            group_reach[ushape[f], ushape[s]] = value
     rows = 2 * n_fast
     body_a = np.empty(rows, np.int64)
     body_b = np.empty(rows, np.int64)
@@ -209,10 +213,10 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     k = 0
     for c in range(n_fast):
         p = code[c] if code[c] >= 0 else -code[c] - 1
-        f = pairs[p, 0] if code[c] >= 0 else pairs[p, 1]
-        s = pairs[p, 1] if code[c] >= 0 else pairs[p, 0]
-        sf = body_shape[f]
-        ss = body_shape[s]
+        f = upairs[p, 0] if code[c] >= 0 else upairs[p, 1]
+        s = upairs[p, 1] if code[c] >= 0 else upairs[p, 0]
+        sf = ushape[f]
+        ss = ushape[s]
         found = 1
         if shape_class[sf] >= BOX:
             found = clip_pair(vertices, normals, poly_start[sf], poly_count[sf],
@@ -284,13 +288,13 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
             depth[k] = d
         for r in range(k, k + found):
             if f > s:
-                body_a[r] = s
-                body_b[r] = f
+                body_a[r] = np.int64(s)
+                body_b[r] = np.int64(f)
                 normal[r, 0] = -normal[r, 0]
                 normal[r, 1] = -normal[r, 1]
             else:
-                body_a[r] = f
-                body_b[r] = s
+                body_a[r] = np.int64(f)
+                body_b[r] = np.int64(s)
         k += found
     return (body_a[:k], body_b[:k], point[:k], normal[:k], depth[:k], feature[:k],
             rest[:n_rest], n_circles, n_boxes, n_polygons)
