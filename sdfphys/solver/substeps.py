@@ -237,7 +237,7 @@ def _warm_start(velocity, angular_velocity, inv_mass, inv_inertia, body_a, body_
                 normal, anchor_a, anchor_b, normal_impulse, tangent_impulse, total_normal_impulse,
                 total_tangent_impulse):
     """Apply the accumulated impulses P = l_n n + l_t t at the current anchors; add them to
-    the step's totals (the tangent total is completed by ``solve_substeps``)."""
+    the step's totals (the tangent total is completed at the end of ``_substeps_kernel``)."""
     body_a, body_b, pair_start = unsigned(body_a), unsigned(body_b), unsigned(pair_start)
     for p in range(pair_count(pair_start)):
         first, last, a, b, ma, ia, mb, ib = pair_bodies(p, pair_start, body_a, body_b,
@@ -568,6 +568,7 @@ def _substeps_kernel(bodies, rows, gravity, loaded, large, h, substeps, relax_pa
                                                    rows.total_tangent_impulse)
     com0 = com.copy()
     angle0 = angle.copy()
+    start_tangent = tangent_impulse.copy()
     arm_a0 = anchor_a.copy()
     arm_b0 = anchor_b.copy()
     cos_d = np.empty_like(angle)
@@ -624,7 +625,27 @@ def _substeps_kernel(bodies, rows, gravity, loaded, large, h, substeps, relax_pa
             passes_run += extra
             if joints is not None:
                 joint_runs += extra
+    # Friction applied in substep s is its accumulated value at the substep's end, l_s:
+    # the warm starts added l_0 .. l_(S-1), and l_S - l_0 completes the sum l_1 .. l_S
+    # (no extra work in the friction rows' passes).
+    for k in range(tangent_impulse.shape[0]):
+        total_tangent_impulse[k] += tangent_impulse[k] - start_tangent[k]
     return passes_run, push_outs, joint_runs
+
+
+@njit(cache=True)
+def _moving(velocity, angular_velocity, inv_mass, radius, has_radius, limit2):
+    """(B,) bool: the bodies whose speed squared, |v|^2 + (w r)^2 (r the bounding radius
+    (B,) of a dynamic body, 0 for the others; w r left out without ``has_radius``),
+    exceeds ``limit2`` (m^2/s^2)."""
+    moving = np.empty(inv_mass.shape[0], np.bool_)
+    for i in range(inv_mass.shape[0]):
+        spin = 0.0
+        if has_radius:
+            spin = angular_velocity[i] * (radius[i] if inv_mass[i] > 0.0 else 0.0)
+        moving[i] = (velocity[i, 0] * velocity[i, 0] + velocity[i, 1] * velocity[i, 1]
+                     + spin * spin > limit2)
+    return moving
 
 
 def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: np.ndarray,
@@ -672,10 +693,6 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
                                     stiffening, islands)
     else:
         joint_args = None
-    v, w = bodies.velocity, bodies.angular_velocity
-    spin = 0.0 if bodies.radius is None else w * np.where(bodies.inv_mass > 0.0,
-                                                          bodies.radius, 0.0)
-    moving = v[:, 0] ** 2 + v[:, 1] ** 2 + spin * spin > REST_SPEED ** 2
     k = len(c.feature)
     row_ref = substep_rows(c, np.empty(k), np.empty(k), np.empty(k))  # filled by loaded_rows
     if kernel_only:
@@ -685,11 +702,14 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         large = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
         root = None
     else:
+        radius = bodies.radius
+        moving = _moving(bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
+                         np.zeros(0) if radius is None else radius, radius is not None,
+                         REST_SPEED ** 2)
         loaded_pairs, caps, large, root = loaded_rows(
             bodies.inv_mass, row_ref, row_softness_params(settings, gravity), moving)
     measured = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
     measured[loaded_pairs] = True
-    start_tangent = c.tangent_impulse.copy()
     passes, push_outs, joint_runs = _substeps_kernel(
         substep_bodies(bodies), row_ref,
         gravity, (loaded_pairs, caps, measured), large,
@@ -699,8 +719,4 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         accel)
     if joint_args is not None:
         cap[0] = stiffening[4]
-    # Friction applied in substep s is its accumulated value at the substep's end, l_s:
-    # the warm starts added l_0 .. l_(S-1), and l_S - l_0 completes the sum l_1 .. l_S
-    # (no extra work in the friction rows' passes).
-    c.total_tangent_impulse += c.tangent_impulse - start_tangent
     return int(passes), int(push_outs), int(joint_runs), root
