@@ -351,11 +351,11 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     pairs = _candidates(boxes, movable, exclude, n, pair_filter, cache)
     shape_class = tables.shape_class
     trig = np.empty((n, 4))
-    box_body = shape_class[body_shape] == BOX
-    if tables.mixed and box_body.any():        # read by circle-box pairs only
+    box_body = np.flatnonzero(shape_class[body_shape] == BOX) if tables.mixed else ()
+    if len(box_body):                          # read by circle-box pairs only
         a_box = angle[box_body]
-        trig[box_body] = np.column_stack([np.cos(-a_box), np.sin(-a_box), np.cos(a_box),
-                                          np.sin(a_box)])
+        trig[box_body, 0], trig[box_body, 1] = np.cos(-a_box), np.sin(-a_box)
+        trig[box_body, 2], trig[box_body, 3] = np.cos(a_box), np.sin(a_box)
     a, b, point, normal, depth, feature, rest, n_circles, n_boxes, n_polygons = (
         analytic_contacts(pairs, body_shape, shape_class, radius, tables.half,
                           tables.polygons, position, angle, trig, reach, float(margin),
