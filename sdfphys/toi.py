@@ -49,7 +49,6 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._jit import njit
 from .collide.broadphase import candidate_pairs
 from .sdf import Field, compiled
 
@@ -71,36 +70,13 @@ def fast_bodies(start: np.ndarray, end: np.ndarray, core_radius: np.ndarray,
     turn: (B,) rad, the angle each body turned in the step; radius: (B,) m, bounding
     radius about the centre of mass (a point at it moves |turn| radius).
     """
-    start = np.ascontiguousarray(start, dtype=np.float64).reshape(-1, 2)
-    end = np.ascontiguousarray(end, dtype=np.float64).reshape(-1, 2)
-    core_radius = np.ascontiguousarray(core_radius, dtype=np.float64).reshape(-1)
-    movable = np.ascontiguousarray(movable, dtype=np.bool_).reshape(-1)
-    turns = turn is not None and radius is not None
-    turn = (np.ascontiguousarray(turn, dtype=np.float64).reshape(-1) if turns
-            else np.zeros(0))
-    radius = (np.ascontiguousarray(radius, dtype=np.float64).reshape(-1) if turns
-              else np.zeros(0))
-    return _fast(start, end, core_radius, movable, turns, turn, radius)
-
-
-@njit(cache=True)
-def _fast(start, end, core_radius, movable, turns, turn, radius):
-    """``fast_bodies`` compiled: |d|^2 > (core / 2)^2 or, with ``turns``,
-    |turn| radius > core / 2 (NaN: not fast), for the movable bodies."""
-    out = np.empty(movable.shape[0], np.int64)
-    count = 0
-    for i in range(movable.shape[0]):
-        if not movable[i]:
-            continue
-        dx, dy = end[i, 0] - start[i, 0], end[i, 1] - start[i, 1]
-        half = 0.5 * core_radius[i]
-        fast = dx * dx + dy * dy > half * half
-        if turns and abs(turn[i]) * radius[i] > half:
-            fast = True
-        if fast:
-            out[count] = i
-            count += 1
-    return out[:count]
+    d = end - start
+    moved2 = d[:, 0] ** 2 + d[:, 1] ** 2
+    fast = moved2 > (0.5 * core_radius) ** 2
+    if turn is not None and radius is not None:
+        with np.errstate(invalid="ignore"):
+            fast |= np.abs(turn) * radius > 0.5 * core_radius
+    return np.flatnonzero(movable & fast)
 
 
 def _candidate_pairs(fast: np.ndarray, start: np.ndarray, end: np.ndarray,
