@@ -452,19 +452,18 @@ def _dense_pairs(box: np.ndarray, movable: np.ndarray):
     first = np.empty(capacity, np.int64)
     second = np.empty(capacity, np.int64)
     count = 0
-    index = entry.view(np.uint64)           # no wraparound select per access
     for p in range(n - n_big):
-        i = index[p]
+        i = entry[p]
         c = cell[i]
-        run, end = np.uint64(p + 1), np.uint64(start[c + 2])
-        above, above_end = np.uint64(start[c + width - 1]), np.uint64(start[c + width + 2])
+        run, end = p + 1, start[c + 2]
+        above, above_end = start[c + width - 1], start[c + width + 2]
         for q in range(run, end):
-            j = index[q]
+            j = entry[q]
             first[count] = min(i, j)
             second[count] = max(i, j)
             count += (movable[i] | movable[j]) & _overlap(box, i, j)
         for q in range(above, above_end):
-            j = index[q]
+            j = entry[q]
             first[count] = min(i, j)
             second[count] = max(i, j)
             count += (movable[i] | movable[j]) & _overlap(box, i, j)
@@ -630,12 +629,11 @@ def _kept_pairs(pairs: np.ndarray, grown: np.ndarray, grown_movable: np.ndarray,
             return False, none
     out = np.empty((pairs.shape[0], 2), np.int64)
     count = 0
-    index = pairs.view(np.uint64)          # no wraparound select per access
     for p in range(pairs.shape[0]):
-        i = index[p, 0]
-        j = index[p, 1]
-        out[count, 0] = pairs[p, 0]
-        out[count, 1] = pairs[p, 1]
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        out[count, 0] = i
+        out[count, 1] = j
         count += (movable[i] | movable[j]) & _overlap(box, i, j)
     return True, out[:count]
 
