@@ -633,21 +633,6 @@ def _substeps_kernel(bodies, rows, gravity, loaded, large, h, substeps, relax_pa
     return passes_run, push_outs, joint_runs
 
 
-@njit(cache=True)
-def _moving(velocity, angular_velocity, inv_mass, radius, has_radius, limit2):
-    """(B,) bool: the bodies whose speed squared, |v|^2 + (w r)^2 (r the bounding radius
-    (B,) of a dynamic body, 0 for the others; w r left out without ``has_radius``),
-    exceeds ``limit2`` (m^2/s^2)."""
-    moving = np.empty(inv_mass.shape[0], np.bool_)
-    for i in range(inv_mass.shape[0]):
-        spin = 0.0
-        if has_radius:
-            spin = angular_velocity[i] * (radius[i] if inv_mass[i] > 0.0 else 0.0)
-        moving[i] = (velocity[i, 0] * velocity[i, 0] + velocity[i, 1] * velocity[i, 1]
-                     + spin * spin > limit2)
-    return moving
-
-
 def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: np.ndarray,
                    settings: Settings, use_friction: bool,
                    joints: tuple[JointRows, np.ndarray] | None = None,
@@ -702,10 +687,10 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         large = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
         root = None
     else:
-        radius = bodies.radius
-        moving = _moving(bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
-                         np.zeros(0) if radius is None else radius, radius is not None,
-                         REST_SPEED ** 2)
+        v, w = bodies.velocity, bodies.angular_velocity
+        spin = 0.0 if bodies.radius is None else w * np.where(bodies.inv_mass > 0.0,
+                                                              bodies.radius, 0.0)
+        moving = v[:, 0] ** 2 + v[:, 1] ** 2 + spin * spin > REST_SPEED ** 2
         loaded_pairs, caps, large, root = loaded_rows(
             bodies.inv_mass, row_ref, row_softness_params(settings, gravity), moving)
     measured = np.zeros(max(len(c.pair_start) - 1, 0), np.bool_)
