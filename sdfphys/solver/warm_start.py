@@ -149,32 +149,31 @@ def _match_sorted(old_a, old_b, old_f, old_normal, old_tangent, old_anchor, new_
     tangent (K,), zeros where unmatched. Returns False, leaving them untouched, if either
     list is not sorted.
 
-    A pair (a, b) is compared as the one integer (a << 32) | b (body indices < 2^31), and
-    the merge's cursors are unsigned (numba wraps signed indices around: a compare and a
-    select per access, ``solver.pair_rows``)."""
+    A pair (a, b) is compared as the one integer (a << 32) | b (body indices < 2^31)."""
     n_old, k = old_a.shape[0], new_a.shape[0]
     if not (_sorted(old_a, old_b, old_f) and _sorted(new_a, new_b, new_f)):
         return False
-    source = np.full(k, -1, np.int64)
+    source = np.empty(k, np.int64)
     lo, hi = np.empty(k, np.int64), np.empty(k, np.int64)
     unmatched = False
-    end = np.uint64(n_old)
-    first = np.uint64(0)                    # the first old row of new row j's pair or after
-    u = np.uint64(0)                        # the first old row of key >= new row j's
+    first = 0                               # the first old row of new row j's pair or after
+    u = 0                                   # the first old row of key >= new row j's
     for j in range(k):
+        source[j] = -1
         pair, f = (new_a[j] << _HIGH) | new_b[j], new_f[j]
-        while first < end and (old_a[first] << _HIGH) | old_b[first] < pair:
-            first += np.uint64(1)
-        u = max(u, first)
-        while u < end and (old_a[u] << _HIGH) | old_b[u] == pair and old_f[u] < f:
-            u += np.uint64(1)
-        if u < end and (old_a[u] << _HIGH) | old_b[u] == pair and old_f[u] == f:
+        while first < n_old and (old_a[first] << _HIGH) | old_b[first] < pair:
+            first += 1
+        if u < first:
+            u = first
+        while u < n_old and (old_a[u] << _HIGH) | old_b[u] == pair and old_f[u] < f:
+            u += 1
+        if u < n_old and (old_a[u] << _HIGH) | old_b[u] == pair and old_f[u] == f:
             source[j] = u
         else:
             unmatched = True
         last = u
-        while last < end and (old_a[last] << _HIGH) | old_b[last] == pair:
-            last += np.uint64(1)
+        while last < n_old and (old_a[last] << _HIGH) | old_b[last] == pair:
+            last += 1
         lo[j], hi[j] = first, last
     if unmatched and tolerance > 0.0:
         _match_by_place(source, lo, hi, np.arange(n_old), old_anchor, new_anchor, tolerance)
