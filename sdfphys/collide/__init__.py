@@ -357,7 +357,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         trig[box_body, 0], trig[box_body, 1] = np.cos(-a_box), np.sin(-a_box)
         trig[box_body, 2], trig[box_body, 3] = np.cos(a_box), np.sin(a_box)
     a, b, point, normal, depth, feature, rest, n_circles, n_boxes, n_polygons = (
-        analytic_contacts(pairs, body_shape, shape_class, radius, tables.half,
+        analytic_contacts(pairs.view(np.uint64), body_shape, shape_class, radius, tables.half,
                           tables.polygons, position, angle, trig, reach, float(margin),
                           float(settings.linear_slop), int(settings.contacts_per_pair)))
     if ran is not None:

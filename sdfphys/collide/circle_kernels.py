@@ -130,7 +130,10 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     """Contacts of the circle-circle, circle-box and convex polygon candidate pairs;
     the others' indices.
 
-    pairs: (P, 2) int64 candidate pairs (i < j), sorted by (i, j); body_shape: (B,)
+    pairs: (P, 2) uint64 candidate pairs (i < j), sorted by (i, j): a uint64 view of
+    the int64 pairs (unsigned indices: numba wraps signed ones around, a compare and a
+    select per access; ``solver.pair_rows.unsigned``; made by the caller, which costs
+    no compiling); body_shape: (B,)
     int64 index into the distinct shapes, whose order decides the orientation of a
     pair of the same kinds; shape_class: (S,) int64 OTHER / CIRCLE / BOX / POLYGON;
     shape_radius: (S,) m (circles); shape_half: (S, 2) m, half-extents (boxes);
@@ -168,9 +171,7 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     n_circles = 0
     n_boxes = 0
     n_polygons = 0
-    # Unsigned indices (``solver.pair_rows.unsigned``: no wraparound select per access);
-    # the polygons' helpers take int64 ones.
-    upairs, ushape = unsigned(pairs), unsigned(body_shape)
+    upairs, ushape = pairs, unsigned(body_shape)
     for p in range(n_pairs):
         i = upairs[p, 0]
         j = upairs[p, 1]
