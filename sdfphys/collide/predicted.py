@@ -81,17 +81,15 @@ get none.
 from __future__ import annotations
 
 import functools
-import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from .._jit import njit
-from ..sdf import compiled
-from ..sdf.base import FALLBACK_DIRECTION
+from ..sdf import compiled, safe_normalize
 from ..settings import Settings
 from ..shapes import Shape
-from ..vec2 import TINY, rotate
+from ..vec2 import rotate
 from .contacts import Contacts
 from .curvature import curvature_radii
 
@@ -136,38 +134,52 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
     are not circles are skipped. Returns body_a < body_b contacts, sorted by pair, at
     most one per pair.
     """
-    c, b, turning, pair_margin, rel, end_angle, turn = _circle_pairs(
+    c, b, turning, pair_margin = _circle_pairs(
         np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2), is_circle, radius,
-        position, velocity, angle, angular_velocity, dt, slop, margin, reach)
+        velocity, angular_velocity, dt, slop, margin, reach)
     if len(c) == 0:
         return Contacts.empty()
-    # The circle's end centre in b's end frame: (c' - x'_b) turned by -(angle_b + w_b dt)
-    # (numpy's cos and sin here and below, as everywhere the bodies turn).
-    local = rotate(rel, -end_angle)
+    turn = angular_velocity[b] * dt
+    centre_end = position[c] + velocity[c] * dt
+    body_end = position[b] + velocity[b] * dt
+    local = rotate(centre_end - body_end, -(angle[b] + turn))
     d = np.empty(len(c))
     g = np.empty((len(c), 2))
     for sid in np.unique(body_shape[b]):
         at = np.flatnonzero(body_shape[b] == sid)
         d[at], g[at] = compiled.evaluate(shapes[sid].field, local[at])
-    keep, point, normal, gap = _predicted_rows(
-        c, b, turning, pair_margin, d, g, np.cos(end_angle), np.sin(end_angle),
-        np.cos(-turn), np.sin(-turn), position, velocity, radius, dt)
-    return Contacts(np.minimum(c, b)[keep], np.maximum(c, b)[keep], point, normal, -gap,
+    out = rotate(safe_normalize(g), angle[b] + turn)                   # n', out of b
+    surface_end = centre_end - d[:, None] * out                        # q'
+    material = position[b] + rotate(surface_end - body_end, -turn)     # q0
+    normal = -out                                                      # circle -> b
+    arm = material - position[c]
+    gap = normal[:, 0] * arm[:, 0] + normal[:, 1] * arm[:, 1] - radius[c]
+    keep = (gap < pair_margin) & (turning | (gap > 0.0))
+    gap = np.maximum(gap, 0.0)
+    # The row's point: on b's material point q0 against a turning body; otherwise on
+    # the line through the circle's centre along n, as every contact of a circle (its
+    # normal impulse exerts no torque on it), midway across the gap.
+    on_line = position[c] + (radius[c] + 0.5 * gap)[:, None] * normal
+    point = np.where(turning[:, None], material - (0.5 * gap)[:, None] * normal,
+                     on_line)
+    flip = c > b                                    # rows are stored body_a < body_b
+    normal = np.where(flip[:, None], -normal, normal)
+    keep = np.flatnonzero(keep)
+    return Contacts(np.minimum(c, b)[keep], np.maximum(c, b)[keep], point[keep],
+                    normal[keep], -gap[keep],
                     np.full(len(keep), np.int64(SOURCE_PREDICTED) << np.int64(56)))
 
 
 @njit(cache=True)
 def _circle_pairs(pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray,
-                  position: np.ndarray, velocity: np.ndarray, angle: np.ndarray,
-                  angular_velocity: np.ndarray, dt: float, slop: float, margin: float,
-                  reach: np.ndarray) -> tuple:
+                  velocity: np.ndarray, angular_velocity: np.ndarray, dt: float, slop: float,
+                  margin: float, reach: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The candidate ``pairs`` (P, 2) of a circle and a body that is not one, where the
     body turns by more than ``slop`` at its bounding radius this step (``_turns``) or the
     circle moves against it by more than that (|v_c - v_b| dt > slop), in pair order:
-    the circle (M,), the other body (M,), whether it turns (M,) bool, the pair's margin
-    (M,) m, margin + reach_i + reach_j (``collide`` module doc), the circle's end centre
-    from the body's, c' - x'_b (M, 2) m (x' = x + v dt), the body's end angle
-    angle_b + w_b dt (M,) rad and its turn w_b dt (M,) rad."""
+    the circle (M,), the other body (M,), whether it turns (M,) bool, and the pair's
+    margin (M,) m, margin + reach_i + reach_j (``collide`` module doc)."""
     n = pairs.shape[0]
     circle, other = np.empty(n, np.int64), np.empty(n, np.int64)
     turning, pair_margin = np.empty(n, np.bool_), np.empty(n)
@@ -183,68 +195,8 @@ def _circle_pairs(pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray,
             circle[m], other[m], turning[m] = c, b, turns
             pair_margin[m] = margin + reach[i] + reach[j]
             m += 1
-    rel, end_angle, turn = np.empty((m, 2)), np.empty(m), np.empty(m)
-    for k in range(m):
-        c, b = circle[k], other[k]
-        turn[k] = angular_velocity[b] * dt
-        end_angle[k] = angle[b] + turn[k]
-        for e in range(2):
-            rel[k, e] = (position[c, e] + velocity[c, e] * dt) - (position[b, e]
-                                                                  + velocity[b, e] * dt)
-    return circle[:m], other[:m], turning[:m], pair_margin[:m], rel, end_angle, turn
+    return circle[:m], other[:m], turning[:m], pair_margin[:m]
 
-
-@njit(cache=True)
-def _predicted_rows(circle, other, turning, pair_margin, d, g, cos_end, sin_end, cos_back,
-                    sin_back, position, velocity, radius, dt):
-    """The rows of the chosen pairs (``_circle_pairs``) from the field of each body b at
-    the circle's end centre (d (M,) m, g (M, 2) its gradient, in b's end frame) and the
-    cosines and sines of b's end angle and of minus its turn (M,) (module docstring):
-    b's end surface point q' = c' - d n' (n' = R(end) g / |g|, out of b), its material
-    point q0 = x_b + R(-turn) (q' - x'_b), the row along n = -n' (circle -> b) with
-    s0 = n . (q0 - c) - r, kept when s0 is within the pair's margin and, against a body
-    that does not turn, speculative (s0 > 0), s0 then clamped at 0. The point: midway
-    across the gap on q0's line against a turning body, else on the circle's centre's
-    line along n. Returns the kept rows' indices (R,), points (R, 2), normals (R, 2) from
-    the lower body index to the higher, and separations (R,) m."""
-    m = circle.shape[0]
-    keep = np.empty(m, np.int64)
-    point, normal, gap = np.empty((m, 2)), np.empty((m, 2)), np.empty(m)
-    count = 0
-    for k in range(m):
-        c, b = circle[k], other[k]
-        gx, gy = g[k, 0], g[k, 1]
-        length = math.hypot(gx, gy)                     # ``safe_normalize``
-        if length > TINY:
-            gx, gy = gx / length, gy / length
-        else:
-            gx, gy = FALLBACK_DIRECTION[0], FALLBACK_DIRECTION[1]
-        ox = cos_end[k] * gx - sin_end[k] * gy          # n', out of b
-        oy = sin_end[k] * gx + cos_end[k] * gy
-        bx = position[b, 0] + velocity[b, 0] * dt       # x'_b
-        by = position[b, 1] + velocity[b, 1] * dt
-        sx = (position[c, 0] + velocity[c, 0] * dt) - d[k] * ox - bx       # q' - x'_b
-        sy = (position[c, 1] + velocity[c, 1] * dt) - d[k] * oy - by
-        mx = position[b, 0] + (cos_back[k] * sx - sin_back[k] * sy)        # q0
-        my = position[b, 1] + (sin_back[k] * sx + cos_back[k] * sy)
-        nx, ny = -ox, -oy
-        s0 = nx * (mx - position[c, 0]) + ny * (my - position[c, 1]) - radius[c]
-        if not (s0 < pair_margin[k] and (turning[k] or s0 > 0.0)):
-            continue
-        s0 = max(s0, 0.0)
-        if turning[k]:
-            point[count, 0], point[count, 1] = mx - (0.5 * s0) * nx, my - (0.5 * s0) * ny
-        else:
-            reach = radius[c] + 0.5 * s0
-            point[count, 0] = position[c, 0] + reach * nx
-            point[count, 1] = position[c, 1] + reach * ny
-        if c > b:                                       # rows are stored body_a < body_b
-            nx, ny = -nx, -ny
-        normal[count, 0], normal[count, 1] = nx, ny
-        gap[count] = s0
-        keep[count] = k
-        count += 1
-    return keep[:count], point[:count], normal[:count], gap[:count]
 
 def predicted_field_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
                              pairs: np.ndarray, radius: np.ndarray, position: np.ndarray,
