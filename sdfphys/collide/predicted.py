@@ -134,11 +134,14 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
     are not circles are skipped. Returns body_a < body_b contacts, sorted by pair, at
     most one per pair.
     """
-    c, b, turning, pair_margin = _circle_pairs(
-        np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2), is_circle, radius,
-        velocity, angular_velocity, dt, slop, margin, reach)
-    if len(c) == 0:
+    chosen = _circle_pairs(np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2),
+                           is_circle, radius, velocity, angular_velocity, dt, slop)
+    if len(chosen) == 0:
         return Contacts.empty()
+    i, j = pairs[chosen, 0], pairs[chosen, 1]
+    c, b = np.where(is_circle[i], i, j), np.where(is_circle[i], j, i)
+    turning = _turns(angular_velocity[b], radius[b], dt, slop)
+    pair_margin = margin + reach[i] + reach[j]
     turn = angular_velocity[b] * dt
     centre_end = position[c] + velocity[c] * dt
     body_end = position[b] + velocity[b] * dt
@@ -172,31 +175,28 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
 
 @njit(cache=True)
 def _circle_pairs(pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray,
-                  velocity: np.ndarray, angular_velocity: np.ndarray, dt: float, slop: float,
-                  margin: float, reach: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The candidate ``pairs`` (P, 2) of a circle and a body that is not one, where the
-    body turns by more than ``slop`` at its bounding radius this step (``_turns``) or the
-    circle moves against it by more than that (|v_c - v_b| dt > slop), in pair order:
-    the circle (M,), the other body (M,), whether it turns (M,) bool, and the pair's
-    margin (M,) m, margin + reach_i + reach_j (``collide`` module doc)."""
-    n = pairs.shape[0]
-    circle, other = np.empty(n, np.int64), np.empty(n, np.int64)
-    turning, pair_margin = np.empty(n, np.bool_), np.empty(n)
+                  velocity: np.ndarray, angular_velocity: np.ndarray, dt: float,
+                  slop: float) -> np.ndarray:
+    """The rows (M,) of the candidate ``pairs`` (P, 2) of a circle c and a body b that is
+    not one, where b turns by more than ``slop`` at its bounding radius this step
+    (``_turns``: |w_b| R_b dt > slop) or c moves against it by more than that
+    (|v_c - v_b| dt > slop), in order: one pass instead of numpy's over every pair."""
+    chosen = np.empty(pairs.shape[0], np.int64)
     m = 0
-    for k in range(n):
-        i, j = pairs[k, 0], pairs[k, 1]
+    for k in range(pairs.shape[0]):
+        i = pairs[k, 0]
+        j = pairs[k, 1]
         if is_circle[i] == is_circle[j]:
             continue
-        c, b = (i, j) if is_circle[i] else (j, i)
-        turns = abs(angular_velocity[b]) * radius[b] * dt > slop
-        rx, ry = velocity[c, 0] - velocity[b, 0], velocity[c, 1] - velocity[b, 1]
-        if turns or (rx * rx + ry * ry) * dt * dt > slop * slop:
-            circle[m], other[m], turning[m] = c, b, turns
-            pair_margin[m] = margin + reach[i] + reach[j]
+        b = j if is_circle[i] else i
+        c = i + j - b
+        rx = velocity[c, 0] - velocity[b, 0]
+        ry = velocity[c, 1] - velocity[b, 1]
+        if (abs(angular_velocity[b]) * radius[b] * dt > slop
+                or (rx * rx + ry * ry) * dt * dt > slop * slop):
+            chosen[m] = k
             m += 1
-    return circle[:m], other[:m], turning[:m], pair_margin[:m]
-
+    return chosen[:m]
 
 def predicted_field_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
                              pairs: np.ndarray, radius: np.ndarray, position: np.ndarray,
