@@ -171,10 +171,10 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     n_circles = 0
     n_boxes = 0
     n_polygons = 0
-    upairs, ushape = pairs, unsigned(body_shape)
+    ushape = unsigned(body_shape)
     for p in range(n_pairs):
-        i = upairs[p, 0]
-        j = upairs[p, 1]
+        i = pairs[p, 0]
+        j = pairs[p, 1]
         ci = shape_class[ushape[i]]
         cj = shape_class[ushape[j]]
         if ci == CIRCLE and cj == CIRCLE:
@@ -214,8 +214,8 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     k = 0
     for c in range(n_fast):
         p = code[c] if code[c] >= 0 else -code[c] - 1
-        f = upairs[p, 0] if code[c] >= 0 else upairs[p, 1]
-        s = upairs[p, 1] if code[c] >= 0 else upairs[p, 0]
+        f = pairs[p, 0] if code[c] >= 0 else pairs[p, 1]
+        s = pairs[p, 1] if code[c] >= 0 else pairs[p, 0]
         sf = ushape[f]
         ss = ushape[s]
         found = 1

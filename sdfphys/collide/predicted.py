@@ -198,6 +198,7 @@ def _circle_pairs(pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray,
             m += 1
     return chosen[:m]
 
+
 def predicted_field_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
                              pairs: np.ndarray, radius: np.ndarray, position: np.ndarray,
                              angle: np.ndarray, velocity: np.ndarray,
