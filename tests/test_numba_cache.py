@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from numba import njit
 
 import sdfphys
@@ -95,6 +96,7 @@ print(s.__file__)
 """
 
 
+@pytest.mark.slow        # three processes on a copy of the package: about 5 s
 def test_an_edit_recompiles_the_kernels_that_import_the_file_and_only_those(tmp_path):
     """A copy of the package and one cache, three processes: the second loads the first's
     kernels; after an edit of sdf/compiled.py, which the descent kernels import (numba

@@ -99,6 +99,7 @@ print(value.tobytes().hex()[:64], grad.tobytes().hex()[:64], float(value.sum()))
 """
 
 
+@pytest.mark.slow        # two fresh processes on a fresh cache: about 10 s
 def test_a_cached_caller_in_a_fresh_process_finds_the_kernel_published(tmp_path):
     """Two processes on one fresh cache, each calling the caller before anything else:
     the first compiles it, the second loads its machine code, whose call through the
