@@ -356,6 +356,7 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         a_box = angle[box_body]
         trig[box_body, 0], trig[box_body, 1] = np.cos(-a_box), np.sin(-a_box)
         trig[box_body, 2], trig[box_body, 3] = np.cos(a_box), np.sin(a_box)
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     a, b, point, normal, depth, feature, rest, n_circles, n_boxes, n_polygons = (
         analytic_contacts(pairs.view(np.uint64), body_shape, shape_class, radius, tables.half,
                           tables.polygons, position, angle, trig, reach, float(margin),
