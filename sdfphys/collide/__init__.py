@@ -357,10 +357,12 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         trig[box_body, 0], trig[box_body, 1] = np.cos(-a_box), np.sin(-a_box)
         trig[box_body, 2], trig[box_body, 3] = np.cos(a_box), np.sin(a_box)
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
-    a, b, point, normal, depth, feature, rest, n_circles, n_boxes, n_polygons = (
+    predict = bool(settings.predicted_contacts and tables.mixed)
+    a, b, point, normal, depth, feature, rest, n_circles, n_boxes, n_polygons, chosen = (
         analytic_contacts(pairs.view(np.uint64), body_shape, shape_class, radius, tables.half,
                           tables.polygons, position, angle, trig, reach, float(margin),
-                          float(settings.linear_slop), int(settings.contacts_per_pair)))
+                          float(settings.linear_slop), int(settings.contacts_per_pair),
+                          velocity, angular_velocity, float(settings.dt), predict))
     if ran is not None:
         if n_circles:
             ran.add(("circle", "circle"))
@@ -377,32 +379,38 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         contacts = Contacts.concatenate([contacts, other]).take(order)
     return _with_predicted(contacts, distinct, tables, body_shape, pairs, radius[body_shape],
                            position, angle, velocity, angular_velocity, reach, settings,
-                           pair_filter)
+                           pair_filter, chosen)
 
 
 def _with_predicted(contacts: Contacts, shapes: list[Shape], tables: _ShapeTables,
                     body_shape: np.ndarray, pairs: np.ndarray, radius: np.ndarray,
                     position: np.ndarray, angle: np.ndarray, velocity: np.ndarray,
                     angular_velocity: np.ndarray, reach: np.ndarray, settings: Settings,
-                    pair_filter: PairFilter | None) -> Contacts:
+                    pair_filter: PairFilter | None, chosen: np.ndarray | None = None
+                    ) -> Contacts:
     """``contacts`` (sorted by (body_a, body_b, feature)) with the predicted contacts
     (``predicted``) of circles among the candidate ``pairs`` (those a contact of the
     pair implies dropped, ``_implied``) and of sdf pairs and concave mesh pairs with a
     contact (sensor pairs left out: a prediction is not a touch), in the same order;
     none without ``settings.predicted_contacts``. An sdf pair's row is another material
     point than its contact's, so no contact implies it; a mesh pair's is on a face no
-    contact of its element has. tables: the distinct ``shapes``' ``_ShapeTables``."""
+    contact of its element has. tables: the distinct ``shapes``' ``_ShapeTables``;
+    chosen: the rows of ``pairs`` that get a circle's predicted row if the caller picked
+    them (``analytic_contacts``), None: picked here."""
     if not settings.predicted_contacts:
         return contacts
     is_circle = tables.shape_class[body_shape] == CIRCLE
     n = np.int64(len(angle))
     extra = Contacts.empty()
     if tables.mixed:             # a circle and a body that is not one: their pairs
+        if chosen is not None:
+            pairs = pairs[chosen]
         extra = predicted_contacts(shapes, body_shape, _without_sensors(pairs, pair_filter),
                                    is_circle, radius, position, angle, velocity,
                                    angular_velocity, float(settings.dt),
                                    float(settings.linear_slop),
-                                   float(settings.speculative_distance), reach)
+                                   float(settings.speculative_distance), reach,
+                                   picked=chosen is not None)
     if len(extra):
         extra = extra.take(~_implied(contacts, extra, n))
     # Pairs with a contact only (the others are farther apart than their margin, which

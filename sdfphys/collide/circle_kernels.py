@@ -126,7 +126,9 @@ def _box_field(px: float, py: float, hx: float, hy: float) -> tuple[float, float
 def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np.ndarray,
                       shape_radius: np.ndarray, shape_half: np.ndarray, polygons: tuple,
                       position: np.ndarray, angle: np.ndarray, trig: np.ndarray,
-                      reach: np.ndarray, margin: float, slop: float, budget: int):
+                      reach: np.ndarray, margin: float, slop: float, budget: int,
+                      velocity: np.ndarray, angular_velocity: np.ndarray, dt: float,
+                      predict: bool):
     """Contacts of the circle-circle, circle-box and convex polygon candidate pairs;
     the others' indices.
 
@@ -151,10 +153,17 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     ``polygons.clip_pair`` with the pair's own margin, at most two contacts (the
     deeper one if budget is 1, ties to the smaller key), in key order.
 
+    With ``predict``, the same pass picks the pairs that get a predicted row
+    (``predicted.predicted_contacts``): a circle c and a body b that is not one, b
+    turning by more than the slop at its bounding radius this step, |w_b| R_b dt > slop,
+    or c moving against it by more than that, |v_c - v_b| dt > slop (velocity (B, 2)
+    m/s, angular_velocity (B,) rad/s, dt s).
+
     Returns (body_a, body_b (K,) int64 with body_a < body_b, point (K, 2) m,
     normal (K, 2) unit a -> b, depth (K,) m > 0 overlapping, feature (K,) int64,
     rest (R,) int64 indices into ``pairs`` of the other pairs, n_circles, n_boxes,
-    n_polygons: the circle-circle, circle-box and polygon candidate pairs seen).
+    n_polygons: the circle-circle, circle-box and polygon candidate pairs seen,
+    predicted (M,) int64 indices into ``pairs`` of the pairs picked for a predicted row).
     Contacts are sorted by (body_a, body_b, feature).
     """
     vertices, normals, poly_start, poly_count = polygons
@@ -166,6 +175,8 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
             group_reach[u, v] = -np.inf
     code = np.empty(n_pairs, np.int64)
     rest = np.empty(n_pairs, np.int64)
+    predicted = np.empty(n_pairs if predict else 0, np.int64)
+    n_predicted = 0
     n_rest = 0
     n_fast = 0
     n_circles = 0
@@ -177,6 +188,15 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
         j = pairs[p, 1]
         ci = shape_class[ushape[i]]
         cj = shape_class[ushape[j]]
+        if predict and (ci == CIRCLE) != (cj == CIRCLE):
+            b = j if ci == CIRCLE else i
+            c = i + j - b
+            rx = velocity[c, 0] - velocity[b, 0]
+            ry = velocity[c, 1] - velocity[b, 1]
+            if (abs(angular_velocity[b]) * shape_radius[ushape[b]] * dt > slop
+                    or (rx * rx + ry * ry) * dt * dt > slop * slop):
+                predicted[n_predicted] = p
+                n_predicted += 1
         if ci == CIRCLE and cj == CIRCLE:
             swap = ushape[i] > ushape[j]
             n_circles += 1
@@ -298,7 +318,7 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
                 body_b[r] = np.int64(s)
         k += found
     return (body_a[:k], body_b[:k], point[:k], normal[:k], depth[:k], feature[:k],
-            rest[:n_rest], n_circles, n_boxes, n_polygons)
+            rest[:n_rest], n_circles, n_boxes, n_polygons, predicted[:n_predicted])
 
 
 @njit(cache=True)

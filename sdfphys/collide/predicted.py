@@ -85,7 +85,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .._jit import njit
 from ..sdf import compiled, safe_normalize
 from ..settings import Settings
 from ..shapes import Shape
@@ -94,7 +93,7 @@ from .contacts import Contacts
 from .curvature import curvature_radii
 
 __all__ = ["FIELD_PAIR", "SOURCE_PREDICTED", "predicted_contacts", "predicted_field_contacts",
-           "predicted_mesh_contacts"]
+           "predicted_mesh_contacts", "predicted_pairs"]
 
 #: Feature key source of predicted contacts (``narrowphase``'s key layout).
 SOURCE_PREDICTED = 6
@@ -122,7 +121,7 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
                        is_circle: np.ndarray, radius: np.ndarray, position: np.ndarray,
                        angle: np.ndarray, velocity: np.ndarray,
                        angular_velocity: np.ndarray, dt: float, slop: float,
-                       margin: float, reach: np.ndarray) -> Contacts:
+                       margin: float, reach: np.ndarray, picked: bool = False) -> Contacts:
     """The predicted contacts (module docstring) of the candidate ``pairs`` (P, 2), i < j.
 
     shapes: distinct Shape objects, body_shape (B,) index into them; is_circle (B,)
@@ -130,15 +129,18 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
     radius); position (B, 2) m, angle (B,) rad, velocity (B, 2) m/s, angular_velocity
     (B,) rad/s: the step's start values; dt s; slop m (``Settings.linear_slop``);
     margin m, the speculative distance, and reach (B,) m, the bodies' reach: a pair's
-    margin is margin + reach_i + reach_j. Pairs of two circles or of two bodies that
-    are not circles are skipped. Returns body_a < body_b contacts, sorted by pair, at
-    most one per pair.
+    margin is margin + reach_i + reach_j. Only the pairs of a circle and a body that is
+    not one, the body turning or the circle moving against it by more than the slop
+    (module docstring), get a row: ``predicted_pairs`` picks them, unless ``picked``
+    (the caller's pairs are those already: ``circle_kernels.analytic_contacts``' pass).
+    Returns body_a < body_b contacts, sorted by pair, at most one per pair.
     """
-    chosen = _circle_pairs(np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2),
-                           is_circle, radius, velocity, angular_velocity, dt, slop)
-    if len(chosen) == 0:
+    if not picked:
+        pairs = pairs[predicted_pairs(pairs, is_circle, radius, velocity, angular_velocity,
+                                      dt, slop)]
+    if len(pairs) == 0:
         return Contacts.empty()
-    i, j = pairs[chosen, 0], pairs[chosen, 1]
+    i, j = pairs[:, 0], pairs[:, 1]
     c, b = np.where(is_circle[i], i, j), np.where(is_circle[i], j, i)
     turning = _turns(angular_velocity[b], radius[b], dt, slop)
     pair_margin = margin + reach[i] + reach[j]
@@ -173,30 +175,23 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
                     np.full(len(keep), np.int64(SOURCE_PREDICTED) << np.int64(56)))
 
 
-@njit(cache=True)
-def _circle_pairs(pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray,
-                  velocity: np.ndarray, angular_velocity: np.ndarray, dt: float,
-                  slop: float) -> np.ndarray:
+def predicted_pairs(pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray,
+                    velocity: np.ndarray, angular_velocity: np.ndarray, dt: float,
+                    slop: float) -> np.ndarray:
     """The rows (M,) of the candidate ``pairs`` (P, 2) of a circle c and a body b that is
     not one, where b turns by more than ``slop`` at its bounding radius this step
     (``_turns``: |w_b| R_b dt > slop) or c moves against it by more than that
-    (|v_c - v_b| dt > slop), in order: one pass instead of numpy's over every pair."""
-    chosen = np.empty(pairs.shape[0], np.int64)
-    m = 0
-    for k in range(pairs.shape[0]):
-        i = pairs[k, 0]
-        j = pairs[k, 1]
-        if is_circle[i] == is_circle[j]:
-            continue
-        b = j if is_circle[i] else i
-        c = i + j - b
-        rx = velocity[c, 0] - velocity[b, 0]
-        ry = velocity[c, 1] - velocity[b, 1]
-        if (abs(angular_velocity[b]) * radius[b] * dt > slop
-                or (rx * rx + ry * ry) * dt * dt > slop * slop):
-            chosen[m] = k
-            m += 1
-    return chosen[:m]
+    (|v_c - v_b| dt > slop), in order (numpy; the closed-form contacts' kernel picks the
+    same in its pass over the pairs)."""
+    i, j = pairs[:, 0], pairs[:, 1]
+    b = np.where(is_circle[i], j, i)
+    c = i + j - b
+    with np.errstate(invalid="ignore"):
+        relative = velocity[c] - velocity[b]
+        fast = (relative[:, 0] * relative[:, 0] + relative[:, 1] * relative[:, 1]) * dt * dt
+    return np.flatnonzero((is_circle[i] != is_circle[j])
+                          & (_turns(angular_velocity[b], radius[b], dt, slop)
+                             | (fast > slop * slop)))
 
 
 def predicted_field_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
