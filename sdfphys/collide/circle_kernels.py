@@ -138,7 +138,8 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     no compiling); body_shape: (B,)
     int64 index into the distinct shapes, whose order decides the orientation of a
     pair of the same kinds; shape_class: (S,) int64 OTHER / CIRCLE / BOX / POLYGON;
-    shape_radius: (S,) m (circles); shape_half: (S, 2) m, half-extents (boxes);
+    shape_radius: (S,) m, bounding radii (a circle's radius; the predicted rows' turning
+    test reads the others'); shape_half: (S, 2) m, half-extents (boxes);
     polygons: ``polygons.polygon_table`` of the shapes (boxes and convex polygons);
     position: (B, 2) centres of mass, m; angle: (B,) rad; trig: (B, 4)
     ``[cos(-a), sin(-a), cos(a), sin(a)]`` of each box body's angle a (numpy's
