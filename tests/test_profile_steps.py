@@ -2,6 +2,7 @@
 a process that compiled them, and a profile prints them (where perf can record)."""
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -90,3 +91,40 @@ def test_refcounts_are_counted_by_caller():
     named = {line.split(maxsplit=1)[1] for line in lines[lines.index(head) + 1:]}
     assert "sdfphys.solver.substeps._solve" in named
     assert not any("clip_pair" in name for name in named)
+
+
+def test_glue_timers_charge_each_stage_its_own_time(monkeypatch):
+    """``--glue``'s accounting on a fake clock: a stage's seconds and kernel seconds
+    exclude those of the stages it runs; a kernel called by a kernel is not counted
+    twice."""
+    tool = load_tool("profile_steps")
+    now = [0.0]
+    monkeypatch.setattr(tool.time, "perf_counter", lambda: now[0])
+    timers = tool._Timers()
+
+    def advance(seconds):
+        now[0] += seconds
+
+    inner_kernel = timers.kernel(lambda: advance(0.5), "inner")
+    kernel = timers.kernel(lambda: (advance(1.0), inner_kernel()), "kernel")
+    nested = timers.stage(lambda: (advance(3.0), kernel()), "nested")
+    outer = timers.stage(lambda: (advance(2.0), kernel(), nested()), "outer")
+    outer()
+    assert timers.stages["outer"] == [1, 2.0 + 1.5, 1.5]
+    assert timers.stages["nested"] == [1, 3.0 + 1.5, 1.5]
+    assert timers.kernel_total == 3.0
+    assert timers.kernels == {"kernel": [2, 3.0]}
+
+
+def test_glue_splits_a_step_into_kernels_and_python():
+    """``--glue`` on ball_drop: the step's kernels and Python add up to its time, and
+    the table names the collision stage and the substep kernel."""
+    out = subprocess.run([sys.executable, str(TOOL), str(ROOT / "scenes" / "ball_drop.toml"),
+                          "--warm", "5", "--steps", "20", "--glue"], capture_output=True,
+                         text=True, timeout=600, check=True).stdout
+    head = next(line for line in out.splitlines() if "ms a step" in line)
+    total, kernels, python = (float(x) for x in re.findall(r"(\d+\.\d+)", head)[:3])
+    assert kernels > 0.0 and python > 0.0
+    assert abs(kernels + python - total) <= 0.002
+    assert "world_stages.collide" in out
+    assert "sdfphys.solver.substeps._substeps_kernel" in out

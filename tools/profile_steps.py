@@ -29,8 +29,21 @@ PATH and permission to attach (``/proc/sys/kernel/yama/ptrace_scope`` 0, or root
 Found so: ``polygons.clip_pair``'s 269,100 calls a step of the base-100 pyramid
 (docs/performance.md, "2026-11-28, session 26").
 
+Kernels against Python by stage (``--glue``; no perf, no gdb): every sdfphys kernel
+called from Python is timed (the outermost call: a kernel's calls of others are
+compiled code), and so are the stages ``World.step`` runs (``world_stages``,
+``world_sleep``), the predicted contacts (``collide._with_predicted``) and each pair
+function by kind (``collide.narrowphase.PAIR_FUNCTIONS``), each exclusive of the stages
+it calls. Printed: per stage its calls, milliseconds a step in all, in kernels and in
+Python (the rest: numpy and the interpreter), then the kernels' own table. Python's
+share is what batching work into fewer calls can save; a kernel's share is arithmetic
+(perf's report) or reference counts (``--refcounts``). Found so: the showcase's 6.3
+ms, half of it Python over ~16 pair-function calls a step (docs/performance.md,
+"2026-11-28, session 28"). Timers cost about a microsecond a call; the kernels come from
+the usual cache.
+
 Usage: python tools/profile_steps.py SCENE [--steps 300] [--warm 300] [--top 30]
-    [--set KNOB=VALUE ...] [--frequency 4000] [--refcounts]
+    [--set KNOB=VALUE ...] [--frequency 4000] [--refcounts | --glue]
 SCENE: a ``tools/bench_vs_peers.py`` scene (pile2000, pyramid20, showcase, ...) or a
 scene file (``--set`` then sets its [sim] keys). Needs ``perf`` on the PATH and
 permission to record the process (``/proc/sys/kernel/perf_event_paranoid`` at most 2);
@@ -218,12 +231,124 @@ def count_refcounts(world, entries: list[tuple[int, str]], steps: int, top: int)
     return 0
 
 
+class _Timers:
+    """``--glue``'s clocks: kernel seconds (the outermost kernel calls) and, per stage,
+    calls, inclusive seconds, the kernel seconds and the seconds of the stages it ran."""
+
+    def __init__(self) -> None:
+        self.kernel_total = 0.0
+        self.kernels: dict[str, list[float]] = {}
+        self.stages: dict[str, list[float]] = {}
+        self.inside = 0
+        self.open: list[list[float]] = []
+
+    def kernel(self, dispatcher, name: str):
+        def call(*args, **kwargs):
+            if self.inside:
+                return dispatcher(*args, **kwargs)
+            self.inside += 1
+            start = time.perf_counter()
+            try:
+                return dispatcher(*args, **kwargs)
+            finally:
+                spent = time.perf_counter() - start
+                self.inside -= 1
+                self.kernel_total += spent
+                entry = self.kernels.setdefault(name, [0, 0.0])
+                entry[0] += 1
+                entry[1] += spent
+        return call
+
+    def stage(self, function, name: str):
+        def call(*args, **kwargs):
+            start, kernels = time.perf_counter(), self.kernel_total
+            self.open.append([0.0, 0.0])              # nested stages' seconds, kernels
+            try:
+                return function(*args, **kwargs)
+            finally:
+                nested, nested_kernels = self.open.pop()
+                spent = time.perf_counter() - start
+                in_kernels = self.kernel_total - kernels
+                entry = self.stages.setdefault(name, [0, 0.0, 0.0])
+                entry[0] += 1
+                entry[1] += spent - nested
+                entry[2] += in_kernels - nested_kernels
+                if self.open:
+                    self.open[-1][0] += spent
+                    self.open[-1][1] += in_kernels
+        return call
+
+
+def install_glue_timers() -> _Timers:
+    """Wrap every sdfphys kernel that a module holds (by any name) and the stages
+    ``--glue`` reports (module docstring) in ``_Timers``' clocks."""
+    from numba.core.registry import CPUDispatcher
+
+    import sdfphys.collide as collide
+    import sdfphys.world_sleep as world_sleep
+    import sdfphys.world_stages as world_stages
+    from sdfphys.collide.narrowphase import PAIR_FUNCTIONS
+
+    timers = _Timers()
+    wrapped: dict[int, object] = {}
+    for name, module in list(sys.modules.items()):
+        if module is None or not name.startswith("sdfphys"):
+            continue
+        for attribute, value in list(vars(module).items()):
+            if isinstance(value, CPUDispatcher):
+                if id(value) not in wrapped:
+                    function = value.py_func
+                    wrapped[id(value)] = timers.kernel(
+                        value, f"{function.__module__}.{function.__name__}")
+                setattr(module, attribute, wrapped[id(value)])
+    for module, names in ((world_stages, ("body_state", "collide", "prepare", "substeps",
+                                          "restitution", "time_of_impact", "store_impulses",
+                                          "record")),
+                          (world_sleep, ("active", "wake_reached", "awake", "fall_asleep")),
+                          (collide, ("_with_predicted",))):
+        for name in names:
+            setattr(module, name, timers.stage(getattr(module, name),
+                                               f"{module.__name__.split('.')[-1]}.{name}"))
+    for kinds, function in list(PAIR_FUNCTIONS.items()):
+        PAIR_FUNCTIONS[kinds] = timers.stage(function, "pair " + "-".join(kinds))
+    return timers
+
+
+def glue_report(world, steps: int, top: int, scene: str) -> int:
+    """``--glue``: ``steps`` steps of ``world`` split into kernels and Python, by stage."""
+    timers = install_glue_timers()
+    start = time.perf_counter()
+    for _ in range(steps):
+        world.step()
+    seconds = time.perf_counter() - start
+    n = max(steps, 1)
+    ms = 1e3 / n
+    print(f"{scene}: {ms * seconds:.3f} ms a step: kernels {ms * timers.kernel_total:.3f}, "
+          f"Python {ms * (seconds - timers.kernel_total):.3f} ({steps} steps)")
+    print(f"{'stage (exclusive of the stages it runs)':44s} {'calls':>7s} {'ms':>7s} "
+          f"{'kernels':>8s} {'Python':>7s}")
+    staged = sum(entry[1] for entry in timers.stages.values())
+    staged_kernels = sum(entry[2] for entry in timers.stages.values())
+    rows = [(name, *entry) for name, entry in timers.stages.items()]
+    rows.append(("(the step's own)", n, seconds - staged, timers.kernel_total - staged_kernels))
+    for name, calls, spent, kernels in sorted(rows, key=lambda row: -row[2]):
+        print(f"{name:44s} {calls / n:7.2f} {ms * spent:7.3f} {ms * kernels:8.3f} "
+              f"{ms * (spent - kernels):7.3f}")
+    print(f"{'kernel':60s} {'calls':>7s} {'ms':>7s} {'us a call':>10s}")
+    for name, (calls, spent) in sorted(timers.kernels.items(), key=lambda kv: -kv[1][1])[:top]:
+        print(f"{name[:60]:60s} {calls / n:7.2f} {ms * spent:7.3f} {1e6 * spent / calls:10.1f}")
+    return 0
+
+
 def child(args: argparse.Namespace) -> int:
-    """In the process with a fresh cache: warm up, map, record, report."""
+    """In the process with a fresh cache (the user's with ``--glue``): warm up, then
+    map, record and report, or time by stage."""
     world = make_world(args.scene, args.set)
     for _ in range(args.warm):
         world.step()
     world = make_world(args.scene, args.set)
+    if args.glue:
+        return glue_report(world, args.steps, args.top, args.scene)
     entries = map_entries()
     if args.refcounts:
         return count_refcounts(world, entries, args.steps, args.top)
@@ -269,8 +394,11 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--frequency", type=int, default=4000)
     parser.add_argument("--set", nargs="*", default=[], metavar="KNOB=VALUE")
     parser.add_argument("--map-only", action="store_true")
-    parser.add_argument("--refcounts", action="store_true",
-                        help="count NRT_incref / NRT_decref calls by caller with gdb")
+    mode = parser.add_mutually_exclusive_group()
+    mode.add_argument("--refcounts", action="store_true",
+                      help="count NRT_incref / NRT_decref calls by caller with gdb")
+    mode.add_argument("--glue", action="store_true",
+                      help="kernels against Python by stage (no perf needed)")
     args = parser.parse_args(argv)
     if args.steps is None:
         args.steps = 3 if args.refcounts else 300
@@ -288,14 +416,17 @@ def main(argv: list[str] | None = None) -> int:
     if args.refcounts and shutil.which("gdb") is None:
         print("profile_steps: gdb is not on the PATH (needed by --refcounts)", file=sys.stderr)
         return 2
-    if not args.map_only and not args.refcounts and shutil.which("perf") is None:
+    if (not args.map_only and not args.refcounts and not args.glue
+            and shutil.which("perf") is None):
         print("profile_steps: perf is not on the PATH (Linux's linux-tools; or --map-only)",
               file=sys.stderr)
         return 2
+    command = [sys.executable, __file__, *(sys.argv[1:] if argv is None else argv)]
+    env = dict(os.environ, SDFPHYS_WARM="0", **{_CHILD: "1"})
+    if args.glue:                       # times only: the kernels may come from the cache
+        return subprocess.run(command, env=env).returncode
     with tempfile.TemporaryDirectory(prefix="sdfphys-profile-cache-") as cache:
-        env = dict(os.environ, NUMBA_CACHE_DIR=cache, SDFPHYS_WARM="0", **{_CHILD: "1"})
-        return subprocess.run([sys.executable, __file__, *sys.argv[1:]] if argv is None
-                              else [sys.executable, __file__, *argv], env=env).returncode
+        return subprocess.run(command, env=dict(env, NUMBA_CACHE_DIR=cache)).returncode
 
 
 if __name__ == "__main__":
