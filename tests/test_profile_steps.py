@@ -116,6 +116,7 @@ def test_glue_timers_charge_each_stage_its_own_time(monkeypatch):
     assert timers.kernels == {"kernel": [2, 3.0]}
 
 
+@pytest.mark.slow
 def test_glue_splits_a_step_into_kernels_and_python():
     """``--glue`` on ball_drop: the step's kernels and Python add up to its time, and
     the table names the collision stage and the substep kernel."""
