@@ -232,8 +232,10 @@ def count_refcounts(world, entries: list[tuple[int, str]], steps: int, top: int)
 
 
 class _Timers:
-    """``--glue``'s clocks: kernel seconds (the outermost kernel calls) and, per stage,
-    calls, inclusive seconds, the kernel seconds and the seconds of the stages it ran."""
+    """``--glue``'s clocks: the kernels' seconds (outermost calls: ``kernel_total``, and
+    per kernel [calls, seconds]) and per stage [calls, seconds, kernel seconds], both
+    exclusive of the stages it ran (``open`` holds, per stage running, the seconds and
+    kernel seconds of the stages it ran so far)."""
 
     def __init__(self) -> None:
         self.kernel_total = 0.0
