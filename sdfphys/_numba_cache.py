@@ -19,6 +19,13 @@ the solver's. Functions outside the package keep numba's own locators. ``install
 puts it first in numba's locator list; ``NUMBA_CACHE_DIR`` is honoured as before (the
 wrapped locator is numba's choice).
 
+Stale indexes. Numba unpickles a kernel's index (its stamp and the signatures it holds)
+before it compares the stamp, so an index written by another version of this package
+that names a class this one no longer has (a bundle's StructRef type) raised
+AttributeError out of the first call of that kernel: a traceback after an upgrade.
+``install`` makes an index that does not unpickle a miss, as numba already treats an
+index of another numba version: the kernel compiles and a fresh index replaces it.
+
 First run. Compiling every kernel a scene needs takes seconds to a minute on a cold
 cache; ``install`` also registers a listener of numba's compile events that says so on
 stderr at the first compilation of an sdfphys kernel ("compiling kernels for this
@@ -32,6 +39,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import pickle
 import re
 import sys
 import time
@@ -39,7 +47,8 @@ from pathlib import Path
 
 from numba.core import caching, event
 
-__all__ = ["ModuleStampLocator", "dependency_stamp", "imported_files", "install"]
+__all__ = ["ModuleStampLocator", "dependency_stamp", "imported_files", "install",
+           "load_index_or_miss"]
 
 #: The directory of the sdfphys package.
 PACKAGE = Path(__file__).resolve().parent
@@ -200,10 +209,25 @@ def _ours(ev: event.Event) -> bool:
 _NOTICE = _CompileNotice()
 
 
+#: Numba's index loader, which ``load_index_or_miss`` wraps.
+_NUMBA_LOAD_INDEX = caching.IndexDataCacheFile._load_index
+
+
+def load_index_or_miss(self: caching.IndexDataCacheFile) -> dict:
+    """Numba's ``_load_index``, with an index that does not unpickle (it names a class or
+    module this version lacks, or is cut short) read as empty (module docstring)."""
+    try:
+        return _NUMBA_LOAD_INDEX(self)
+    except (AttributeError, ImportError, EOFError, pickle.UnpicklingError):
+        return {}
+
+
 def install() -> None:
-    """Put ModuleStampLocator first in numba's locator list and register the first-run
-    notice (idempotent). A locator list the user chose (NUMBA_CACHE_LOCATOR_CLASSES,
-    numba >= 0.61) replaces numba's and so this one too."""
+    """Put ModuleStampLocator first in numba's locator list, read stale indexes as
+    misses (``load_index_or_miss``) and register the first-run notice (idempotent). A
+    locator list the user chose (NUMBA_CACHE_LOCATOR_CLASSES, numba >= 0.61) replaces
+    numba's and so this one too."""
+    caching.IndexDataCacheFile._load_index = load_index_or_miss
     locators = _CACHE_IMPL._locator_classes
     if ModuleStampLocator not in locators:
         locators.insert(0, ModuleStampLocator)

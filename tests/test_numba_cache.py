@@ -130,3 +130,33 @@ def test_an_edit_recompiles_the_kernels_that_import_the_file_and_only_those(tmp_
         f.write("\n# edited again\n")
     counts, err = run()
     assert counts == [(1, 0), (0, 1)] and "compiling" not in err
+
+
+class _Gone:
+    """Stands for a class an older version of the package pickled into a cache index."""
+
+
+def test_an_index_naming_a_class_this_version_lacks_is_a_miss(tmp_path, monkeypatch):
+    """Numba unpickles a kernel's index before it compares its stamp: an index written by
+    a version whose bundle type this one no longer has (the joints' StructRef, removed)
+    raised AttributeError out of the kernel's first call. Read through
+    ``load_index_or_miss`` it is empty (numba compiles and writes a fresh one), and a
+    save over it works; a readable index loads as before."""
+    from numba.core import caching
+
+    from sdfphys.solver import joints
+
+    monkeypatch.setattr(_Gone, "__module__", joints.__name__)
+    monkeypatch.setattr(joints, "_Gone", _Gone, raising=False)
+    cache = caching.IndexDataCacheFile(str(tmp_path), "kernel-1.py311", "stamp")
+    cache._save_index({("signature",): _Gone()})
+    monkeypatch.delattr(joints, "_Gone")
+    with pytest.raises(AttributeError):
+        _numba_cache._NUMBA_LOAD_INDEX(cache)
+    assert caching.IndexDataCacheFile._load_index is _numba_cache.load_index_or_miss
+    assert cache._load_index() == {}
+    cache.save(("signature",), b"machine code")
+    assert list(cache._load_index()) == [("signature",)]
+    (tmp_path / "kernel-1.py311.nbi").write_bytes(
+        (tmp_path / "kernel-1.py311.nbi").read_bytes()[:-3])          # cut short
+    assert cache._load_index() == {}
