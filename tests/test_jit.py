@@ -12,8 +12,8 @@ from sdfphys.collide._descent_kernels import _most_candidates
 from sdfphys.collide.polygons import clip_pair
 from sdfphys.sdf.compiled import run
 from sdfphys.sdf.primitive_kernels import _shape
-from sdfphys.solver.joint_direct import _add_impulse, _impulse
-from sdfphys.solver.joints import _point, _row
+from sdfphys.solver.joint_direct import _coupling, _point_pair, _row_geometry
+from sdfphys.solver.joints import _joint, _point, _row, solve_joints, stiffen
 
 
 def _sum_rows(a, rows):
@@ -40,9 +40,10 @@ def test_numba_refuses_a_kernel_without_reference_counts_that_allocates():
         fresh(3)
 
 
-@pytest.mark.parametrize("kernel", [clip_pair, run, _shape, _h, _most_candidates, _impulse,
-                                    _add_impulse, _row, _point])
+@pytest.mark.parametrize("kernel", [clip_pair, run, _shape, _h, _most_candidates, _row, _point,
+                                    _joint, solve_joints, stiffen, _coupling, _point_pair,
+                                    _row_geometry])
 def test_the_per_pair_and_per_point_kernels_count_no_references(kernel):
     """The kernels called once per polygon pair, per batch of field points, per descent
-    start or per joint row of a direct pass (``sdfphys._jit``, "Reference counts")."""
+    start, per joint or joint row of a pass (``sdfphys._jit``, "Reference counts")."""
     assert kernel.targetoptions.get("_nrt") is False

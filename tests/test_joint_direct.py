@@ -8,7 +8,7 @@ import pytest
 import sdfphys
 from sdfphys.solver import joint_direct as direct
 from sdfphys.solver.joint_direct import kernel_plan
-from sdfphys.solver.joints import RELAX, SOLVE, Output, kernel_rows, stiffened_softness
+from sdfphys.solver.joints import RELAX, SOLVE, Output, pack, stiffened_softness
 from sdfphys.world_stages import body_state
 
 
@@ -62,7 +62,7 @@ def test_one_direct_pass_is_the_dense_solution_of_the_soft_and_the_rigid_system(
     soft, _ = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows, world.settings,
                                  world._gravity, 4.0)
     rng = np.random.default_rng(3)
-    ref = kernel_rows(rows)
+    ref = pack(rows)
     for phase in (SOLVE, RELAX):
         p = direct.plan(ref, bodies.inv_mass, bodies.inv_inertia)
         direct.factor(kernel_plan(p), bodies.com, bodies.angle, bodies.inv_mass,
@@ -71,18 +71,14 @@ def test_one_direct_pass_is_the_dense_solution_of_the_soft_and_the_rigid_system(
         jac, _, a_matrix, g = dense_system(p, rows, bodies.inv_mass, bodies.inv_inertia)
         velocity = rng.normal(size=(len(bodies.inv_mass), 2))
         spin = rng.normal(size=len(bodies.inv_mass))
-        impulse = np.array([direct._impulse(direct._impulses(ref), j, c)
-                            for j, c in zip(p.row_joint, p.row_code)])
+        impulse = ref.impulses[p.row_joint, p.row_code]
         x = np.column_stack([velocity, spin]).reshape(-1)
         expected = np.linalg.solve(a_matrix + g, -(jac @ x + p.rate * p.error) - g @ impulse)
-        after = rows._replace(**{f: getattr(rows, f).copy() for f in (
-            "linear_impulse", "angular_impulse", "perp_impulse", "axial_impulse")})
         out = Output(np.zeros((0, 2)), np.zeros(0), np.zeros(2))
-        after_ref = kernel_rows(after)
+        after_ref = pack(rows)
         direct.direct_pass(kernel_plan(p), velocity, spin, bodies.inv_mass, bodies.inv_inertia,
                            after_ref, out)
-        got = np.array([direct._impulse(direct._impulses(after_ref), j, c)
-                        for j, c in zip(p.row_joint, p.row_code)]) - impulse
+        got = after_ref.impulses[p.row_joint, p.row_code] - impulse
         np.testing.assert_allclose(got, expected, rtol=1e-10, atol=1e-12)
         residual = jac @ np.column_stack([velocity, spin]).reshape(-1) + p.rate * p.error \
             + g @ (impulse + got)
@@ -98,14 +94,14 @@ def test_islands_split_at_the_world_and_redundant_rigid_rows_fall_back():
     direct solve at the next soft phase."""
     world = chain_world(links=3, chains=2)
     bodies, rows = body_state(world), world._joints.rows
-    p = direct.plan(kernel_rows(rows), bodies.inv_mass, bodies.inv_inertia)
+    p = direct.plan(pack(rows), bodies.inv_mass, bodies.inv_inertia)
     assert np.diff(p.start).tolist() == [6, 6]
 
     world = chain_world(links=1, pinned_end=True)
     bodies, rows = body_state(world), world._joints.rows
     soft, _ = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows, world.settings,
                                  world._gravity, 4.0)
-    ref = kernel_rows(rows)
+    ref = pack(rows)
     p = direct.plan(ref, bodies.inv_mass, bodies.inv_inertia)
     for phase, ok in ((SOLVE, True), (RELAX, False), (SOLVE, True)):
         direct.factor(kernel_plan(p), bodies.com, bodies.angle, bodies.inv_mass,
@@ -114,23 +110,45 @@ def test_islands_split_at_the_world_and_redundant_rigid_rows_fall_back():
         assert (p.mask == (direct.equality_mask(0, False, 0.0, 0.0) if ok else 0)).all()
 
 
-def test_the_kernel_references_hold_every_field_in_order():
-    """``kernel_rows`` and ``kernel_plan`` list the bundles' fields by hand (a compiled
-    constructor, cached): they must follow JointRows and DirectPlan field for field, and
-    the reference shares the arrays (a kernel's write is the bundle's)."""
+def test_the_plan_reference_holds_every_field_in_order():
+    """``kernel_plan`` lists DirectPlan's fields by hand (a compiled constructor, cached):
+    it must follow DirectPlan field for field."""
     import inspect
 
+    assert tuple(inspect.signature(direct._direct_plan_ref.py_func).parameters) == \
+        direct.DirectPlan._fields
+
+
+def test_packed_rows_hold_every_field_and_the_impulses_go_back():
+    """``pack`` puts every field the kernels read in its column (kinds, bodies, flags,
+    geometry, limits, motors: JointRows' values, bit for bit), and ``unpack_impulses``
+    writes each packed impulse column back to the JointRows field it came from."""
     from sdfphys.solver import joints
 
-    for maker, bundle in ((joints._joint_rows_ref, joints.JointRows),
-                          (direct._direct_plan_ref, direct.DirectPlan)):
-        assert tuple(inspect.signature(maker.py_func).parameters) == bundle._fields
-    world = chain_world(links=2)
-    rows = world._joints.rows
-    ref = kernel_rows(rows)
-    before = float(rows.angular_impulse[0])
-    direct._add_impulse(direct._impulses(ref), 0, direct._ANGLE, 0.25)
-    assert rows.angular_impulse[0] == before + 0.25
+    world = chain_world(links=3)
+    rows = world._joints.rows._replace(lower=np.array([-0.5, -0.25, -0.125]),
+                                       has_limit=np.array([True, False, True]))
+    packed = pack(rows)
+    columns = [(joints._INT_FIELDS, packed.ints), (joints._REAL_FIELDS, packed.reals),
+               (joints._IMPULSE_FIELDS, packed.impulses)]
+    names = set()
+    for fields, array in columns:
+        assert array.shape == (len(rows.kind), len(fields))
+        for c, field in enumerate(fields):
+            name, column = field if isinstance(field, tuple) else (field, None)
+            names.add(name)
+            value = getattr(rows, name)
+            np.testing.assert_array_equal(array[:, c], value if column is None
+                                          else value[:, column])
+    solved = set(joints.JointRows._fields) - {"collide_connected", "spring_hertz",
+                                                "spring_damping"}
+    assert names == solved        # the others are read in Python (spring_softness, pairs)
+    rng = np.random.default_rng(2)
+    packed.impulses[:] = rng.normal(size=packed.impulses.shape)
+    joints.unpack_impulses(packed, rows)
+    assert rows.linear_impulse[:, 1].tolist() == packed.impulses[:, joints.LINEAR_Y].tolist()
+    assert rows.upper_impulse.tolist() == packed.impulses[:, joints.UPPER_IMPULSE].tolist()
+    assert pack(rows).impulses.tolist() == packed.impulses.tolist()
 
 
 def test_the_substep_joints_hold_their_fields_in_order_and_share_the_arrays():
@@ -147,7 +165,7 @@ def test_the_substep_joints_hold_their_fields_in_order_and_share_the_arrays():
     bodies, rows = body_state(world), world._joints.rows
     soft, stiffening = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows,
                                           world.settings, world._gravity, 4.0)
-    ref = kernel_rows(rows)
+    ref = pack(rows)
     progress = np.zeros(2)
     bundle = direct._substep_joints(
         bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity, bodies.inv_mass,
@@ -197,9 +215,9 @@ def test_a_joint_all_of_whose_rows_are_direct_is_skipped_and_left_unchanged(spec
         {"name": "b", "shape": {"type": "box", "size": [0.4, 0.4]}, "position": [1.0, 0.0]}],
         "joint": [spec]})
     bodies, rows = body_state(world), world._joints.rows
-    ref = kernel_rows(rows)
+    ref = pack(rows)
     mask = direct.plan(ref, bodies.inv_mass, bodies.inv_inertia).mask
-    assert joints._all_direct(ref, 0, mask[0]) == all_direct
+    assert joints._all_direct(ref.ints, 0, mask[0]) == all_direct
     soft, _ = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows, world.settings,
                                  world._gravity, 4.0)
     spring = joints.spring_softness(rows, world.settings.dt / world.settings.substeps)
@@ -209,7 +227,7 @@ def test_a_joint_all_of_whose_rows_are_direct_is_skipped_and_left_unchanged(spec
         for _ in range(5):
             v = tuple(rng.normal(scale=3.0, size=6))
             g = joints.joint_geometry(*bodies.com[0], bodies.angle[0], *bodies.com[1],
-                                      bodies.angle[1], ref, 0)
+                                      bodies.angle[1], ref.reals, 0)
             out = Output(np.zeros((0, 2)), np.zeros(0), np.zeros(2))
             masses = (bodies.inv_mass[0], bodies.inv_inertia[0], bodies.inv_mass[1],
                       bodies.inv_inertia[1])

@@ -50,11 +50,26 @@ from .._jit import njit
 from .bundles import PlainFields
 from .joints import (
     ANGLE_ROW,
+    ANGULAR_IMPULSE,
+    AXIAL_IMPULSE,
     AXIAL_ROW,
+    AXIS_X,
+    AXIS_Y,
+    BODY_A,
+    BODY_B,
     DISTANCE,
+    HAS_SPRING,
+    KIND,
+    LENGTH,
+    LINEAR_X,
+    LINEAR_Y,
+    MAX_LENGTH,
+    MIN_LENGTH,
+    PERP_IMPULSE,
     PERP_ROW,
     POINT_ROWS,
     PRISMATIC,
+    REFERENCE_ANGLE,
     REVOLUTE,
     SOLVE,
     WARM,
@@ -70,8 +85,9 @@ from .softness import CONVERGED
 __all__ = ["JOINT_FIELDS", "MAX_ROWS", "DirectPlan", "DirectPlanRef", "SubstepJoints",
            "direct_pass", "equality_mask", "factor", "joint_passes", "kernel_plan", "plan",
            "substep_joints"]
-#: Row codes (``DirectPlan.row_code``): point x, point y, angle, perpendicular, axial.
-_X, _Y, _ANGLE, _PERP, _AXIAL = range(5)
+#: Row codes (``DirectPlan.row_code``): point x, point y, angle, perpendicular, axial;
+#: each the column of its accumulated impulse in the packed impulses (``joints.Packed``).
+_X, _Y, _ANGLE, _PERP, _AXIAL = LINEAR_X, LINEAR_Y, ANGULAR_IMPULSE, PERP_IMPULSE, AXIAL_IMPULSE
 #: The largest island solved directly, in rows (dense storage R^2, work <= R^3 / 3).
 MAX_ROWS = 256
 #: A pivot below this fraction of its diagonal entry: the rows are redundant.
@@ -91,7 +107,7 @@ class DirectPlan(NamedTuple):
     island; matrix: the Cholesky factors L (row-major, lower); ok: (C,) bool;
     soft_diag, soft_off: (R,) g_i A_ii and, for a point's x row, g_i A_i,i+1 (its coupling
     to the y row), the terms of G that ``island_pass`` multiplies by the impulses (0 where
-    g_i = 0).
+    g_i = 0). work: (R,) scratch of ``island_pass`` (which then allocates nothing).
     """
 
     mask: np.ndarray
@@ -108,6 +124,7 @@ class DirectPlan(NamedTuple):
     ok: np.ndarray
     soft_diag: np.ndarray
     soft_off: np.ndarray
+    work: np.ndarray
 
 
 @structref.register
@@ -117,7 +134,7 @@ class _DirectPlanType(PlainFields):
 
 class DirectPlanRef(structref.StructRefProxy):
     """DirectPlan as the kernels take it, one reference to the same arrays
-    (``kernel_plan``; why: ``joints.kernel_rows``). Opaque to Python."""
+    (``kernel_plan``; why: ``solver.bundles``). Opaque to Python."""
 
 
 structref.define_proxy(DirectPlanRef, _DirectPlanType, list(DirectPlan._fields))
@@ -125,13 +142,13 @@ structref.define_proxy(DirectPlanRef, _DirectPlanType, list(DirectPlan._fields))
 
 @njit(cache=True)
 def _direct_plan_ref(mask, row_joint, row_code, start, offset, jac, error, rate, scale,
-                     first, matrix, ok, soft_diag, soft_off):
+                     first, matrix, ok, soft_diag, soft_off, work):
     return DirectPlanRef(mask, row_joint, row_code, start, offset, jac, error, rate, scale,
-                         first, matrix, ok, soft_diag, soft_off)
+                         first, matrix, ok, soft_diag, soft_off, work)
 
 
 def kernel_plan(p: DirectPlan) -> DirectPlanRef:
-    """``p`` as the joint kernels take it (``joints.kernel_rows``)."""
+    """``p`` as the joint kernels take it (``DirectPlanRef``)."""
     return _direct_plan_ref(*p)
 
 
@@ -151,6 +168,13 @@ def equality_mask(kind, has_spring, min_length, max_length):
     return 0
 
 
+@njit(cache=True, refcounts=False)
+def _joint_mask(ints, reals, j):
+    """``equality_mask`` of joint j of the packed rows."""
+    return equality_mask(ints[j, KIND], ints[j, HAS_SPRING], reals[j, MIN_LENGTH],
+                         reals[j, MAX_LENGTH])
+
+
 @njit(cache=True)
 def _root(parent, i):
     while parent[i] != i:
@@ -161,21 +185,22 @@ def _root(parent, i):
 
 @njit(cache=True)
 def plan(rows, inv_mass, inv_inertia):
-    """The islands of the joints' equality rows for bodies with inv_mass, inv_inertia (B,)
-    now (``DirectPlan``; the per-phase arrays allocated, not yet filled)."""
-    count = rows.kind.shape[0]
+    """The islands of the joints' equality rows (``joints.Packed``) for bodies with
+    inv_mass, inv_inertia (B,) now (``DirectPlan``; the per-phase arrays allocated, not
+    yet filled)."""
+    ints, reals, _ = rows
+    count = ints.shape[0]
     bodies = inv_mass.shape[0]
     parent = np.arange(bodies)
     mask = np.zeros(count, np.int64)
     anchor = np.full(count, -1)
     for j in range(count):
-        a, b = rows.body_a[j], rows.body_b[j]
+        a, b = ints[j, BODY_A], ints[j, BODY_B]
         live_a = a >= 0 and (inv_mass[a] > 0.0 or inv_inertia[a] > 0.0)
         live_b = b >= 0 and (inv_mass[b] > 0.0 or inv_inertia[b] > 0.0)
         if not (live_a or live_b):
             continue
-        mask[j] = equality_mask(rows.kind[j], rows.has_spring[j], rows.min_length[j],
-                                rows.max_length[j])
+        mask[j] = _joint_mask(ints, reals, j)
         if mask[j] == 0:
             continue
         anchor[j] = a if live_a else b
@@ -236,106 +261,68 @@ def plan(rows, inv_mass, inv_inertia):
     return DirectPlan(mask, row_joint, row_code, start, offset, np.zeros((total, 4)),
                       np.zeros(total), np.zeros(total), np.zeros(total),
                       np.zeros(total, np.int64), np.zeros(offset[-1]),
-                      np.zeros(kept_count, np.bool_), np.zeros(total), np.zeros(total))
-
-
-@njit(cache=True)
-def _impulses(rows):
-    """The rows' accumulated impulses as the tuple ``_impulse`` and ``_add_impulse`` take
-    (linear (J, 2), angular, perp, axial (J,)): read from the bundle once per island,
-    not at each row (every read of a structref's field is a reference count)."""
-    return rows.linear_impulse, rows.angular_impulse, rows.perp_impulse, rows.axial_impulse
+                      np.zeros(kept_count, np.bool_), np.zeros(total), np.zeros(total),
+                      np.zeros(total))
 
 
 @njit(cache=True, refcounts=False)
-def _impulse(impulses, j, code):
-    """Row ``code``'s accumulated impulse of joint j (N s per substep); impulses:
-    ``_impulses``."""
-    linear, angular, perp, axial = impulses
-    if code == _X:
-        return linear[j, 0]
-    if code == _Y:
-        return linear[j, 1]
-    if code == _ANGLE:
-        return angular[j]
-    if code == _PERP:
-        return perp[j]
-    return axial[j]
-
-
-@njit(cache=True, refcounts=False)
-def _add_impulse(impulses, j, code, value):
-    """Add ``value`` to row ``code``'s accumulated impulse of joint j."""
-    linear, angular, perp, axial = impulses
-    if code == _X:
-        linear[j, 0] += value
-    elif code == _Y:
-        linear[j, 1] += value
-    elif code == _ANGLE:
-        angular[j] += value
-    elif code == _PERP:
-        perp[j] += value
-    else:
-        axial[j] += value
-
-
-@njit(cache=True)
-def _row_geometry(com, angle, rows, j, code):
-    """(ux, uy, a1, a2, C) of equality row ``code`` of joint j at the positions now, the
-    Jacobian as ``joints._row``'s (Cdot = u.(vb - va) + a2 wb - a1 wa)."""
-    a, b = rows.body_a[j], rows.body_b[j]
+def _row_geometry(com, angle, ints, reals, j, code):
+    """(ux, uy, a1, a2, C) of equality row ``code`` of joint j (the packed ints and reals)
+    at the positions now, the Jacobian as ``joints._row``'s (Cdot = u.(vb - va) + a2 wb -
+    a1 wa)."""
+    a, b = ints[j, BODY_A], ints[j, BODY_B]
     cax = cay = qa = cbx = cby = qb = 0.0
     if a >= 0:
         cax, cay, qa = com[a, 0], com[a, 1], angle[a]
     if b >= 0:
         cbx, cby, qb = com[b, 0], com[b, 1], angle[b]
-    rax, ray, rbx, rby, dx, dy, qa, qb = joint_geometry(cax, cay, qa, cbx, cby, qb, rows, j)
+    rax, ray, rbx, rby, dx, dy, qa, qb = joint_geometry(cax, cay, qa, cbx, cby, qb, reals, j)
     if code == _X:
         return 1.0, 0.0, -ray, -rby, dx
     if code == _Y:
         return 0.0, 1.0, rax, rbx, dy
     if code == _ANGLE:
-        return 0.0, 0.0, 1.0, 1.0, qb - qa - rows.reference_angle[j]
-    if rows.kind[j] == DISTANCE:
+        return 0.0, 0.0, 1.0, 1.0, qb - qa - reals[j, REFERENCE_ANGLE]
+    if ints[j, KIND] == DISTANCE:
         length = math.hypot(dx, dy)
         if length < 1e-9:
             return 0.0, 0.0, 0.0, 0.0, 0.0
         ux, uy = dx / length, dy / length
-        return ux, uy, rax * uy - ray * ux, rbx * uy - rby * ux, length - rows.length[j]
+        return ux, uy, rax * uy - ray * ux, rbx * uy - rby * ux, length - reals[j, LENGTH]
     c, s = math.cos(qa), math.sin(qa)
-    ux = c * rows.local_axis[j, 0] - s * rows.local_axis[j, 1]
-    uy = s * rows.local_axis[j, 0] + c * rows.local_axis[j, 1]
+    ux = c * reals[j, AXIS_X] - s * reals[j, AXIS_Y]
+    uy = s * reals[j, AXIS_X] + c * reals[j, AXIS_Y]
     if code == _PERP:
         ux, uy = -uy, ux
     return ux, uy, (dx + rax) * uy - (dy + ray) * ux, rbx * uy - rby * ux, ux * dx + uy * dy
 
 
-@njit(cache=True)
-def _coupling(p, i, k, rows, inv_mass, inv_inertia):
-    """A_ik = J_i M^-1 J_k^T of rows i, k of plan p (their shared bodies' terms)."""
-    ji, jk = p.row_joint[i], p.row_joint[k]
+@njit(cache=True, refcounts=False)
+def _coupling(row_joint, jac, i, k, ints, inv_mass, inv_inertia):
+    """A_ik = J_i M^-1 J_k^T of rows i, k of a plan (its row_joint and jac; their shared
+    bodies' terms); ints: the packed ints."""
+    ji, jk = row_joint[i], row_joint[k]
     total = 0.0
     for side_i in range(2):
-        body = rows.body_a[ji] if side_i == 0 else rows.body_b[ji]
+        body = ints[ji, BODY_A] if side_i == 0 else ints[ji, BODY_B]
         if body < 0:
             continue
         for side_k in range(2):
-            if body != (rows.body_a[jk] if side_k == 0 else rows.body_b[jk]):
+            if body != (ints[jk, BODY_A] if side_k == 0 else ints[jk, BODY_B]):
                 continue
             sign = 1.0 if side_i == side_k else -1.0
-            wi = p.jac[i, 2] if side_i == 0 else p.jac[i, 3]
-            wk = p.jac[k, 2] if side_k == 0 else p.jac[k, 3]
-            total += sign * (inv_mass[body] * (p.jac[i, 0] * p.jac[k, 0]
-                                               + p.jac[i, 1] * p.jac[k, 1])
+            wi = jac[i, 2] if side_i == 0 else jac[i, 3]
+            wk = jac[k, 2] if side_k == 0 else jac[k, 3]
+            total += sign * (inv_mass[body] * (jac[i, 0] * jac[k, 0] + jac[i, 1] * jac[k, 1])
                              + inv_inertia[body] * wi * wk)
     return total
 
 
-@njit(cache=True)
-def _point_pair(p, i):
-    """Whether row i of plan p is a point's x row followed by its y row (one island)."""
-    return (p.row_code[i] == _X and i + 1 < p.row_code.shape[0] and p.row_code[i + 1] == _Y
-            and p.row_joint[i + 1] == p.row_joint[i])
+@njit(cache=True, refcounts=False)
+def _point_pair(row_code, row_joint, i):
+    """Whether row i of a plan is a point's x row followed by its y row (one island)."""
+    return (row_code[i] == _X and i + 1 < row_code.shape[0] and row_code[i + 1] == _Y
+            and row_joint[i + 1] == row_joint[i])
 
 
 @njit(cache=True)
@@ -343,54 +330,62 @@ def factor(p, com, angle, inv_mass, inv_inertia, rows, soft, phase):
     """Fill p's per-phase arrays for ``phase`` (SOLVE: soft rows, soft (J, 2, 3) the
     joints' linear [:, 0] and angular [:, 1] (bias_rate, mass_scale, impulse_scale);
     RELAX: rigid) at the positions now, and factor each island's A + G (module
-    docstring). An island whose pivot fails goes back to Gauss-Seidel (mask cleared)."""
-    total = p.row_joint.shape[0]
+    docstring). An island whose pivot fails goes back to Gauss-Seidel (mask cleared).
+    rows: ``joints.Packed``."""
+    # The plan's fields read once: each read of a StructRef's field in a loop is a
+    # reference count taken and dropped.
+    ints, reals, _ = rows
+    row_joint, row_code, jac, error, rate, scale = (p.row_joint, p.row_code, p.jac, p.error,
+                                                    p.rate, p.scale)
+    soft_diag, soft_off, start, offset, first = (p.soft_diag, p.soft_off, p.start, p.offset,
+                                                 p.first)
+    matrix, ok, mask = p.matrix, p.ok, p.mask
+    total = row_joint.shape[0]
     for i in range(total):
-        j, code = p.row_joint[i], p.row_code[i]
-        ux, uy, a1, a2, c = _row_geometry(com, angle, rows, j, code)
-        p.jac[i, 0], p.jac[i, 1], p.jac[i, 2], p.jac[i, 3] = ux, uy, a1, a2
-        p.error[i] = c
+        j, code = row_joint[i], row_code[i]
+        ux, uy, a1, a2, c = _row_geometry(com, angle, ints, reals, j, code)
+        jac[i, 0], jac[i, 1], jac[i, 2], jac[i, 3] = ux, uy, a1, a2
+        error[i] = c
         k = soft[j, 1] if code == _ANGLE else soft[j, 0]
         if phase == SOLVE:
-            p.rate[i] = k[0]
-            p.scale[i] = k[2] / k[1]
+            rate[i] = k[0]
+            scale[i] = k[2] / k[1]
         else:
-            p.rate[i] = 0.0
-            p.scale[i] = 0.0
+            rate[i] = 0.0
+            scale[i] = 0.0
     for i in range(total):
-        g = p.scale[i]
-        p.soft_diag[i] = 0.0
-        p.soft_off[i] = 0.0
+        g = scale[i]
+        soft_diag[i] = 0.0
+        soft_off[i] = 0.0
         if g == 0.0:
             continue
-        p.soft_diag[i] = g * _coupling(p, i, i, rows, inv_mass, inv_inertia)
-        if _point_pair(p, i):
-            p.soft_off[i] = g * _coupling(p, i, i + 1, rows, inv_mass, inv_inertia)
-    for c in range(p.ok.shape[0]):
-        s, e = p.start[c], p.start[c + 1]
+        soft_diag[i] = g * _coupling(row_joint, jac, i, i, ints, inv_mass, inv_inertia)
+        if _point_pair(row_code, row_joint, i):
+            soft_off[i] = g * _coupling(row_joint, jac, i, i + 1, ints, inv_mass, inv_inertia)
+    for c in range(ok.shape[0]):
+        s, e = start[c], start[c + 1]
         n = e - s
-        m = p.matrix[p.offset[c]:p.offset[c + 1]].reshape((n, n))
+        m = matrix[offset[c]:offset[c + 1]].reshape((n, n))
         for i in range(n):
-            p.first[s + i] = i
+            first[s + i] = i
             for k in range(i + 1):
-                a = _coupling(p, s + i, s + k, rows, inv_mass, inv_inertia)
+                a = _coupling(row_joint, jac, s + i, s + k, ints, inv_mass, inv_inertia)
                 m[i, k] = a
-                if a != 0.0 and k < p.first[s + i]:
-                    p.first[s + i] = k
+                if a != 0.0 and k < first[s + i]:
+                    first[s + i] = k
         # G: the point's 2x2 block (rows x, y of one joint, adjacent) or the diagonal.
         for i in range(n):
-            g = p.scale[s + i]
+            g = scale[s + i]
             if g == 0.0:
                 continue
             m[i, i] *= 1.0 + g
-            if (p.row_code[s + i] == _Y and i > 0 and p.row_code[s + i - 1] == _X
-                    and p.row_joint[s + i - 1] == p.row_joint[s + i]):
+            if (row_code[s + i] == _Y and i > 0 and row_code[s + i - 1] == _X
+                    and row_joint[s + i - 1] == row_joint[s + i]):
                 m[i, i - 1] *= 1.0 + g
-        p.ok[c] = _cholesky(m, p.first[s:e])
+        ok[c] = _cholesky(m, first[s:e])
         for i in range(s, e):
-            j = p.row_joint[i]
-            p.mask[j] = 0 if not p.ok[c] else equality_mask(
-                rows.kind[j], rows.has_spring[j], rows.min_length[j], rows.max_length[j])
+            j = row_joint[i]
+            mask[j] = _joint_mask(ints, reals, j) if ok[c] else 0
 
 
 @njit(cache=True)
@@ -417,8 +412,8 @@ def _cholesky(m, first):
 def direct_pass(p, velocity, angular_velocity, inv_mass, inv_inertia, rows, out: Output):
     """One exact solve of every factored island's rows (the phase ``factor`` prepared) at
     the velocities now (B, 2) m/s, (B,) rad/s, updated in place with the impulses, which
-    are added to the rows' accumulated ones; out.progress is raised to (largest |d_l|,
-    largest |l|) as a Gauss-Seidel pass's."""
+    are added to the rows' accumulated ones (``joints.Packed``); out.progress is raised
+    to (largest |d_l|, largest |l|) as a Gauss-Seidel pass's."""
     for c in range(p.ok.shape[0]):
         island_pass(p, c, velocity, angular_velocity, inv_mass, inv_inertia, rows,
                     out.progress)
@@ -429,60 +424,64 @@ def island_pass(p, c, velocity, angular_velocity, inv_mass, inv_inertia, rows, p
     """``direct_pass`` of island c alone; progress (2,) raised as out.progress there."""
     if not p.ok[c]:
         return
+    # The plan's fields read once (``factor``).
+    row_joint, row_code, jac, error, rate, scale = (p.row_joint, p.row_code, p.jac, p.error,
+                                                    p.rate, p.scale)
+    soft_diag, soft_off, first = p.soft_diag, p.soft_off, p.first
     s, e = p.start[c], p.start[c + 1]
     n = e - s
     m = p.matrix[p.offset[c]:p.offset[c + 1]].reshape((n, n))
-    impulses = _impulses(rows)
-    x = np.empty(n)
+    ints, _, impulses = rows
+    x = p.work[s:e]
     for i in range(n):
         r = s + i
-        j, code = p.row_joint[r], p.row_code[r]
-        a, b = rows.body_a[j], rows.body_b[j]
+        j = row_joint[r]
+        a, b = ints[j, BODY_A], ints[j, BODY_B]
         cdot = 0.0
         if a >= 0:
-            cdot -= (p.jac[r, 0] * velocity[a, 0] + p.jac[r, 1] * velocity[a, 1]
-                     + p.jac[r, 2] * angular_velocity[a])
+            cdot -= (jac[r, 0] * velocity[a, 0] + jac[r, 1] * velocity[a, 1]
+                     + jac[r, 2] * angular_velocity[a])
         if b >= 0:
-            cdot += (p.jac[r, 0] * velocity[b, 0] + p.jac[r, 1] * velocity[b, 1]
-                     + p.jac[r, 3] * angular_velocity[b])
-        x[i] = -(cdot + p.rate[r] * p.error[r])
+            cdot += (jac[r, 0] * velocity[b, 0] + jac[r, 1] * velocity[b, 1]
+                     + jac[r, 3] * angular_velocity[b])
+        x[i] = -(cdot + rate[r] * error[r])
     # - G l: the diagonal (or the point block) of A scaled by is / ms, times l.
     for i in range(n):
         r = s + i
-        if p.scale[r] == 0.0:
+        if scale[r] == 0.0:
             continue
-        j, code = p.row_joint[r], p.row_code[r]
-        x[i] -= p.soft_diag[r] * _impulse(impulses, j, code)
-        if _point_pair(p, r):
-            off = p.soft_off[r]
-            x[i] -= off * _impulse(impulses, j, _Y)
-            x[i + 1] -= off * _impulse(impulses, j, _X)
+        j, code = row_joint[r], row_code[r]
+        x[i] -= soft_diag[r] * impulses[j, code]
+        if _point_pair(row_code, row_joint, r):
+            off = soft_off[r]
+            x[i] -= off * impulses[j, _Y]
+            x[i + 1] -= off * impulses[j, _X]
     # L y = x, then L^T d = y, over the envelopes.
     for i in range(n):
         total = x[i]
-        for q in range(p.first[s + i], i):
+        for q in range(first[s + i], i):
             total -= m[i, q] * x[q]
         x[i] = total / m[i, i]
     for i in range(n - 1, -1, -1):
         x[i] /= m[i, i]
-        for q in range(p.first[s + i], i):
+        for q in range(first[s + i], i):
             x[q] -= m[i, q] * x[i]
     for i in range(n):
         r = s + i
-        j, code = p.row_joint[r], p.row_code[r]
+        j, code = row_joint[r], row_code[r]
         d = x[i]
-        _add_impulse(impulses, j, code, d)
+        impulses[j, code] += d
         progress[0] = max(progress[0], abs(d))
-        progress[1] = max(progress[1], abs(_impulse(impulses, j, code)))
-        a, b = rows.body_a[j], rows.body_b[j]
+        progress[1] = max(progress[1], abs(impulses[j, code]))
+        a, b = ints[j, BODY_A], ints[j, BODY_B]
         if a >= 0:
-            velocity[a, 0] -= inv_mass[a] * d * p.jac[r, 0]
-            velocity[a, 1] -= inv_mass[a] * d * p.jac[r, 1]
-            angular_velocity[a] -= inv_inertia[a] * d * p.jac[r, 2]
+            velocity[a, 0] -= inv_mass[a] * d * jac[r, 0]
+            velocity[a, 1] -= inv_mass[a] * d * jac[r, 1]
+            angular_velocity[a] -= inv_inertia[a] * d * jac[r, 2]
         if b >= 0:
-            velocity[b, 0] += inv_mass[b] * d * p.jac[r, 0]
-            velocity[b, 1] += inv_mass[b] * d * p.jac[r, 1]
-            angular_velocity[b] += inv_inertia[b] * d * p.jac[r, 3]
+            velocity[b, 0] += inv_mass[b] * d * jac[r, 0]
+            velocity[b, 1] += inv_mass[b] * d * jac[r, 1]
+            angular_velocity[b] += inv_inertia[b] * d * jac[r, 3]
 
 
 @structref.register
@@ -492,7 +491,7 @@ class _SubstepJointsType(PlainFields):
 
 class SubstepJoints(structref.StructRefProxy):
     """The joints as the substep kernel takes them (``substep_joints``): the bodies'
-    arrays (B, 2) or (B,) the rows act on, the rows (``joints.kernel_rows``), their
+    arrays (B, 2) or (B,) the rows act on, the rows (``joints.Packed``), their
     softness soft (J, 2, 3) and spring (J, 3), the stiffening parameters (6,), the
     islands' plan (``kernel_plan``) and what the passes report (``joints.Output``).
     One reference: numba types a tuple holding references by its Python ``typeof`` at
@@ -514,7 +513,7 @@ def _substep_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inerti
 def substep_joints(bodies, rows, soft: np.ndarray, spring: np.ndarray,
                    stiffening: np.ndarray, islands: DirectPlanRef) -> SubstepJoints:
     """The joints of one step by reference: ``bodies`` (a ``rows.BodyState``), the rows
-    (``joints.kernel_rows``), ``stiffened_softness``' soft and stiffening, the springs'
+    (``joints.Packed``), ``stiffened_softness``' soft and stiffening, the springs'
     softness and the islands' plan (``kernel_plan``); an empty Output."""
     return _substep_joints(bodies.com, bodies.angle, bodies.velocity, bodies.angular_velocity,
                            bodies.inv_mass, bodies.inv_inertia, rows, soft, spring, stiffening,

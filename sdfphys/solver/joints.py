@@ -38,10 +38,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba.experimental import structref
 
 from .._jit import njit
-from .bundles import PlainFields
 from .softness import soft_coefficients
 
 __all__ = [
@@ -52,15 +50,16 @@ __all__ = [
     "PERP_ROW",
     "POINT_ROWS",
     "JointRows",
-    "JointRowsRef",
     "Output",
+    "Packed",
     "joint_geometry",
     "joint_reactions",
-    "kernel_rows",
+    "pack",
     "solve_joints",
     "spring_softness",
     "stiffen",
     "stiffened_softness",
+    "unpack_impulses",
 ]
 
 REVOLUTE, PRISMATIC, DISTANCE, WELD, WHEEL, MOTOR, MOUSE = range(7)
@@ -198,52 +197,84 @@ _FIELDS = {name: ((2,) if name in ("local_a", "local_b", "local_axis", "linear_i
            for name in JointRows._fields}
 
 
-# The kernels take the rows by reference (``kernel_rows``, ``bundles``): numba passes a
-# tuple by value, each of its 30 arrays as seven arguments, through every function that
-# takes it, which made each joint kernel several times slower to compile (21 small
-# functions reading two of 30 arrays each: 5.4 s with a NamedTuple, 0.9 s with a
-# StructRef or a tuple of two arrays; scratch measurement) and to call (the chain
-# bridge's steps took twice as long). Inside the kernels ``rows.kind[j]`` reads the
-# same arrays either way.
+# --------------------------------------------------------------------------------------
+# Packed rows: the kernels' view of JointRows.
+#
+# The kernels take the rows as three arrays, one row per joint, a column per field
+# (``pack``; the accumulated impulses go back to the NamedTuple after the step,
+# ``unpack_impulses``). A NamedTuple of the 30 arrays is passed by value, each array as
+# seven arguments, through every function that takes it, and a StructRef holding them
+# takes and drops a reference count at every field read in a kernel that counts them
+# (the ragdoll: 297,000 NRT_incref / NRT_decref calls a step, a quarter of its time).
+# Three arrays indexed by constant columns cost neither, so the per-joint kernels compile
+# without reference counts: the ragdoll's step 2.03-2.10 -> 1.32-1.36 ms, the chain
+# bridge's 2.98-3.06 -> 2.75-2.77 ms, the same bits (docs/performance.md, "2026-11-29").
+# --------------------------------------------------------------------------------------
+
+#: Columns of the packed ints (J, INTS) int64: JointRows' kind, body_a, body_b and flags.
+KIND, BODY_A, BODY_B, HAS_LIMIT, HAS_MOTOR, HAS_SPRING = range(6)
+INTS = 6
+#: Columns of the packed reals (J, REALS) float64, JointRows' fields of those names
+#: (local_a, local_b, local_axis as x, y).
+(LOCAL_AX, LOCAL_AY, LOCAL_BX, LOCAL_BY, AXIS_X, AXIS_Y, REFERENCE_ANGLE, LENGTH,
+ MIN_LENGTH, MAX_LENGTH, LOWER, UPPER, MOTOR_SPEED, MAX_MOTOR, MAX_TORQUE, MAX_FORCE) = \
+    range(16)
+REALS = 16
+#: Columns of the packed impulses (J, IMPULSES) float64, N s per substep: JointRows'
+#: linear_impulse (x, y), angular, perp, axial, spring, motor, lower and upper impulses.
+(LINEAR_X, LINEAR_Y, ANGULAR_IMPULSE, PERP_IMPULSE, AXIAL_IMPULSE, SPRING_IMPULSE,
+ MOTOR_IMPULSE, LOWER_IMPULSE, UPPER_IMPULSE) = range(9)
+IMPULSES = 9
+_INT_FIELDS = ("kind", "body_a", "body_b", "has_limit", "has_motor", "has_spring")
+_REAL_FIELDS = (("local_a", 0), ("local_a", 1), ("local_b", 0), ("local_b", 1),
+                ("local_axis", 0), ("local_axis", 1), ("reference_angle", None),
+                ("length", None), ("min_length", None), ("max_length", None),
+                ("lower", None), ("upper", None), ("motor_speed", None), ("max_motor", None),
+                ("max_torque", None), ("max_force", None))
+_IMPULSE_FIELDS = (("linear_impulse", 0), ("linear_impulse", 1), ("angular_impulse", None),
+                   ("perp_impulse", None), ("axial_impulse", None), ("spring_impulse", None),
+                   ("motor_impulse", None), ("lower_impulse", None), ("upper_impulse", None))
 
 
-@structref.register
-class _JointRowsType(PlainFields):
-    """Numba's type of ``JointRowsRef``."""
+class Packed(NamedTuple):
+    """JointRows as the kernels take them (``pack``): ints (J, INTS) int64, reals
+    (J, REALS), impulses (J, IMPULSES) (the columns above)."""
+
+    ints: np.ndarray
+    reals: np.ndarray
+    impulses: np.ndarray
 
 
-class JointRowsRef(structref.StructRefProxy):
-    """JointRows as the kernels take it: one reference to the same 30 arrays (writes in
-    a kernel are the NamedTuple's). Made by ``kernel_rows``; opaque to Python."""
+def _columns(rows: JointRows, fields, dtype) -> np.ndarray:
+    """The (J, len(fields)) array of ``rows``' fields (name, column or None)."""
+    out = np.empty((len(rows.kind), len(fields)), dtype)
+    for c, (name, column) in enumerate(fields):
+        values = getattr(rows, name)
+        out[:, c] = values if column is None else values[:, column]
+    return out
 
 
-structref.define_proxy(JointRowsRef, _JointRowsType, list(JointRows._fields))
+def pack(rows: JointRows) -> Packed:
+    """``rows`` packed for the kernels (a copy: ``unpack_impulses`` brings the impulses
+    back)."""
+    return Packed(_columns(rows, [(name, None) for name in _INT_FIELDS], np.int64),
+                  _columns(rows, _REAL_FIELDS, np.float64),
+                  _columns(rows, _IMPULSE_FIELDS, np.float64))
 
 
-@njit(cache=True)
-def _joint_rows_ref(kind, body_a, body_b, local_a, local_b, local_axis, reference_angle,
-                    length, min_length, max_length, lower, upper, has_limit, has_motor,
-                    has_spring, collide_connected, motor_speed, max_motor, max_torque,
-                    max_force, spring_hertz, spring_damping, linear_impulse,
-                    angular_impulse, perp_impulse, axial_impulse, spring_impulse,
-                    motor_impulse, lower_impulse, upper_impulse):
-    return JointRowsRef(kind, body_a, body_b, local_a, local_b, local_axis, reference_angle,
-                        length, min_length, max_length, lower, upper, has_limit, has_motor,
-                        has_spring, collide_connected, motor_speed, max_motor, max_torque,
-                        max_force, spring_hertz, spring_damping, linear_impulse,
-                        angular_impulse, perp_impulse, axial_impulse, spring_impulse,
-                        motor_impulse, lower_impulse, upper_impulse)
-
-
-def kernel_rows(rows: JointRows) -> JointRowsRef:
-    """``rows`` as the joint kernels take them (a compiled call, cached on disk: the
-    proxy's own constructor would compile again in every process)."""
-    return _joint_rows_ref(*rows)
+def unpack_impulses(packed: Packed, rows: JointRows) -> None:
+    """The packed impulses written back into ``rows``' impulse arrays, in place."""
+    for c, (name, column) in enumerate(_IMPULSE_FIELDS):
+        target = getattr(rows, name)
+        if column is None:
+            target[:] = packed.impulses[:, c]
+        else:
+            target[:, column] = packed.impulses[:, c]
 
 
 def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: JointRows,
                        settings, gravity: np.ndarray, cap: float,
-                       ref: JointRowsRef | None = None) -> tuple[np.ndarray, np.ndarray]:
+                       packed: Packed | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(soft (J, 2, 3), params (6,)): bias_rate 1/s, mass_scale, impulse_scale of each
     joint's rigid rows, linear [:, 0] and angular [:, 1] ("Loaded joints" below), from
     the accumulated impulses now; ``joint_passes`` refills them every substep from
@@ -251,15 +282,15 @@ def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: Join
     or raises the cap on r (``cap``: where the last step left it; inf: none).
 
     inv_mass, inv_inertia: (B,); gravity: (2,) m/s^2 (zero, or
-    ``settings.load_stiffening`` false: no stiffening); ref: ``kernel_rows(rows)`` if
-    the caller has it already.
+    ``settings.load_stiffening`` false: no stiffening); packed: ``pack(rows)`` if the
+    caller has it already.
     """
     h = settings.dt / settings.substeps
     g = float(np.hypot(gravity[0], gravity[1])) if settings.load_stiffening else 0.0
     params = np.array([2.0 * math.pi * 2.0 * min(settings.contact_hertz, 0.25 / h),
                        JOINT_DAMPING_RATIO, h, g * h, cap, 1.0])
     soft = np.empty((rows.kind.shape[0], 2, 3))
-    stiffen(inv_mass, inv_inertia, kernel_rows(rows) if ref is None else ref, params, soft)
+    stiffen(inv_mass, inv_inertia, pack(rows) if packed is None else packed, params, soft)
     return soft, params
 
 
@@ -291,23 +322,24 @@ def stiffened_softness(inv_mass: np.ndarray, inv_inertia: np.ndarray, rows: Join
 # --------------------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def stiffen(inv_mass, inv_inertia, rows, params, out):
-    """Fill out (J, 2, 3) (``stiffened_softness``); params: omega rad/s and zeta of the
-    joint softness, h s, weight_impulse |g| h m/s (0: no stiffening), the cap on r;
-    params[5] receives the largest r before the cap."""
+    """Fill out (J, 2, 3) (``stiffened_softness``) for the ``Packed`` rows; params: omega
+    rad/s and zeta of the joint softness, h s, weight_impulse |g| h m/s (0: no
+    stiffening), the cap on r; params[5] receives the largest r before the cap."""
+    ints, _, impulses = rows
     omega, zeta, h, weight_impulse = params[0], params[1], params[2], params[3]
     params[5] = 1.0
-    for j in range(rows.kind.shape[0]):
-        a = rows.body_a[j]
-        b = rows.body_b[j]
+    for j in range(ints.shape[0]):
+        a = ints[j, BODY_A]
+        b = ints[j, BODY_B]
         m_lin = (inv_mass[a] if a >= 0 else 0.0) + (inv_mass[b] if b >= 0 else 0.0)
         m_ang = (inv_inertia[a] if a >= 0 else 0.0) + (inv_inertia[b] if b >= 0 else 0.0)
-        limit = max(rows.lower_impulse[j], rows.upper_impulse[j])
-        angular = abs(rows.angular_impulse[j])
-        linear = max(math.hypot(rows.linear_impulse[j, 0], rows.linear_impulse[j, 1]),
-                     abs(rows.perp_impulse[j]), abs(rows.axial_impulse[j]))
-        if rows.kind[j] == REVOLUTE:
+        limit = max(impulses[j, LOWER_IMPULSE], impulses[j, UPPER_IMPULSE])
+        angular = abs(impulses[j, ANGULAR_IMPULSE])
+        linear = max(math.hypot(impulses[j, LINEAR_X], impulses[j, LINEAR_Y]),
+                     abs(impulses[j, PERP_IMPULSE]), abs(impulses[j, AXIAL_IMPULSE]))
+        if ints[j, KIND] == REVOLUTE:
             angular = max(angular, limit)
         else:
             linear = max(linear, limit)
@@ -371,21 +403,23 @@ def _apply(v, m, ux, uy, a1, a2, impulse):
 
 
 @njit(cache=True, refcounts=False)
-def _row(v, m, ux, uy, a1, a2, acc, j, phase, bias, m_scale, i_scale, lo, hi, out):
-    """One row with Jacobian (u, a1, a2) and accumulated impulse acc[j] (module docstring).
+def _row(v, m, ux, uy, a1, a2, impulses, j, c, phase, bias, m_scale, i_scale, lo, hi, out):
+    """One row with Jacobian (u, a1, a2) and accumulated impulse impulses[j, c] (module
+    docstring; the packed impulses, column c).
 
-    phase WARM applies acc[j]; SOLVE and RELAX update it with the given bias (m/s or
-    rad/s), mass_scale, impulse_scale, clamped to [lo, hi], and raise out.progress to
-    (|change|, |acc[j]|); REACTION adds its linear impulse on b to out.force[j] and, for
-    an angular row (u = 0), its torque to out.torque[j].
+    phase WARM applies it; SOLVE and RELAX update it with the given bias (m/s or rad/s),
+    mass_scale, impulse_scale, clamped to [lo, hi], and raise out.progress to (|change|,
+    |impulse|); REACTION adds its linear impulse on b to out.force[j] and, for an angular
+    row (u = 0), its torque to out.torque[j].
     """
+    acc = impulses[j, c]
     if phase == WARM:
-        return _apply(v, m, ux, uy, a1, a2, acc[j])
+        return _apply(v, m, ux, uy, a1, a2, acc)
     if phase == REACTION:
-        out.force[j, 0] += acc[j] * ux
-        out.force[j, 1] += acc[j] * uy
+        out.force[j, 0] += acc * ux
+        out.force[j, 1] += acc * uy
         if ux == 0.0 and uy == 0.0:
-            out.torque[j] += acc[j] * a2
+            out.torque[j] += acc * a2
         return v
     vax, vay, wa, vbx, vby, wb = v
     ma, ia, mb, ib = m
@@ -393,26 +427,28 @@ def _row(v, m, ux, uy, a1, a2, acc, j, phase, bias, m_scale, i_scale, lo, hi, ou
     if k <= 0.0:
         return v
     cdot = ux * (vbx - vax) + uy * (vby - vay) + a2 * wb - a1 * wa
-    impulse = -(m_scale * cdot + bias) / k - i_scale * acc[j]
-    total = min(max(acc[j] + impulse, lo), hi)
-    impulse = total - acc[j]
-    acc[j] = total
+    impulse = -(m_scale * cdot + bias) / k - i_scale * acc
+    total = min(max(acc + impulse, lo), hi)
+    impulse = total - acc
+    impulses[j, c] = total
     _progress(out.progress, abs(impulse), abs(total))
     return _apply(v, m, ux, uy, a1, a2, impulse)
 
 
 @njit(cache=True, refcounts=False)
-def _point(v, m, rax, ray, rbx, rby, acc, j, phase, bx, by, m_scale, i_scale, largest, out):
-    """The 2x2 block of a shared point, accumulated impulse acc[j] (2,) on b, |acc| <=
-    largest (N s). bias (bx, by) m/s as in ``_row``; REACTION adds acc[j] to out.force[j]."""
+def _point(v, m, rax, ray, rbx, rby, impulses, j, phase, bx, by, m_scale, i_scale, largest,
+           out):
+    """The 2x2 block of a shared point, accumulated impulse (impulses[j, LINEAR_X],
+    impulses[j, LINEAR_Y]) on b, of length at most largest (N s). bias (bx, by) m/s as
+    in ``_row``; REACTION adds the impulse to out.force[j]."""
     vax, vay, wa, vbx, vby, wb = v
     ma, ia, mb, ib = m
     if phase == REACTION:
-        out.force[j, 0] += acc[j, 0]
-        out.force[j, 1] += acc[j, 1]
+        out.force[j, 0] += impulses[j, LINEAR_X]
+        out.force[j, 1] += impulses[j, LINEAR_Y]
         return v
     if phase == WARM:
-        px, py = acc[j, 0], acc[j, 1]
+        px, py = impulses[j, LINEAR_X], impulses[j, LINEAR_Y]
     else:
         k11 = ma + mb + ia * ray * ray + ib * rby * rby
         k12 = -ia * rax * ray - ib * rbx * rby
@@ -422,14 +458,14 @@ def _point(v, m, rax, ray, rbx, rby, acc, j, phase, bx, by, m_scale, i_scale, la
             return v
         cx = m_scale * (vbx - wb * rby - vax + wa * ray) + bx
         cy = m_scale * (vby + wb * rbx - vay - wa * rax) + by
-        ox, oy = acc[j, 0], acc[j, 1]
+        ox, oy = impulses[j, LINEAR_X], impulses[j, LINEAR_Y]
         tx = ox - (k22 * cx - k12 * cy) / det - i_scale * ox
         ty = oy - (k11 * cy - k12 * cx) / det - i_scale * oy
         size = math.hypot(tx, ty)
         if size > largest:
             tx *= largest / size
             ty *= largest / size
-        acc[j, 0], acc[j, 1] = tx, ty
+        impulses[j, LINEAR_X], impulses[j, LINEAR_Y] = tx, ty
         px, py = tx - ox, ty - oy
         _progress(out.progress, math.hypot(px, py), math.hypot(tx, ty))
     return (vax - ma * px, vay - ma * py, wa - ia * (rax * py - ray * px),
@@ -459,27 +495,30 @@ def _spring(c, spring):
     return spring[1] * spring[0] * c, spring[1], spring[2]
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def _limits(v, m, r, j, phase, value, ux, uy, a1, a2, soft, inv_h, out):
-    """The lower and upper rows of a limited coordinate ``value`` (rad or m)."""
-    if not r.has_limit[j]:
+    """The lower and upper rows of a limited coordinate ``value`` (rad or m); r: the
+    ``Packed`` rows."""
+    ints, reals, impulses = r
+    if not ints[j, HAS_LIMIT]:
         return v
-    bias, ms, isc = _limit(value - r.lower[j], soft, phase, inv_h)
-    v = _row(v, m, ux, uy, a1, a2, r.lower_impulse, j, phase, bias, ms, isc, 0.0, np.inf,
-             out)
-    bias, ms, isc = _limit(r.upper[j] - value, soft, phase, inv_h)
-    return _row(v, m, -ux, -uy, -a1, -a2, r.upper_impulse, j, phase, bias, ms, isc, 0.0,
-                np.inf, out)
+    bias, ms, isc = _limit(value - reals[j, LOWER], soft, phase, inv_h)
+    v = _row(v, m, ux, uy, a1, a2, impulses, j, LOWER_IMPULSE, phase, bias, ms, isc, 0.0,
+             np.inf, out)
+    bias, ms, isc = _limit(reals[j, UPPER] - value, soft, phase, inv_h)
+    return _row(v, m, -ux, -uy, -a1, -a2, impulses, j, UPPER_IMPULSE, phase, bias, ms, isc,
+                0.0, np.inf, out)
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def _motor(v, m, r, j, phase, ux, uy, a1, a2, h, out):
     """A motor row driving Cdot toward motor_speed, |impulse| <= max_motor h."""
-    if not r.has_motor[j]:
+    ints, reals, impulses = r
+    if not ints[j, HAS_MOTOR]:
         return v
-    bound = r.max_motor[j] * h
-    return _row(v, m, ux, uy, a1, a2, r.motor_impulse, j, phase, -r.motor_speed[j], 1.0, 0.0,
-                -bound, bound, out)
+    bound = reals[j, MAX_MOTOR] * h
+    return _row(v, m, ux, uy, a1, a2, impulses, j, MOTOR_IMPULSE, phase,
+                -reals[j, MOTOR_SPEED], 1.0, 0.0, -bound, bound, out)
 
 
 # --------------------------------------------------------------------------------------
@@ -487,21 +526,22 @@ def _motor(v, m, r, j, phase, ux, uy, a1, a2, h, out):
 # --------------------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out, direct):
     """Joint j's rows in Box2D v3's order (springs, motors, limits, then the rigid rows).
 
-    g: (rax, ray, rbx, rby, dx, dy, qa, qb) the arms, the separation d = pB - pA (m) and
-    the angles (rad) now. soft: (J, 2, 3) the rigid rows' coefficients, linear and
-    angular (``stiffened_softness``). direct: the equality rows (bits POINT_ROWS,
-    ANGLE_ROW, PERP_ROW, AXIAL_ROW) this pass leaves to the island's direct solve
-    (``joint_direct``). Returns the new velocities."""
+    r: the ``Packed`` rows. g: (rax, ray, rbx, rby, dx, dy, qa, qb) the arms, the
+    separation d = pB - pA (m) and the angles (rad) now. soft: (J, 2, 3) the rigid rows'
+    coefficients, linear and angular (``stiffened_softness``). direct: the equality rows
+    (bits POINT_ROWS, ANGLE_ROW, PERP_ROW, AXIAL_ROW) this pass leaves to the island's
+    direct solve (``joint_direct``). Returns the new velocities."""
     rax, ray, rbx, rby, dx, dy, qa, qb = g
-    kind = r.kind[j]
+    ints, reals, impulses = r
+    kind = ints[j, KIND]
     lin = soft[j, 0]
     ang = soft[j, 1]
     h = 1.0 / inv_h
-    angle = qb - qa - r.reference_angle[j]
+    angle = qb - qa - reals[j, REFERENCE_ANGLE]
     if kind == REVOLUTE or kind == WELD or kind == MOTOR:
         if kind == REVOLUTE:
             v = _motor(v, m, r, j, phase, 0.0, 0.0, 1.0, 1.0, h, out)
@@ -509,37 +549,37 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out, direct):
             bias, ms, isc = _equality(1.0, lin, phase)
             largest = np.inf
         elif kind == WELD:
-            if r.has_spring[j]:
+            if ints[j, HAS_SPRING]:
                 bias, ms, isc = _spring(angle, spring[j])
             else:
                 bias, ms, isc = _equality(angle, ang, phase)
             if not direct & ANGLE_ROW:
-                v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase, bias, ms,
+                v = _row(v, m, 0.0, 0.0, 1.0, 1.0, impulses, j, ANGULAR_IMPULSE, phase, bias, ms,
                          isc, -np.inf, np.inf, out)
-            bias, ms, isc = _spring(1.0, spring[j]) if r.has_spring[j] else _equality(
+            bias, ms, isc = _spring(1.0, spring[j]) if ints[j, HAS_SPRING] else _equality(
                 1.0, lin, phase)
             largest = np.inf
         else:
-            bound = r.max_torque[j] * h
-            if r.has_spring[j]:
+            bound = reals[j, MAX_TORQUE] * h
+            if ints[j, HAS_SPRING]:
                 bias, ms, isc = _spring(angle, spring[j])
             else:
                 bias, ms, isc = _equality(angle, ang, phase)
-            v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase, bias, ms, isc,
+            v = _row(v, m, 0.0, 0.0, 1.0, 1.0, impulses, j, ANGULAR_IMPULSE, phase, bias, ms, isc,
                      -bound, bound, out)
-            bias, ms, isc = _spring(1.0, spring[j]) if r.has_spring[j] else _equality(
+            bias, ms, isc = _spring(1.0, spring[j]) if ints[j, HAS_SPRING] else _equality(
                 1.0, lin, phase)
-            largest = r.max_motor[j] * h
+            largest = reals[j, MAX_MOTOR] * h
         if direct & POINT_ROWS:
             return v
         # bias above is per metre of separation: the point's bias is (bias dx, bias dy).
-        return _point(v, m, rax, ray, rbx, rby, r.linear_impulse, j, phase, bias * dx,
+        return _point(v, m, rax, ray, rbx, rby, impulses, j, phase, bias * dx,
                       bias * dy, ms, isc, largest, out)
     if kind == MOUSE:
         spring_j = spring[j]
-        return _point(v, m, rax, ray, rbx, rby, r.linear_impulse, j, phase,
+        return _point(v, m, rax, ray, rbx, rby, impulses, j, phase,
                       spring_j[1] * spring_j[0] * dx, spring_j[1] * spring_j[0] * dy,
-                      spring_j[1], spring_j[2], r.max_force[j] * h, out)
+                      spring_j[1], spring_j[2], reals[j, MAX_FORCE] * h, out)
     if kind == DISTANCE:
         length = math.hypot(dx, dy)
         if length < 1e-9:
@@ -547,29 +587,29 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out, direct):
         ux, uy = dx / length, dy / length
         a1 = rax * uy - ray * ux
         a2 = rbx * uy - rby * ux
-        if r.min_length[j] == r.max_length[j]:
+        if reals[j, MIN_LENGTH] == reals[j, MAX_LENGTH]:
             if direct & AXIAL_ROW:
                 return v
-            bias, ms, isc = _equality(length - r.length[j], lin, phase)
-            return _row(v, m, ux, uy, a1, a2, r.axial_impulse, j, phase, bias, ms, isc,
+            bias, ms, isc = _equality(length - reals[j, LENGTH], lin, phase)
+            return _row(v, m, ux, uy, a1, a2, impulses, j, AXIAL_IMPULSE, phase, bias, ms, isc,
                         -np.inf, np.inf, out)
-        if r.has_spring[j]:
-            bias, ms, isc = _spring(length - r.length[j], spring[j])
-            v = _row(v, m, ux, uy, a1, a2, r.spring_impulse, j, phase, bias, ms, isc,
+        if ints[j, HAS_SPRING]:
+            bias, ms, isc = _spring(length - reals[j, LENGTH], spring[j])
+            v = _row(v, m, ux, uy, a1, a2, impulses, j, SPRING_IMPULSE, phase, bias, ms, isc,
                      -np.inf, np.inf, out)
-        if r.min_length[j] > 0.0:
-            bias, ms, isc = _limit(length - r.min_length[j], lin, phase, inv_h)
-            v = _row(v, m, ux, uy, a1, a2, r.lower_impulse, j, phase, bias, ms, isc, 0.0,
+        if reals[j, MIN_LENGTH] > 0.0:
+            bias, ms, isc = _limit(length - reals[j, MIN_LENGTH], lin, phase, inv_h)
+            v = _row(v, m, ux, uy, a1, a2, impulses, j, LOWER_IMPULSE, phase, bias, ms, isc, 0.0,
                      np.inf, out)
-        if r.max_length[j] < _NO_LIMIT:
-            bias, ms, isc = _limit(r.max_length[j] - length, lin, phase, inv_h)
-            v = _row(v, m, -ux, -uy, -a1, -a2, r.upper_impulse, j, phase, bias, ms, isc, 0.0,
-                     np.inf, out)
+        if reals[j, MAX_LENGTH] < _NO_LIMIT:
+            bias, ms, isc = _limit(reals[j, MAX_LENGTH] - length, lin, phase, inv_h)
+            v = _row(v, m, -ux, -uy, -a1, -a2, impulses, j, UPPER_IMPULSE, phase, bias, ms,
+                     isc, 0.0, np.inf, out)
         return v
     # PRISMATIC and WHEEL: an axis carried by a, along which b slides.
     ca, sa = math.cos(qa), math.sin(qa)
-    ux = ca * r.local_axis[j, 0] - sa * r.local_axis[j, 1]
-    uy = sa * r.local_axis[j, 0] + ca * r.local_axis[j, 1]
+    ux = ca * reals[j, AXIS_X] - sa * reals[j, AXIS_Y]
+    uy = sa * reals[j, AXIS_X] + ca * reals[j, AXIS_Y]
     translation = ux * dx + uy * dy
     a1 = (dx + rax) * uy - (dy + ray) * ux
     a2 = rbx * uy - rby * ux
@@ -577,49 +617,51 @@ def _joint(v, m, g, r, j, phase, soft, spring, inv_h, out, direct):
         v = _motor(v, m, r, j, phase, ux, uy, a1, a2, h, out)
     else:
         v = _motor(v, m, r, j, phase, 0.0, 0.0, 1.0, 1.0, h, out)
-        if r.has_spring[j]:
+        if ints[j, HAS_SPRING]:
             bias, ms, isc = _spring(translation, spring[j])
-            v = _row(v, m, ux, uy, a1, a2, r.spring_impulse, j, phase, bias, ms, isc,
+            v = _row(v, m, ux, uy, a1, a2, impulses, j, SPRING_IMPULSE, phase, bias, ms, isc,
                      -np.inf, np.inf, out)
         elif not direct & AXIAL_ROW:
             bias, ms, isc = _equality(translation, lin, phase)
-            v = _row(v, m, ux, uy, a1, a2, r.axial_impulse, j, phase, bias, ms, isc,
+            v = _row(v, m, ux, uy, a1, a2, impulses, j, AXIAL_IMPULSE, phase, bias, ms, isc,
                      -np.inf, np.inf, out)
     v = _limits(v, m, r, j, phase, translation, ux, uy, a1, a2, lin, inv_h, out)
     px, py = -uy, ux
     if not direct & PERP_ROW:
         bias, ms, isc = _equality(px * dx + py * dy, lin, phase)
         v = _row(v, m, px, py, (dx + rax) * py - (dy + ray) * px, rbx * py - rby * px,
-                 r.perp_impulse, j, phase, bias, ms, isc, -np.inf, np.inf, out)
+                 impulses, j, PERP_IMPULSE, phase, bias, ms, isc, -np.inf, np.inf, out)
     if kind == PRISMATIC and not direct & ANGLE_ROW:
         bias, ms, isc = _equality(angle, ang, phase)
-        v = _row(v, m, 0.0, 0.0, 1.0, 1.0, r.angular_impulse, j, phase, bias, ms, isc,
+        v = _row(v, m, 0.0, 0.0, 1.0, 1.0, impulses, j, ANGULAR_IMPULSE, phase, bias, ms, isc,
                  -np.inf, np.inf, out)
     return v
 
 
-@njit(cache=True)
-def joint_geometry(cax, cay, qa, cbx, cby, qb, rows, j):
+@njit(cache=True, refcounts=False)
+def joint_geometry(cax, cay, qa, cbx, cby, qb, reals, j):
     """(rax, ray, rbx, rby, dx, dy, qa, qb) of joint j with body a at (cax, cay) m, angle qa
     rad and body b at (cbx, cby), qb (zeros for the world): the arms rA = R(qa) local_a,
-    rB = R(qb) local_b, the separation d = (xb + rB) - (xa + rA) (m) and the angles."""
+    rB = R(qb) local_b, the separation d = (xb + rB) - (xa + rA) (m) and the angles.
+    reals: the packed reals (``Packed``)."""
     c, s = math.cos(qa), math.sin(qa)
-    rax = c * rows.local_a[j, 0] - s * rows.local_a[j, 1]
-    ray = s * rows.local_a[j, 0] + c * rows.local_a[j, 1]
+    rax = c * reals[j, LOCAL_AX] - s * reals[j, LOCAL_AY]
+    ray = s * reals[j, LOCAL_AX] + c * reals[j, LOCAL_AY]
     c, s = math.cos(qb), math.sin(qb)
-    rbx = c * rows.local_b[j, 0] - s * rows.local_b[j, 1]
-    rby = s * rows.local_b[j, 0] + c * rows.local_b[j, 1]
+    rbx = c * reals[j, LOCAL_BX] - s * reals[j, LOCAL_BY]
+    rby = s * reals[j, LOCAL_BX] + c * reals[j, LOCAL_BY]
     return rax, ray, rbx, rby, cbx + rbx - cax - rax, cby + rby - cay - ray, qa, qb
 
 
-@njit(cache=True)
-def _all_direct(r, j, direct):
+@njit(cache=True, refcounts=False)
+def _all_direct(ints, j, direct):
     """Whether ``_joint`` has no row of joint j to solve when the direct solve takes its
     equality rows ``direct`` (bits): no motor, no limit, no spring row, every rigid row
-    direct. Such a joint is skipped by a SOLVE or RELAX pass (its velocities unchanged)."""
-    if r.has_motor[j] or r.has_limit[j]:
+    direct. Such a joint is skipped by a SOLVE or RELAX pass (its velocities unchanged).
+    ints: the packed ints (``Packed``)."""
+    if ints[j, HAS_MOTOR] or ints[j, HAS_LIMIT]:
         return False
-    kind = r.kind[j]
+    kind = ints[j, KIND]
     if kind == REVOLUTE:
         return direct == POINT_ROWS
     if kind == WELD:
@@ -633,23 +675,24 @@ def _all_direct(r, j, direct):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, refcounts=False)
 def solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, rows, phase,
                  soft, spring, inv_h, out, direct):
     """One pass of ``phase`` (WARM, SOLVE, RELAX, REACTION) over every joint, in order.
 
     com (B, 2) m, angle (B,) rad: the bodies now; velocity, angular_velocity updated in
-    place; inv_mass, inv_inertia: (B,) (0: static, kinematic, asleep). rows: JointRows.
+    place; inv_mass, inv_inertia: (B,) (0: static, kinematic, asleep). rows: ``Packed``.
     soft: (J, 2, 3) ``stiffened_softness``; spring: (J, 3) ``spring_softness``;
     inv_h: 1/s. out: Output, what REACTION adds to and SOLVE, RELAX report progress in.
     direct: (J,) int64, the equality rows SOLVE and RELAX leave to ``joint_direct``
     (bits; zeros: every row here).
     """
-    for j in range(rows.kind.shape[0]):
-        if (phase == SOLVE or phase == RELAX) and _all_direct(rows, j, direct[j]):
+    ints, reals, _ = rows
+    for j in range(ints.shape[0]):
+        if (phase == SOLVE or phase == RELAX) and _all_direct(ints, j, direct[j]):
             continue
-        a = rows.body_a[j]
-        b = rows.body_b[j]
+        a = ints[j, BODY_A]
+        b = ints[j, BODY_B]
         cax = cay = qa = vax = vay = wa = ma = ia = 0.0
         cbx = cby = qb = vbx = vby = wb = mb = ib = 0.0
         if a >= 0:
@@ -662,7 +705,7 @@ def solve_joints(com, angle, velocity, angular_velocity, inv_mass, inv_inertia, 
             mb, ib = inv_mass[b], inv_inertia[b]
         if ma == 0.0 and ia == 0.0 and mb == 0.0 and ib == 0.0 and phase != REACTION:
             continue
-        g = joint_geometry(cax, cay, qa, cbx, cby, qb, rows, j)
+        g = joint_geometry(cax, cay, qa, cbx, cby, qb, reals, j)
         v = _joint((vax, vay, wa, vbx, vby, wb), (ma, ia, mb, ib), g, rows, j, phase, soft,
                    spring, inv_h, out,
                    direct[j] if phase == SOLVE or phase == RELAX else 0)
@@ -681,7 +724,7 @@ def joint_reactions(com: np.ndarray, angle: np.ndarray, rows: JointRows,
     out = Output(np.zeros((count, 2)), np.zeros(count), np.zeros(2))
     if count:
         zero = np.zeros(len(angle))
-        solve_joints(com, angle, np.zeros_like(com), zero, zero, zero, kernel_rows(rows),
-                     REACTION, np.zeros((count, 2, 3)), np.zeros((count, 3)), 1.0 / h, out,
+        solve_joints(com, angle, np.zeros_like(com), zero, zero, zero, pack(rows), REACTION,
+                     np.zeros((count, 2, 3)), np.zeros((count, 3)), 1.0 / h, out,
                      np.zeros(count, np.int64))
     return out.force / h, out.torque / h

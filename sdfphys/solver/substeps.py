@@ -72,9 +72,10 @@ from .joints import (
     SOLVE,
     WARM,
     JointRows,
-    kernel_rows,
+    pack,
     spring_softness,
     stiffened_softness,
+    unpack_impulses,
 )
 from .pair_rows import (
     along,
@@ -670,11 +671,11 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
     gravity = np.asarray(gravity, dtype=np.float64)
     if joints is not None and len(joints[0].kind) > 0:
         rows, cap = joints
-        ref = kernel_rows(rows)
+        packed = pack(rows)
         joint_soft, stiffening = stiffened_softness(bodies.inv_mass, bodies.inv_inertia, rows,
-                                                    settings, gravity, float(cap[0]), ref)
-        islands = kernel_plan(plan(ref, bodies.inv_mass, bodies.inv_inertia))
-        joint_args = substep_joints(bodies, ref, joint_soft, spring_softness(rows, h),
+                                                    settings, gravity, float(cap[0]), packed)
+        islands = kernel_plan(plan(packed, bodies.inv_mass, bodies.inv_inertia))
+        joint_args = substep_joints(bodies, packed, joint_soft, spring_softness(rows, h),
                                     stiffening, islands)
     else:
         joint_args = None
@@ -704,4 +705,5 @@ def solve_substeps(bodies: BodyState, constraints: ContactConstraints, gravity: 
         accel)
     if joint_args is not None:
         cap[0] = stiffening[4]
+        unpack_impulses(packed, rows)
     return int(passes), int(push_outs), int(joint_runs), root
