@@ -1,4 +1,7 @@
 import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -7,6 +10,32 @@ import pytest
 # compiles what depends on the order, so the suite (and its subprocesses) runs quiet.
 # tests/test_numba_cache.py turns it back on where it tests it.
 os.environ["SDFPHYS_COMPILE_NOTICE"] = "0"
+
+
+#: The compiling helper of a run on a cold cache (tests/prewarm.py), while it runs.
+_prewarm: subprocess.Popen | None = None
+
+
+def pytest_sessionstart(session):
+    """On a cold numba cache and two cores or more, start tests/prewarm.py beside the run
+    (its docstring says why); ``SDFPHYS_TEST_PREWARM=0`` turns it off."""
+    global _prewarm
+    from sdfphys import _warm
+
+    if (os.environ.get("SDFPHYS_TEST_PREWARM", "1") == "0" or (os.cpu_count() or 1) < 2
+            or not _warm._cold()):
+        return
+    _prewarm = subprocess.Popen([sys.executable, str(Path(__file__).with_name("prewarm.py"))],
+                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL, start_new_session=True)
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """Stop the compiling helper if it still runs (a lock it held is taken over by the
+    next process that needs its kernel: ``sdfphys._compile_lock``)."""
+    if _prewarm is not None and _prewarm.poll() is None:
+        _prewarm.terminate()
+        _prewarm.wait(timeout=30)
 
 
 def pytest_addoption(parser):
