@@ -25,9 +25,11 @@ def pytest_sessionstart(session):
     if (os.environ.get("SDFPHYS_TEST_PREWARM", "1") == "0" or (os.cpu_count() or 1) < 2
             or not _warm._cold()):
         return
+    # SDFPHYS_WARM=0: the helper forks no compiling child of its own (sdfphys._warm).
     _prewarm = subprocess.Popen([sys.executable, str(Path(__file__).with_name("prewarm.py"))],
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL, start_new_session=True)
+                                stderr=subprocess.DEVNULL, start_new_session=True,
+                                env=dict(os.environ, SDFPHYS_WARM="0"))
 
 
 def pytest_sessionfinish(session, exitstatus):
@@ -35,7 +37,11 @@ def pytest_sessionfinish(session, exitstatus):
     next process that needs its kernel: ``sdfphys._compile_lock``)."""
     if _prewarm is not None and _prewarm.poll() is None:
         _prewarm.terminate()
-        _prewarm.wait(timeout=30)
+        try:
+            _prewarm.wait(timeout=30)
+        except subprocess.TimeoutExpired:         # inside a compile that ignores it
+            _prewarm.kill()
+            _prewarm.wait()
 
 
 def pytest_addoption(parser):
