@@ -126,8 +126,12 @@ def test_packed_rows_hold_every_field_and_the_impulses_go_back():
     from sdfphys.solver import joints
 
     world = chain_world(links=3)
-    rows = world._joints.rows._replace(lower=np.array([-0.5, -0.25, -0.125]),
-                                       has_limit=np.array([True, False, True]))
+    rng = np.random.default_rng(2)
+    rows = world._joints.rows          # every float and flag distinct (a swapped column shows)
+    rows = rows._replace(**{name: (rng.normal(size=value.shape) if value.dtype == float
+                                   else rng.random(value.shape) < 0.5)
+                            for name, value in rows._asdict().items()
+                            if value.dtype in (float, bool)})
     packed = pack(rows)
     columns = [(joints._INT_FIELDS, packed.ints), (joints._REAL_FIELDS, packed.reals),
                (joints._IMPULSE_FIELDS, packed.impulses)]
@@ -143,7 +147,35 @@ def test_packed_rows_hold_every_field_and_the_impulses_go_back():
     solved = set(joints.JointRows._fields) - {"collide_connected", "spring_hertz",
                                                 "spring_damping"}
     assert names == solved        # the others are read in Python (spring_softness, pairs)
-    rng = np.random.default_rng(2)
+    # The column constants the kernels index by name the same fields.
+    named = {"KIND": ("ints", "kind", None), "BODY_A": ("ints", "body_a", None),
+             "BODY_B": ("ints", "body_b", None), "HAS_LIMIT": ("ints", "has_limit", None),
+             "HAS_MOTOR": ("ints", "has_motor", None),
+             "HAS_SPRING": ("ints", "has_spring", None),
+             "LOCAL_AX": ("reals", "local_a", 0), "LOCAL_AY": ("reals", "local_a", 1),
+             "LOCAL_BX": ("reals", "local_b", 0), "LOCAL_BY": ("reals", "local_b", 1),
+             "AXIS_X": ("reals", "local_axis", 0), "AXIS_Y": ("reals", "local_axis", 1),
+             "REFERENCE_ANGLE": ("reals", "reference_angle", None),
+             "LENGTH": ("reals", "length", None), "MIN_LENGTH": ("reals", "min_length", None),
+             "MAX_LENGTH": ("reals", "max_length", None), "LOWER": ("reals", "lower", None),
+             "UPPER": ("reals", "upper", None), "MOTOR_SPEED": ("reals", "motor_speed", None),
+             "MAX_MOTOR": ("reals", "max_motor", None),
+             "MAX_TORQUE": ("reals", "max_torque", None),
+             "MAX_FORCE": ("reals", "max_force", None),
+             "LINEAR_X": ("impulses", "linear_impulse", 0),
+             "LINEAR_Y": ("impulses", "linear_impulse", 1),
+             "ANGULAR_IMPULSE": ("impulses", "angular_impulse", None),
+             "PERP_IMPULSE": ("impulses", "perp_impulse", None),
+             "AXIAL_IMPULSE": ("impulses", "axial_impulse", None),
+             "SPRING_IMPULSE": ("impulses", "spring_impulse", None),
+             "MOTOR_IMPULSE": ("impulses", "motor_impulse", None),
+             "LOWER_IMPULSE": ("impulses", "lower_impulse", None),
+             "UPPER_IMPULSE": ("impulses", "upper_impulse", None)}
+    for constant, (array, name, column) in named.items():
+        value = getattr(rows, name)
+        np.testing.assert_array_equal(getattr(packed, array)[:, getattr(joints, constant)],
+                                      value if column is None else value[:, column])
+    assert len(named) == joints.INTS + joints.REALS + joints.IMPULSES
     packed.impulses[:] = rng.normal(size=packed.impulses.shape)
     joints.unpack_impulses(packed, rows)
     assert rows.linear_impulse[:, 1].tolist() == packed.impulses[:, joints.LINEAR_Y].tolist()
