@@ -7,12 +7,10 @@ as from a NamedTuple, and a write is the caller's array's. Each bundle here is a
 StructRef type (``PlainFields``: its fields take their values' plain types), a proxy
 class Python holds opaquely, and a maker compiled once into the disk cache (the proxy's
 own constructor would compile again in every process). The joints' bundles (a step's
-joints, the direct solve's plan) are in ``joint_direct``: the joint rows as a StructRef
-made their compilation 5x shorter and the chain bridge's steps twice as fast against a
-tuple of 30 arrays (docs/performance.md), and have since become three packed arrays
-(``joints.pack``), which kernels without reference counts read. The substep kernel's
-bundles here gained neither measurably (its tuples were unpacked once a pass), only a
-signature of 16 arguments instead of 43. A StructRef's field read takes and drops a
+joints, the direct solve's plan) are in ``joint_direct``; the joint rows themselves are
+three packed arrays (``joints.pack``), which kernels without reference counts read. The
+substep kernel's bundles here gained no speed over tuples (unpacked once a pass), only
+a signature of 16 arguments instead of 43. A StructRef's field read takes and drops a
 reference count, so a kernel that takes one cannot be compiled without them: the
 kernels read the fields once, at their top.
 """

@@ -205,10 +205,9 @@ _FIELDS = {name: ((2,) if name in ("local_a", "local_b", "local_axis", "linear_i
 # ``unpack_impulses``). A NamedTuple of the 30 arrays is passed by value, each array as
 # seven arguments, through every function that takes it, and a StructRef holding them
 # takes and drops a reference count at every field read in a kernel that counts them
-# (the ragdoll: 297,000 NRT_incref / NRT_decref calls a step, a quarter of its time).
-# Three arrays indexed by constant columns cost neither, so the per-joint kernels compile
-# without reference counts: the ragdoll's step 2.03-2.10 -> 1.32-1.36 ms, the chain
-# bridge's 2.98-3.06 -> 2.75-2.77 ms, the same bits (docs/performance.md, "2026-11-29").
+# (in the ragdoll a quarter of its time). Three arrays indexed by constant columns cost
+# neither, so the per-joint kernels compile without reference counts (figures:
+# docs/performance.md, "2026-11-29").
 # --------------------------------------------------------------------------------------
 
 #: Columns of the packed ints (J, INTS) int64: JointRows' kind, body_a, body_b and flags.
