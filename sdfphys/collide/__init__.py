@@ -85,7 +85,12 @@ from .contacts import Contacts
 from .filter import PairFilter
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .polygons import SOURCE_CLIP, polygon_table
-from .predicted import predicted_contacts, predicted_field_contacts, predicted_mesh_contacts
+from .predicted import (
+    IMPLIED_ROUND_OFF,
+    predicted_contacts,
+    predicted_field_contacts,
+    predicted_mesh_contacts,
+)
 from .reduce import reduce_contacts
 
 __all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "ContactCache", "Contacts", "collide",
@@ -350,19 +355,28 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
                     UNBOUNDED_RADIUS, REACH_CAP_RADII, reach, boxes)
     pairs = _candidates(boxes, movable, exclude, n, pair_filter, cache)
     shape_class = tables.shape_class
-    trig = np.empty((n, 4))
+    predict = bool(settings.predicted_contacts and tables.mixed)
+    # Circle-box pairs' predicted rows are made with the contacts, unless a sensor could
+    # be among them (``_with_predicted`` leaves sensor pairs out).
+    box_rows = predict and (pair_filter is None or not pair_filter.has_sensors)
+    trig = np.empty((n, 10 if box_rows else 4))
     box_body = np.flatnonzero(shape_class[body_shape] == BOX) if tables.mixed else ()
     if len(box_body):                          # read by circle-box pairs only
         a_box = angle[box_body]
         trig[box_body, 0], trig[box_body, 1] = np.cos(-a_box), np.sin(-a_box)
         trig[box_body, 2], trig[box_body, 3] = np.cos(a_box), np.sin(a_box)
+        if box_rows:                           # the end pose's, as ``predicted_contacts``
+            turn = angular_velocity[box_body] * float(settings.dt)
+            end = a_box + turn
+            trig[box_body, 4], trig[box_body, 5] = np.cos(-end), np.sin(-end)
+            trig[box_body, 6], trig[box_body, 7] = np.cos(end), np.sin(end)
+            trig[box_body, 8], trig[box_body, 9] = np.cos(-turn), np.sin(-turn)
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
-    predict = bool(settings.predicted_contacts and tables.mixed)
     a, b, point, normal, depth, feature, rest, n_circles, n_boxes, n_polygons, chosen = (
         analytic_contacts(pairs.view(np.uint64), body_shape, shape_class, radius, tables.half,
                           tables.polygons, position, angle, trig, reach, float(margin),
                           float(settings.linear_slop), int(settings.contacts_per_pair),
-                          velocity, angular_velocity, float(settings.dt), predict))
+                          velocity, angular_velocity, float(settings.dt), predict, box_rows))
     if ran is not None:
         if n_circles:
             ran.add(("circle", "circle"))
@@ -396,7 +410,8 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], tables: _ShapeTable
     point than its contact's, so no contact implies it; a mesh pair's is on a face no
     contact of its element has. tables: the distinct ``shapes``' ``_ShapeTables``;
     chosen: the rows of ``pairs`` that get a circle's predicted row if the caller picked
-    them (``analytic_contacts``), None: picked here."""
+    them (``analytic_contacts``, which makes the circle-box pairs' rows itself and
+    leaves them out), None: picked here."""
     if not settings.predicted_contacts:
         return contacts
     is_circle = tables.shape_class[body_shape] == CIRCLE
@@ -450,12 +465,6 @@ def _without_sensors(pairs: np.ndarray, pair_filter: PairFilter | None) -> np.nd
     if pair_filter is None or not pair_filter.has_sensors or len(pairs) == 0:
         return pairs
     return pairs[~(pair_filter.sensor[pairs[:, 0]] | pair_filter.sensor[pairs[:, 1]])]
-
-
-#: Separations of a pair's contact and of its predicted contact along one normal that
-#: differ by less than this (m) are equal: the two are computed by different paths
-#: (a narrowphase, a field at the end pose), whose round-off differs by ~1e-16 m.
-IMPLIED_ROUND_OFF = 1e-9
 
 
 def _implied(contacts: Contacts, extra: Contacts, n: np.int64) -> np.ndarray:
