@@ -78,6 +78,7 @@ from .circle_kernels import (
     analytic_contacts,
     analytic_pair,
     merge_order,
+    predicted_box_rows,
     reach_and_boxes,
 )
 from .contact_cache import ContactCache, body_turns
@@ -372,11 +373,24 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
             trig[box_body, 6], trig[box_body, 7] = np.cos(end), np.sin(end)
             trig[box_body, 8], trig[box_body, 9] = np.cos(-turn), np.sin(-turn)
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
-    a, b, point, normal, depth, feature, rest, n_circles, n_boxes, n_polygons, chosen = (
-        analytic_contacts(pairs.view(np.uint64), body_shape, shape_class, radius, tables.half,
-                          tables.polygons, position, angle, trig, reach, float(margin),
-                          float(settings.linear_slop), int(settings.contacts_per_pair),
-                          velocity, angular_velocity, float(settings.dt), predict, box_rows))
+    (a, b, point, normal, depth, feature, rest, n_circles, n_boxes, n_polygons, chosen,
+     box_chosen) = analytic_contacts(
+        pairs.view(np.uint64), body_shape, shape_class, radius, tables.half, tables.polygons,
+        position, angle, trig, reach, float(margin), float(settings.linear_slop),
+        int(settings.contacts_per_pair), velocity, angular_velocity, float(settings.dt),
+        predict, box_rows)
+    if len(box_chosen):             # the circle-box pairs' predicted rows, in pair order
+        rows = predicted_box_rows(
+            box_chosen, pairs.view(np.uint64), body_shape, shape_class, radius, tables.half,
+            position, velocity, angular_velocity, trig, reach, float(margin),
+            float(settings.linear_slop), float(settings.dt), a * np.int64(n) + b, normal, depth)
+        if len(rows[0]):            # each after its pair's contact (feature 0 < its)
+            order = merge_order(2 * (a * np.int64(n) + b),
+                                2 * (rows[0] * np.int64(n) + rows[1]) + 1)
+            a, b, point, normal, depth, feature = (
+                np.concatenate([mine, theirs])[order]
+                for mine, theirs in zip((a, b, point, normal, depth, feature), rows,
+                                        strict=True))
     if ran is not None:
         if n_circles:
             ran.add(("circle", "circle"))

@@ -34,6 +34,11 @@ filter, the flip to body_a < body_b, the sort) dominated a step. Here:
     A bit-identical rotation needs numpy's cos and sin (numba's libm calls may
     differ in the last bit): the caller passes them per box body.
 
+``predicted_box_rows``
+    the predicted rows (``predicted.predicted_contacts``) of the circle-box pairs
+    ``analytic_contacts`` picked, operation for operation, the implied ones left out;
+    compiled only in scenes that have such pairs.
+
 ``merge_order``
     the order that merges the circle contacts and the general path's contacts, both
     sorted by (body_a, body_b[, feature]) and never sharing a body pair, into one
@@ -57,7 +62,7 @@ from .polygons import clip_pair
 from .predicted import IMPLIED_ROUND_OFF, SOURCE_PREDICTED
 
 __all__ = ["BOX", "CIRCLE", "OTHER", "POLYGON", "analytic_contacts", "merge_order",
-           "reach_and_boxes"]
+           "predicted_box_rows", "reach_and_boxes"]
 
 
 @njit(cache=True)
@@ -144,10 +149,8 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     polygons: ``polygons.polygon_table`` of the shapes (boxes and convex polygons);
     position: (B, 2) centres of mass, m; angle: (B,) rad; trig: (B, 4)
     ``[cos(-a), sin(-a), cos(a), sin(a)]`` of each box body's angle a (numpy's
-    values; other rows unused; with ``box_rows`` also, of a = angle + w dt with w dt its
-    turn in the step, ``[cos(-a'), sin(-a'), cos(a'), sin(a'), cos(-w dt), sin(-w dt)]``
-    in columns 4 to 9); reach: (B,) m; margin: m, the speculative distance; slop: m,
-    ``Settings.linear_slop``; budget: ``Settings.contacts_per_pair``.
+    values; other rows unused); reach: (B,) m; margin: m, the speculative distance;
+    slop: m, ``Settings.linear_slop``; budget: ``Settings.contacts_per_pair``.
 
     Circle-circle: module doc. Circle-box (``collide_circle_and_field`` with the box
     field): the circle is first; its centre in the box frame c = R(-a)(x_c - x_b),
@@ -161,19 +164,17 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     (``predicted.predicted_contacts``): a circle c and a body b that is not one, b
     turning by more than the slop at its bounding radius this step, |w_b| R_b dt > slop,
     or c moving against it by more than that, |v_c - v_b| dt > slop (velocity (B, 2)
-    m/s, angular_velocity (B,) rad/s, dt s). With ``box_rows`` too (no sensor among the
-    bodies: a prediction is not a touch), a picked circle-box pair's predicted row is
-    made here (``_predicted_box_row``, the operations of ``predicted_contacts``) and
-    placed after the pair's contact unless that contact implies it
-    (``collide._implied``); the other picked pairs are returned for the caller.
+    m/s, angular_velocity (B,) rad/s, dt s). With ``box_rows`` too, the picked
+    circle-box pairs are returned apart, for ``predicted_box_rows``.
 
     Returns (body_a, body_b (K,) int64 with body_a < body_b, point (K, 2) m,
     normal (K, 2) unit a -> b, depth (K,) m > 0 overlapping, feature (K,) int64,
     rest (R,) int64 indices into ``pairs`` of the other pairs, n_circles, n_boxes,
     n_polygons: the circle-circle, circle-box and polygon candidate pairs seen,
-    predicted (M,) int64 indices into ``pairs`` of the pairs picked for a predicted row
-    that is not made here). Contacts (the predicted rows made here among them) are
-    sorted by (body_a, body_b, feature).
+    predicted (M,) int64 indices into ``pairs`` of the pairs picked for a predicted row,
+    box_predicted (N,) int64 those of them that are circle-box pairs with ``box_rows``
+    (then not in ``predicted``), in order). Contacts are sorted by (body_a, body_b,
+    feature).
     """
     vertices, normals, poly_start, poly_count = polygons
     n_pairs = pairs.shape[0]
@@ -185,8 +186,9 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     code = np.empty(n_pairs, np.int64)
     rest = np.empty(n_pairs, np.int64)
     predicted = np.empty(n_pairs if predict else 0, np.int64)
-    box_row = np.zeros(n_pairs if predict else 0, np.bool_)   # per fast pair
+    box_predicted = np.empty(n_pairs if predict and box_rows else 0, np.int64)
     n_predicted = 0
+    n_box_predicted = 0
     n_rest = 0
     n_fast = 0
     n_circles = 0
@@ -198,17 +200,19 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
         j = pairs[p, 1]
         ci = shape_class[ushape[i]]
         cj = shape_class[ushape[j]]
-        picked = False
         if predict and (ci == CIRCLE) != (cj == CIRCLE):
             b = j if ci == CIRCLE else i
             c = i + j - b
             rx = velocity[c, 0] - velocity[b, 0]
             ry = velocity[c, 1] - velocity[b, 1]
-            picked = (abs(angular_velocity[b]) * shape_radius[ushape[b]] * dt > slop
-                      or (rx * rx + ry * ry) * dt * dt > slop * slop)
-            if picked and not (box_rows and (ci == BOX or cj == BOX)):
-                predicted[n_predicted] = p
-                n_predicted += 1
+            if (abs(angular_velocity[b]) * shape_radius[ushape[b]] * dt > slop
+                    or (rx * rx + ry * ry) * dt * dt > slop * slop):
+                if box_rows and shape_class[ushape[b]] == BOX:
+                    box_predicted[n_box_predicted] = p
+                    n_box_predicted += 1
+                else:
+                    predicted[n_predicted] = p
+                    n_predicted += 1
         if ci == CIRCLE and cj == CIRCLE:
             swap = ushape[i] > ushape[j]
             n_circles += 1
@@ -228,8 +232,6 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
         f = j if swap else i
         s = i if swap else j
         code[n_fast] = -p - 1 if swap else p
-        if picked and box_rows:                    # a circle-box pair
-            box_row[n_fast] = True
         n_fast += 1
         value = reach[f] + reach[s]
         if value > group_reach[ushape[f], ushape[s]]:
@@ -304,12 +306,6 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
                                        shape_half[ss, 0], shape_half[ss, 1])
             d = rf - value
             if not (d > -group_margin and d > -((margin + reach[f]) + reach[s])):
-                if predict and box_row[c]:
-                    k = _predicted_box_row(f, s, rf, shape_radius[ss], shape_half[ss, 0],
-                                           shape_half[ss, 1], position, velocity,
-                                           angular_velocity, trig, reach, margin, slop, dt,
-                                           body_a, body_b, point, normal, depth, feature,
-                                           k, 0)
                 continue
             length = math.hypot(gx, gy)
             if length > TINY:
@@ -337,13 +333,9 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
                 body_a[r] = np.int64(f)
                 body_b[r] = np.int64(s)
         k += found
-        if predict and box_row[c]:
-            k = _predicted_box_row(f, s, shape_radius[sf], shape_radius[ss],
-                                   shape_half[ss, 0], shape_half[ss, 1], position, velocity,
-                                   angular_velocity, trig, reach, margin, slop, dt, body_a,
-                                   body_b, point, normal, depth, feature, k, found)
     return (body_a[:k], body_b[:k], point[:k], normal[:k], depth[:k], feature[:k],
-            rest[:n_rest], n_circles, n_boxes, n_polygons, predicted[:n_predicted])
+            rest[:n_rest], n_circles, n_boxes, n_polygons, predicted[:n_predicted],
+            box_predicted[:n_box_predicted])
 
 
 #: Feature key of a predicted row (element and start 0).
@@ -351,72 +343,102 @@ _PREDICTED_KEY = np.int64(SOURCE_PREDICTED) << np.int64(56)
 
 
 @njit(cache=True, error_model="numpy")
-def _predicted_box_row(c: int, b: int, radius_c: float, radius_b: float, hx: float,
-                       hy: float, position: np.ndarray, velocity: np.ndarray,
+def predicted_box_rows(chosen: np.ndarray, pairs: np.ndarray, body_shape: np.ndarray,
+                       shape_class: np.ndarray, shape_radius: np.ndarray,
+                       shape_half: np.ndarray, position: np.ndarray, velocity: np.ndarray,
                        angular_velocity: np.ndarray, trig: np.ndarray, reach: np.ndarray,
-                       margin: float, slop: float, dt: float, body_a: np.ndarray,
-                       body_b: np.ndarray, point: np.ndarray, normal: np.ndarray,
-                       depth: np.ndarray, feature: np.ndarray, k: int, found: int) -> int:
-    """Write the predicted row of circle c (radius_c, m) against box b (bounding radius
-    radius_b, half-extents hx, hy, m) at row k unless the pair's ``found`` contact rows
-    just before it imply it; return the next free row.
+                       margin: float, slop: float, dt: float, key: np.ndarray,
+                       normal_now: np.ndarray, depth_now: np.ndarray):
+    """The predicted rows of the circle-box pairs ``chosen`` (M,) (rows of ``pairs``,
+    (P, 2) uint64, in order: ``analytic_contacts``' box_predicted), as
+    ``predicted.predicted_contacts`` makes them, operation for operation (its module
+    docstring derives the row), less those a contact of the pair implies
+    (``collide._implied``).
 
-    ``predicted.predicted_contacts`` operation for operation (its module docstring
-    derives the row): the circle's centre at the step's end in the box's end frame
-    (trig columns 4, 5), the box field there, its surface point at the end carried back
-    to the box's material point (columns 6 to 9), the gap along the end normal; kept
-    when under the pair's margin and the box turns or the gap is open. Implied
-    (``collide._implied``): a contact row of the pair with the same normal (cosine at
-    least 1 - 1e-12) and a depth at least the row's less ``IMPLIED_ROUND_OFF``.
+    A circle c (radius r) and a box b (bounding radius R, half-extents): the circle's
+    centre at the step's end in the box's end frame (``trig`` columns 4, 5 of the box,
+    ``analytic_contacts``), the box field there, its surface point at the end carried
+    back to the box's material point (columns 6 to 9), the gap along the end normal; kept
+    when under the pair's margin (margin + reach_i + reach_j, m) and the box turns by
+    more than ``slop`` at R or the gap is open. Implied: a contact of the pair (pair keys
+    ``key`` (K,) = body_a B + body_b, sorted, with ``normal_now`` (K, 2) and
+    ``depth_now`` (K,)) with the same normal (cosine at least 1 - 1e-12) and a depth at
+    least the row's less ``IMPLIED_ROUND_OFF``. Other arguments as ``analytic_contacts``.
+
+    Returns body_a, body_b (N,) int64 (body_a < body_b), point (N, 2), normal (N, 2) a ->
+    b, depth (N,), feature (N,) int64: the kept rows, in pair order.
     """
-    i, j = min(c, b), max(c, b)
-    turning = abs(angular_velocity[b]) * radius_b * dt > slop
-    pair_margin = (margin + reach[i]) + reach[j]
-    cex = position[c, 0] + velocity[c, 0] * dt
-    cey = position[c, 1] + velocity[c, 1] * dt
-    bex = position[b, 0] + velocity[b, 0] * dt
-    bey = position[b, 1] + velocity[b, 1] * dt
-    vx, vy = cex - bex, cey - bey
-    cl, sl = trig[b, 4], trig[b, 5]
-    value, gx, gy = _box_field(cl * vx - sl * vy, sl * vx + cl * vy, hx, hy)
-    length = math.hypot(gx, gy)
-    if length > TINY:
-        gx = gx / length
-        gy = gy / length
-    else:
-        gx = 1.0
-        gy = 0.0
-    cw, sw = trig[b, 6], trig[b, 7]
-    ox = cw * gx - sw * gy                                  # n', out of b
-    oy = sw * gx + cw * gy
-    qx = (cex - value * ox) - bex                           # q' - x'_b
-    qy = (cey - value * oy) - bey
-    ct, st = trig[b, 8], trig[b, 9]
-    mx = position[b, 0] + (ct * qx - st * qy)               # q0
-    my = position[b, 1] + (st * qx + ct * qy)
-    nx, ny = -ox, -oy                                       # circle -> b
-    gap = (nx * (mx - position[c, 0]) + ny * (my - position[c, 1])) - radius_c
-    if not (gap < pair_margin and (turning or gap > 0.0)):
-        return k
-    gap = gap if gap >= 0.0 else 0.0
-    if turning:
-        px = mx - (0.5 * gap) * nx
-        py = my - (0.5 * gap) * ny
-    else:
-        px = position[c, 0] + (radius_c + 0.5 * gap) * nx
-        py = position[c, 1] + (radius_c + 0.5 * gap) * ny
-    if c > b:                                               # rows are body_a < body_b
-        nx, ny = -nx, -ny
-    for r in range(k - found, k):
-        if (normal[r, 0] * nx + normal[r, 1] * ny >= 1.0 - 1e-12
-                and depth[r] >= -gap - IMPLIED_ROUND_OFF):
-            return k
-    body_a[k], body_b[k] = np.int64(i), np.int64(j)
-    point[k, 0], point[k, 1] = px, py
-    normal[k, 0], normal[k, 1] = nx, ny
-    depth[k] = -gap
-    feature[k] = _PREDICTED_KEY
-    return k + 1
+    n = chosen.shape[0]
+    n_bodies = np.int64(position.shape[0])
+    body_a = np.empty(n, np.int64)
+    body_b = np.empty(n, np.int64)
+    point = np.empty((n, 2))
+    normal = np.empty((n, 2))
+    depth = np.empty(n)
+    ushape = unsigned(body_shape)
+    k = 0
+    for q in range(n):
+        i = np.int64(pairs[chosen[q], 0])
+        j = np.int64(pairs[chosen[q], 1])
+        c, b = (i, j) if shape_class[ushape[i]] == CIRCLE else (j, i)
+        radius_c = shape_radius[ushape[c]]
+        sb = ushape[b]
+        turning = abs(angular_velocity[b]) * shape_radius[sb] * dt > slop
+        pair_margin = (margin + reach[i]) + reach[j]
+        cex = position[c, 0] + velocity[c, 0] * dt
+        cey = position[c, 1] + velocity[c, 1] * dt
+        bex = position[b, 0] + velocity[b, 0] * dt
+        bey = position[b, 1] + velocity[b, 1] * dt
+        vx, vy = cex - bex, cey - bey
+        cl, sl = trig[b, 4], trig[b, 5]
+        value, gx, gy = _box_field(cl * vx - sl * vy, sl * vx + cl * vy, shape_half[sb, 0],
+                                   shape_half[sb, 1])
+        length = math.hypot(gx, gy)
+        if length > TINY:
+            gx = gx / length
+            gy = gy / length
+        else:
+            gx = 1.0
+            gy = 0.0
+        cw, sw = trig[b, 6], trig[b, 7]
+        ox = cw * gx - sw * gy                                  # n', out of b
+        oy = sw * gx + cw * gy
+        qx = (cex - value * ox) - bex                           # q' - x'_b
+        qy = (cey - value * oy) - bey
+        ct, st = trig[b, 8], trig[b, 9]
+        mx = position[b, 0] + (ct * qx - st * qy)               # q0
+        my = position[b, 1] + (st * qx + ct * qy)
+        nx, ny = -ox, -oy                                       # circle -> b
+        gap = (nx * (mx - position[c, 0]) + ny * (my - position[c, 1])) - radius_c
+        if not (gap < pair_margin and (turning or gap > 0.0)):
+            continue
+        gap = gap if gap >= 0.0 else 0.0
+        if turning:
+            px = mx - (0.5 * gap) * nx
+            py = my - (0.5 * gap) * ny
+        else:
+            px = position[c, 0] + (radius_c + 0.5 * gap) * nx
+            py = position[c, 1] + (radius_c + 0.5 * gap) * ny
+        if c > b:                                               # rows are body_a < body_b
+            nx, ny = -nx, -ny
+        wanted = i * n_bodies + j
+        implied = False
+        for r in range(np.searchsorted(key, wanted), key.shape[0]):
+            if key[r] != wanted:
+                break
+            if (normal_now[r, 0] * nx + normal_now[r, 1] * ny >= 1.0 - 1e-12
+                    and depth_now[r] >= -gap - IMPLIED_ROUND_OFF):
+                implied = True
+                break
+        if implied:
+            continue
+        body_a[k], body_b[k] = i, j
+        point[k, 0], point[k, 1] = px, py
+        normal[k, 0], normal[k, 1] = nx, ny
+        depth[k] = -gap
+        k += 1
+    return (body_a[:k], body_b[:k], point[:k], normal[:k], depth[:k],
+            np.full(k, _PREDICTED_KEY, np.int64))
 
 
 @njit(cache=True)
