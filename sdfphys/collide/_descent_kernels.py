@@ -87,6 +87,7 @@ from ._descent_paths import (
     SIGMA,
     SLOW,
     STATIONARY,
+    STATIONARY_PAIR,
     TINY,
     TRIANGLE,
     _bundle_free,
@@ -170,10 +171,11 @@ def _shape_code(code: float, plane_x: float, plane_y: float, gx: float, gy: floa
 
 @njit(cache=True, error_model="numpy")
 def _moving(kind: int, v: tuple, steep: tuple, sigma: float) -> tuple[bool, float, float]:
-    """Whether the steepest path ``steep`` leaves b (a projected gradient that does
-    not vanish), and its dq/ds there (read at s = PROBE sigma, past any corner)."""
+    """Whether the steepest path ``steep`` leaves b (a projected gradient longer than
+    ``STATIONARY``, ``STATIONARY_PAIR`` for a field pair), and its dq/ds there (read at
+    s = PROBE sigma, past any corner)."""
     _, _, dqx, dqy = _path(kind, v, steep, PROBE * sigma)
-    return _norm(dqx, dqy) > STATIONARY, dqx, dqy
+    return _norm(dqx, dqy) > (STATIONARY if kind == TRIANGLE else STATIONARY_PAIR), dqx, dqy
 
 
 @njit(cache=True, error_model="numpy", refcounts=False)

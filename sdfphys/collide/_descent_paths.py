@@ -41,6 +41,14 @@ GUARD = 1e-3
 PROBE = 1e-9
 #: A projected gradient shorter than this (unit gradients) means a stationary point.
 STATIONARY = 1e-12
+#: ... of a field pair's objective (``PAIR``). Where the two surfaces balance, the
+#: projected gradient is the min-norm element of the two planes' hull, about e kappa at
+#: a distance e along the contact's tangent from its minimum (kappa, 1/m, the two
+#: surfaces' curvatures apart); the rounds after it falls under 1e-8 moved the point by
+#: a tenth of a micrometre and the depth by 1e-14 m (the showcase's field-field queries:
+#: 10 % fewer evaluations, the same contacts and keys). 1e-7 turns two circles' normal
+#: by more than 1e-9 (tests/test_descent.py). docs/performance.md, "2026-11-29, session 30".
+STATIONARY_PAIR = 1e-8
 #: The Barzilai-Borwein scale stays within this factor of the last step's scale.
 BB_RANGE = 16.0
 #: Two unit gradients with cosine below 1 - KINK are taken as the two sides of a kink.

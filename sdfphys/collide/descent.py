@@ -83,7 +83,8 @@ superlinearly. A round without decrease divides the scale by 64 and brackets
 the first ladder step, so the next round searches finely around b; a second
 such round ends the descent, as does a zero projected gradient (b is a vertex
 whose normal cone contains -grad f, or the two fields' gradients are
-antiparallel and balanced) or an accepted step shorter than ``tol``. phi never
+antiparallel and balanced; for a field pair, one shorter than
+``_descent_paths.STATIONARY_PAIR``) or an accepted step shorter than ``tol``. phi never
 increases: whatever the budget, the returned point is the best one seen.
 
 What the starts of a triangle tell
