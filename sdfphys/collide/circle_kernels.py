@@ -56,7 +56,7 @@ import numpy as np
 
 from .._jit import njit
 from ..solver.pair_rows import unsigned
-from ..vec2 import TINY
+from ..vec2 import TINY, unit_or
 from .broadphase import body_box
 from .polygons import clip_pair
 from .predicted import IMPLIED_ROUND_OFF, SOURCE_PREDICTED
@@ -393,13 +393,7 @@ def predicted_box_rows(chosen: np.ndarray, pairs: np.ndarray, body_shape: np.nda
         cl, sl = trig[b, 4], trig[b, 5]
         value, gx, gy = _box_field(cl * vx - sl * vy, sl * vx + cl * vy, shape_half[sb, 0],
                                    shape_half[sb, 1])
-        length = math.hypot(gx, gy)
-        if length > TINY:
-            gx = gx / length
-            gy = gy / length
-        else:
-            gx = 1.0
-            gy = 0.0
+        gx, gy = unit_or(gx, gy, 1.0, 0.0)                     # sdf.safe_normalize's
         cw, sw = trig[b, 6], trig[b, 7]
         ox = cw * gx - sw * gy                                  # n', out of b
         oy = sw * gx + cw * gy
