@@ -87,6 +87,7 @@ from .filter import PairFilter
 from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
 from .polygons import SOURCE_CLIP, polygon_table
 from .predicted import (
+    IMPLIED_COSINE,
     IMPLIED_ROUND_OFF,
     predicted_contacts,
     predicted_field_contacts,
@@ -357,8 +358,9 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     pairs = _candidates(boxes, movable, exclude, n, pair_filter, cache)
     shape_class = tables.shape_class
     predict = bool(settings.predicted_contacts and tables.mixed)
-    # Circle-box pairs' predicted rows are made with the contacts, unless a sensor could
-    # be among them (``_with_predicted`` leaves sensor pairs out).
+    # Circle-box pairs' predicted rows are made right after the fast path
+    # (``predicted_box_rows``), unless a sensor could be among them
+    # (``_with_predicted`` leaves sensor pairs out).
     box_rows = predict and (pair_filter is None or not pair_filter.has_sensors)
     trig = np.empty((n, 10 if box_rows else 4))
     box_body = np.flatnonzero(shape_class[body_shape] == BOX) if tables.mixed else ()
@@ -380,13 +382,13 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         int(settings.contacts_per_pair), velocity, angular_velocity, float(settings.dt),
         predict, box_rows)
     if len(box_chosen):             # the circle-box pairs' predicted rows, in pair order
+        key = a * np.int64(n) + b
         rows = predicted_box_rows(
             box_chosen, pairs.view(np.uint64), body_shape, shape_class, radius, tables.half,
             position, velocity, angular_velocity, trig, reach, float(margin),
-            float(settings.linear_slop), float(settings.dt), a * np.int64(n) + b, normal, depth)
+            float(settings.linear_slop), float(settings.dt), key, normal, depth)
         if len(rows[0]):            # each after its pair's contact (feature 0 < its)
-            order = merge_order(2 * (a * np.int64(n) + b),
-                                2 * (rows[0] * np.int64(n) + rows[1]) + 1)
+            order = merge_order(2 * key, 2 * (rows[0] * np.int64(n) + rows[1]) + 1)
             a, b, point, normal, depth, feature = (
                 np.concatenate([mine, theirs])[order]
                 for mine, theirs in zip((a, b, point, normal, depth, feature), rows,
@@ -488,7 +490,7 @@ def _implied(contacts: Contacts, extra: Contacts, n: np.int64) -> np.ndarray:
     move along one normal, so the predicted row would only repeat it (a circle falling
     on or rolling along a flat face)."""
     owner, row = contacts.pair_rows(extra, n)
-    same = np.einsum("ij,ij->i", contacts.normal[row], extra.normal[owner]) >= 1.0 - 1e-12
+    same = np.einsum("ij,ij->i", contacts.normal[row], extra.normal[owner]) >= IMPLIED_COSINE
     repeats = same & (contacts.depth[row] >= extra.depth[owner] - IMPLIED_ROUND_OFF)
     implied = np.zeros(len(extra), bool)
     np.logical_or.at(implied, owner, repeats)

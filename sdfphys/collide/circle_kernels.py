@@ -59,7 +59,7 @@ from ..solver.pair_rows import unsigned
 from ..vec2 import TINY, unit_or
 from .broadphase import body_box
 from .polygons import clip_pair
-from .predicted import IMPLIED_ROUND_OFF, SOURCE_PREDICTED
+from .predicted import IMPLIED_COSINE, IMPLIED_ROUND_OFF, SOURCE_PREDICTED
 
 __all__ = ["BOX", "CIRCLE", "OTHER", "POLYGON", "analytic_contacts", "merge_order",
            "predicted_box_rows", "reach_and_boxes"]
@@ -362,8 +362,8 @@ def predicted_box_rows(chosen: np.ndarray, pairs: np.ndarray, body_shape: np.nda
     when under the pair's margin (margin + reach_i + reach_j, m) and the box turns by
     more than ``slop`` at R or the gap is open. Implied: a contact of the pair (pair keys
     ``key`` (K,) = body_a B + body_b, sorted, with ``normal_now`` (K, 2) and
-    ``depth_now`` (K,)) with the same normal (cosine at least 1 - 1e-12) and a depth at
-    least the row's less ``IMPLIED_ROUND_OFF``. Other arguments as ``analytic_contacts``.
+    ``depth_now`` (K,)) with the same normal (cosine at least ``IMPLIED_COSINE``) and a
+    depth at least the row's less ``IMPLIED_ROUND_OFF``. Other arguments as ``analytic_contacts``.
 
     Returns body_a, body_b (N,) int64 (body_a < body_b), point (N, 2), normal (N, 2) a ->
     b, depth (N,), feature (N,) int64: the kept rows, in pair order.
@@ -420,7 +420,7 @@ def predicted_box_rows(chosen: np.ndarray, pairs: np.ndarray, body_shape: np.nda
         for r in range(np.searchsorted(key, wanted), key.shape[0]):
             if key[r] != wanted:
                 break
-            if (normal_now[r, 0] * nx + normal_now[r, 1] * ny >= 1.0 - 1e-12
+            if (normal_now[r, 0] * nx + normal_now[r, 1] * ny >= IMPLIED_COSINE
                     and depth_now[r] >= -gap - IMPLIED_ROUND_OFF):
                 implied = True
                 break

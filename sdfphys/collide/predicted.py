@@ -92,8 +92,9 @@ from ..vec2 import rotate
 from .contacts import Contacts
 from .curvature import curvature_radii
 
-__all__ = ["FIELD_PAIR", "IMPLIED_ROUND_OFF", "SOURCE_PREDICTED", "predicted_contacts",
-           "predicted_field_contacts", "predicted_mesh_contacts", "predicted_pairs"]
+__all__ = ["FIELD_PAIR", "IMPLIED_COSINE", "IMPLIED_ROUND_OFF", "SOURCE_PREDICTED",
+           "predicted_contacts", "predicted_field_contacts", "predicted_mesh_contacts",
+           "predicted_pairs"]
 
 #: Feature key source of predicted contacts (``narrowphase``'s key layout).
 SOURCE_PREDICTED = 6
@@ -109,8 +110,10 @@ NEW_FACE_ANGLE = 0.05
 
 #: Separations of a pair's contact and of its predicted contact along one normal that
 #: differ by less than this (m) are equal: the two are computed by different paths
-#: (a narrowphase, a field at the end pose), whose round-off differs by ~1e-16 m.
+#: (a narrowphase, a field at the end pose), whose round-off differs by ~1e-16 m ...
 IMPLIED_ROUND_OFF = 1e-9
+#: ... and so are two unit normals whose cosine is at least this (``collide._implied``).
+IMPLIED_COSINE = 1.0 - 1e-12
 
 
 def _turns(angular_velocity: np.ndarray, radius: np.ndarray, dt: float,
