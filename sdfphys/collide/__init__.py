@@ -368,12 +368,6 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         a_box = angle[box_body]
         trig[box_body, 0], trig[box_body, 1] = np.cos(-a_box), np.sin(-a_box)
         trig[box_body, 2], trig[box_body, 3] = np.cos(a_box), np.sin(a_box)
-        if box_rows:                           # the end pose's, as ``predicted_contacts``
-            turn = angular_velocity[box_body] * float(settings.dt)
-            end = a_box + turn
-            trig[box_body, 4], trig[box_body, 5] = np.cos(-end), np.sin(-end)
-            trig[box_body, 6], trig[box_body, 7] = np.cos(end), np.sin(end)
-            trig[box_body, 8], trig[box_body, 9] = np.cos(-turn), np.sin(-turn)
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     (a, b, point, normal, depth, feature, rest, n_circles, n_boxes, n_polygons, chosen,
      box_chosen) = analytic_contacts(
@@ -382,6 +376,14 @@ def find_contacts(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         int(settings.contacts_per_pair), velocity, angular_velocity, float(settings.dt),
         predict, box_rows)
     if len(box_chosen):             # the circle-box pairs' predicted rows, in pair order
+        # The picked boxes' end-pose trig, as ``predicted_contacts`` takes it.
+        i, j = pairs[box_chosen, 0], pairs[box_chosen, 1]
+        box = np.where(shape_class[body_shape[i]] == BOX, i, j)
+        turn = angular_velocity[box] * float(settings.dt)
+        end = angle[box] + turn
+        trig[box, 4], trig[box, 5] = np.cos(-end), np.sin(-end)
+        trig[box, 6], trig[box, 7] = np.cos(end), np.sin(end)
+        trig[box, 8], trig[box, 9] = np.cos(-turn), np.sin(-turn)
         key = a * np.int64(n) + b
         rows = predicted_box_rows(
             box_chosen, pairs.view(np.uint64), body_shape, shape_class, radius, tables.half,

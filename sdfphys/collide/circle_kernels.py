@@ -147,8 +147,8 @@ def analytic_contacts(pairs: np.ndarray, body_shape: np.ndarray, shape_class: np
     shape_radius: (S,) m, bounding radii (a circle's radius; the predicted rows' turning
     test reads the others'); shape_half: (S, 2) m, half-extents (boxes);
     polygons: ``polygons.polygon_table`` of the shapes (boxes and convex polygons);
-    position: (B, 2) centres of mass, m; angle: (B,) rad; trig: (B, 4)
-    ``[cos(-a), sin(-a), cos(a), sin(a)]`` of each box body's angle a (numpy's
+    position: (B, 2) centres of mass, m; angle: (B,) rad; trig: (B, 4 or more), columns
+    0 to 3 ``[cos(-a), sin(-a), cos(a), sin(a)]`` of each box body's angle a (numpy's
     values; other rows unused); reach: (B,) m; margin: m, the speculative distance;
     slop: m, ``Settings.linear_slop``; budget: ``Settings.contacts_per_pair``.
 
@@ -356,14 +356,17 @@ def predicted_box_rows(chosen: np.ndarray, pairs: np.ndarray, body_shape: np.nda
     (``collide._implied``).
 
     A circle c (radius r) and a box b (bounding radius R, half-extents): the circle's
-    centre at the step's end in the box's end frame (``trig`` columns 4, 5 of the box,
-    ``analytic_contacts``), the box field there, its surface point at the end carried
-    back to the box's material point (columns 6 to 9), the gap along the end normal; kept
-    when under the pair's margin (margin + reach_i + reach_j, m) and the box turns by
-    more than ``slop`` at R or the gap is open. Implied: a contact of the pair (pair keys
-    ``key`` (K,) = body_a B + body_b, sorted, with ``normal_now`` (K, 2) and
+    centre at the step's end in the box's end frame, the box field there, its surface
+    point at the end carried back to the box's material point, the gap along the end
+    normal; kept when under the pair's margin (margin + reach_i + reach_j, m) and the box
+    turns by more than ``slop`` at R or the gap is open. Implied: a contact of the pair
+    (pair keys ``key`` (K,) = body_a B + body_b, sorted, with ``normal_now`` (K, 2) and
     ``depth_now`` (K,)) with the same normal (cosine at least ``IMPLIED_COSINE``) and a
-    depth at least the row's less ``IMPLIED_ROUND_OFF``. Other arguments as ``analytic_contacts``.
+    depth at least the row's less ``IMPLIED_ROUND_OFF``. trig (B, 10): as
+    ``analytic_contacts`` takes it and, in columns 4 to 9 of each box given, ``[cos(-a'),
+    sin(-a'), cos(a'), sin(a'), cos(-w dt), sin(-w dt)]`` of its end angle a' = a + w dt
+    (numpy's values, as ``predicted_contacts`` turns by them). Other arguments as
+    ``analytic_contacts``.
 
     Returns body_a, body_b (N,) int64 (body_a < body_b), point (N, 2), normal (N, 2) a ->
     b, depth (N,), feature (N,) int64: the kept rows, in pair order.
