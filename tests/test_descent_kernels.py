@@ -157,3 +157,79 @@ def test_a_triangles_answer_does_not_depend_on_its_batch(spec):
     point2, value2 = descent.triangle_deepest(f, tri[shuffled])
     np.testing.assert_array_equal(point2, point[shuffled])
     np.testing.assert_array_equal(value2, value[shuffled])
+
+
+# --------------------------------------------------------------------------------------
+# The osculating point of a field pair (_descent_paths._osculating_point)
+# --------------------------------------------------------------------------------------
+
+def osculating_point(b: np.ndarray, prior: np.ndarray, fields) -> tuple[bool, np.ndarray]:
+    """``_osculating_point`` of one start at b with its prior point, fields (fa, fb): callables
+    x -> (value, gradient) in a's frame."""
+    (fa, ga), (fb, gb) = fields[0](b), fields[1](b)
+    found, x, y = paths._osculating_point(fa, fb, *ga, *gb, *b, *prior, *fields[0](prior)[1],
+                                      *fields[1](prior)[1])
+    return found, np.array([x, y])
+
+
+def circle(centre: np.ndarray, radius: float):
+    return lambda x: (np.hypot(*(x - centre)) - radius, (x - centre) / np.hypot(*(x - centre)))
+
+
+def plane(normal: np.ndarray, offset: float):
+    """f(x) = n . x - offset (n unit)."""
+    return lambda x: (normal @ x - offset, normal.copy())
+
+
+def test_the_osculating_point_of_two_circles_is_their_contact():
+    """Circles are their own osculating circles: from any b and prior point (gradients
+    that turn between them), the point is the balanced deepest point of the two exact
+    fields, on the line through the centres midway between the surfaces (overlapping or
+    apart; not nested, where f_a - f_b keeps its sign along that line)."""
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        ca, cb = rng.uniform(-1.0, 1.0, 2), rng.uniform(-1.0, 1.0, 2)
+        gap = np.hypot(*(cb - ca))
+        ra = rng.uniform(0.1, 1.0)
+        rb = rng.uniform(max(0.05, ra - 0.9 * gap), ra + 0.9 * gap)
+        e = (cb - ca) / gap
+        b = 0.5 * (ca + cb) + rng.uniform(-0.3, 0.3, 2)
+        prior = b + rng.uniform(-2.0, 2.0, 2)
+        found, point = osculating_point(b, prior, (circle(ca, ra), circle(cb, rb)))
+        assert found
+        np.testing.assert_allclose(point, ca + 0.5 * (gap + ra - rb) * e, atol=1e-9)
+
+
+def test_the_osculating_point_of_a_circle_and_a_plane_is_their_contact():
+    """A plane does not turn its gradient: it is modelled by itself, and the point lies
+    on the normal through the circle's centre, midway between the plane and the
+    circle."""
+    rng = np.random.default_rng(6)
+    for _ in range(200):
+        c, r = rng.uniform(-1.0, 1.0, 2), rng.uniform(0.1, 1.0)
+        angle = rng.uniform(0.0, 2.0 * np.pi)
+        n = np.array([np.cos(angle), np.sin(angle)])
+        height = rng.uniform(0.05 - r, r + 0.3)        # the centre above -r: they balance
+        offset = n @ c - height
+        b = c - 0.5 * height * n + rng.uniform(-0.3, 0.3, 2)
+        prior = b + rng.uniform(-2.0, 2.0, 2)
+        for fields, sign in (((plane(n, offset), circle(c, r)), 1.0),
+                             ((circle(c, r), plane(n, offset)), 1.0)):
+            found, point = osculating_point(b, prior, fields)
+            assert found
+            np.testing.assert_allclose(point, c - 0.5 * (height + r) * n * sign, atol=1e-9)
+
+
+def test_two_opposed_planes_balance_and_two_planes_that_do_not_oppose_give_nothing():
+    """Two flat fields: the point is b moved onto their mid-plane when they oppose (every
+    point of it is a minimum); none when their gradients do not oppose."""
+    rng = np.random.default_rng(7)
+    n = np.array([0.6, 0.8])
+    b, prior = rng.uniform(-1.0, 1.0, 2), rng.uniform(-1.0, 1.0, 2)
+    found, point = osculating_point(b, prior, (plane(n, 0.3), plane(-n, 0.1)))
+    assert found
+    # f_a = n.x - 0.3 and f_b = -n.x - 0.1 balance where n.x = 0.1, moved along n.
+    np.testing.assert_allclose(n @ point, 0.1, atol=1e-12)
+    np.testing.assert_allclose(point - b, (n @ (point - b)) * n, atol=1e-12)
+    tilted = np.array([0.8, -0.6])
+    assert not osculating_point(b, prior, (plane(n, 0.3), plane(tilted, 0.1)))[0]

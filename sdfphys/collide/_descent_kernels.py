@@ -17,13 +17,16 @@ State of P starts, updated in place (columns named by the constants below):
   the second plane of the bundle (point, value, gradient), the path of the line
   search in progress (``PATH``: 8 parameters, see ``_proximal_step``) and its
   bracket ends (s, value, slope), the step scale sigma (path units), the
-  Barzilai-Borwein memory (last b, last direction), and per round the slope of
-  the steepest path at s = 0 and the ladder's scale.
+  Barzilai-Borwein memory (last b, last direction), per round the slope of
+  the steepest path at s = 0 and the ladder's scale, and (PAIR) the prior best
+  point with the two fields' gradients there.
 - ``flags`` (P, N_FLAGS) int64: bracketed, rounds without decrease in a row,
   rounds run, BB memory usable, per round the number and offset of the start's
   candidates and whether its steepest ladder ended at the path's end, whether
-  the minimiser of its triangle's model (cone or cuts) was tried, and whether
-  its last continued line search shrank its bracket less than half.
+  the minimiser of its triangle's model (cone or cuts) was tried, whether
+  its last continued line search shrank its bracket less than half, and (PAIR)
+  whether the prior point is set and whether the osculating point won the last
+  round (then proposed alone).
 - ``running`` (P,) int64: the indices of the running starts (the leading R).
 - ``data`` (P, kd): the problem's data at b (TRIANGLE: the gradient).
 
@@ -57,6 +60,7 @@ from ._descent_paths import (
     BRACKETED,
     COLUMN_BUNDLE,
     COLUMN_MODEL,
+    COLUMN_OSCULATING,
     CONE,
     COUNT,
     D0,
@@ -68,6 +72,7 @@ from ._descent_paths import (
     GRAD,
     GUARD,
     HAS_PREVIOUS,
+    HAS_PRIOR,
     KINK,
     LADDER,
     LEFT,
@@ -75,10 +80,12 @@ from ._descent_paths import (
     N_COLUMNS,
     N_RUNGS,
     OFFSET,
+    OSCULATING,
     PARALLEL,
     PHI,
     PLANE,
     PREVIOUS,
+    PRIOR,
     PROBE,
     RIGHT,
     ROUNDS,
@@ -103,6 +110,7 @@ from ._descent_paths import (
     _stored_path,
     _unit,
     _vertices,
+    osculating_point_shared,
 )
 
 # --------------------------------------------------------------------------------------
@@ -189,7 +197,7 @@ def _most_candidates(kind: int, owner: np.ndarray, shape: np.ndarray, state: np.
         total += N_RUNGS - 1
     if flags[i, BRACKETED]:
         total += 2
-    return total
+    return total + (1 if kind != TRIANGLE else 0)            # the osculating point
 
 
 @njit(cache=True, error_model="numpy")
@@ -216,12 +224,14 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
     value and gradient of f at each vertex, NaN where unknown; shape (T, 4): what
     f is over the triangle (``triangle_known``): on a plane the steepest path runs
     straight to its end and only the end is evaluated; on a cone or cuts the start
-    tries the model's minimiser first. Stops the starts whose projected gradient
-    vanishes; writes the per-round columns of ``state`` and ``flags`` and the
-    candidates (rows 0..C-1 of ``cand``, ``cand_i``).
+    tries the model's minimiser first. A field pair's start adds its osculating point
+    (``_osculating_point``), alone when it won the last round. Stops the starts whose
+    projected gradient vanishes; writes the per-round columns of ``state`` and
+    ``flags`` and the candidates (rows 0..C-1 of ``cand``, ``cand_i``).
     """
     # Paths of a round (rows: steepest, bundle, the line search's) and the plan of
-    # a start's candidates: path (-1: the model's minimiser), step, column,
+    # a start's candidates: path (-1: the model's minimiser, 3: the osculating point),
+    # step, column,
     # candidate it may repeat (-1: none), and whether it is the steepest path's end.
     plan_path = np.empty(N_COLUMNS, dtype=np.int64)
     plan_s = np.empty(N_COLUMNS)
@@ -248,7 +258,22 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
         state[i, D0] = state[i, GRAD] * dqx + state[i, GRAD + 1] * dqy
         count = 0
         end, end_dx, end_dy = np.inf, 0.0, 0.0
-        if code >= CONE and flags[i, MODEL] == 0:
+        # A field pair's osculating point (once b has a prior point), alone when it won
+        # the last round.
+        osculating, model_x, model_y = False, 0.0, 0.0
+        if kind != TRIANGLE and flags[i, HAS_PRIOR]:
+            osculating, model_x, model_y = osculating_point_shared(
+                data[i, 0], data[i, 1], data[i, 2], data[i, 3], data[i, 4], data[i, 5],
+                state[i, BEST], state[i, BEST + 1], state[i, PRIOR], state[i, PRIOR + 1],
+                state[i, PRIOR + 2], state[i, PRIOR + 3], state[i, PRIOR + 4],
+                state[i, PRIOR + 5])
+        alone = osculating and flags[i, OSCULATING] == 1
+        flags[i, OSCULATING] = 2 if alone else 0
+        if alone:
+            plan_path[0], plan_s[0], plan_twin[0], plan_end[0] = 3, 0.0, -1, False
+            count = 1
+            osculating = False
+        elif code >= CONE and flags[i, MODEL] == 0:
             # The model's minimiser, shared by the starts of the triangle.
             flags[i, MODEL] = 1
             plan_path[0], plan_s[0], plan_twin[0], plan_end[0] = -1, 0.0, -1, False
@@ -340,9 +365,13 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                 plan_path[count + 1], plan_s[count + 1], plan_twin[count + 1] = 2, s_second, count
                 plan_end[count] = plan_end[count + 1] = False
                 count += 2
+        if osculating:
+            plan_path[count], plan_s[count], plan_twin[count], plan_end[count] = 3, 0.0, -1, False
+            count += 1
 
         # The plan's candidates; columns: steepest rungs from 0, bundle rungs from
-        # COLUMN_BUNDLE, model points from COLUMN_MODEL (the model's minimiser: 0).
+        # COLUMN_BUNDLE, model points from COLUMN_MODEL (the model's minimiser: 0), the
+        # osculating point COLUMN_OSCULATING.
         start = n
         rung = bundle_rung = model = 0
         for j in range(count):
@@ -350,6 +379,9 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             if which < 0:
                 x, y, dx, dy = shape[t, 1], shape[t, 2], 0.0, 0.0
                 col = 0
+            elif which == 3:
+                x, y, dx, dy = model_x, model_y, 0.0, 0.0
+                col = COLUMN_OSCULATING
             else:
                 x, y, dx, dy = _path(kind, v, steep if which == 0 else
                                      (bundle if which == 1 else search), plan_s[j])
@@ -509,18 +541,28 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             has = flags[i, BRACKETED] != 0
             width = state[i, RIGHT] - state[i, LEFT]
             if has:
-                for c in range(COLUMN_MODEL, N_COLUMNS):
+                for c in range(COLUMN_MODEL, COLUMN_OSCULATING):
                     s = cand[where[c], 0]
                     if state[i, LEFT] < s < state[i, RIGHT]:
                         end = LEFT if slope[c] < 0.0 and table[c] <= state[i, LEFT + 1] else RIGHT
                         state[i, end], state[i, end + 1], state[i, end + 2] = s, table[c], slope[c]
-                if improved and win >= COLUMN_MODEL:
+                if improved and COLUMN_MODEL <= win < COLUMN_OSCULATING:
                     new_sigma = _max(moved, 0.25 * scale)
             # A continued line search whose models failed to halve the bracket gets
             # ladders again next round (the bracket holds more than one kink or bend).
             flags[i, SLOW] = rungs[0] == 0 and state[i, RIGHT] - state[i, LEFT] > 0.5 * width
 
-            if improved and win < COLUMN_MODEL:
+            alone = flags[i, OSCULATING] == 2
+            flags[i, OSCULATING] = 1 if improved and win == COLUMN_OSCULATING else 0
+            if win == COLUMN_OSCULATING and improved:
+                # The osculating point won: the next round tries the next one alone.
+                has = False
+                new_sigma = scale
+            elif alone:
+                # It failed alone: the ladders come back next round, at the same scale.
+                has = False
+                new_sigma = scale
+            elif improved and win < COLUMN_MODEL:
                 # (b) A ladder winner at rung k starts a new line search on its path,
                 #     bracketed by its neighbours (k - 1, k) if phi' >= 0 there, else
                 #     (k, k + 1); open (no bracket) past the last rung, where the scale
@@ -594,6 +636,11 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
 
             # Commit.
             if improved:
+                if kind != TRIANGLE:
+                    state[i, PRIOR], state[i, PRIOR + 1] = state[i, BEST], state[i, BEST + 1]
+                    for c in range(4):
+                        state[i, PRIOR + 2 + c] = data[i, 2 + c]
+                    flags[i, HAS_PRIOR] = 1
                 state[i, BEST], state[i, BEST + 1], state[i, PHI] = new_x, new_y, phi_win
                 state[i, GRAD], state[i, GRAD + 1] = new_gx, new_gy
                 src = cand_i[w, 1]
@@ -604,7 +651,10 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
                     data[i, 0], data[i, 1] = new_gx, new_gy
             flags[i, BRACKETED] = has and state[i, RIGHT] > state[i, LEFT]
             state[i, SIGMA] = _max(new_sigma, TINY)
-            flags[i, FAILS] = 0 if improved else flags[i, FAILS] + 1
+            if improved:
+                flags[i, FAILS] = 0
+            elif not alone:
+                flags[i, FAILS] += 1
             flags[i, HAS_PREVIOUS] = improved
             keep = flags[i, FAILS] < 2 and not (improved and moved < tol)
         if keep:

@@ -63,7 +63,19 @@ each round evaluates, in one batch:
    - the crossing of the tangent lines at s_l and s_r, exact at a kink between
      two linear pieces (a polygon's medial axis, or a circle's centre along a
      ray through it: f(c + t u) = |t| - r is V-shaped);
-   both kept a fraction ``GUARD`` of the bracket away from its ends.
+   both kept a fraction ``GUARD`` of the bracket away from its ends;
+4. for a field pair, once b has a prior point, the *osculating point*
+   (``_descent_paths._osculating_point``): each field modelled by its osculating
+   circle, the centre where its gradient lines at b and at the prior point cross
+   (by its tangent plane where they do not turn), and the models' deepest balanced
+   point, on the line through the two centres. At a smooth contact this is a
+   secant Newton step on both the balance f_a = f_b and the tangent slope of
+   f_a + f_b, converging superlinearly where the ladders creep along a curved
+   ridge (a polygon's corner near a smooth surface: the ridge f_a = f_b bends
+   with the corner's distance field, and a straight step along its tangent
+   leaves it). A round whose winner is the osculating point proposes the next
+   one alone (one evaluation); the ladders come back when it fails to lower phi,
+   which does not count as a round without decrease.
 
 On a triangle, a line search whose bracket lies on one straight piece of its
 path (a slide along an edge, a straight gradient line), with b at an end of it
