@@ -9,12 +9,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from oracles import Opaque
 from test_descent import brute_minimum, closest_on_triangle
 
 from sdfphys.collide import _descent_paths as paths
 from sdfphys.collide import _descent_starts as start_kernels
-from sdfphys.collide import descent
+from sdfphys.collide import descent, field_pairs
+from sdfphys.collide._placed_fields import placed_starts
 from sdfphys.sdf import field
+from sdfphys.sdf.compiled import compile_field
 
 
 def random_triangles(count: int, rng: np.random.Generator) -> np.ndarray:
@@ -233,3 +236,27 @@ def test_two_opposed_planes_balance_and_two_planes_that_do_not_oppose_give_nothi
     np.testing.assert_allclose(point - b, (n @ (point - b)) * n, atol=1e-12)
     tilted = np.array([0.8, -0.6])
     assert not osculating_point(b, prior, (plane(n, 0.3), plane(tilted, 0.1)))[0]
+
+
+def test_starts_on_two_crossing_circles_converge_in_two_rounds():
+    """A field pair's start takes one ladder round to get a prior point, then the
+    osculating point, exact for circles, where it stops (its gradients antiparallel and
+    balanced): two rounds for every start, compiled or Python-driven (the ladders alone
+    took 4 to 13)."""
+    rng = np.random.default_rng(21)
+    for _ in range(40):
+        ra, rb = rng.uniform(0.2, 1.5, 2)
+        d = rng.uniform(abs(ra - rb) + 0.02, ra + rb - 1e-3)       # crossing, not nested
+        theta = rng.uniform(0.0, 2.0 * np.pi)
+        angle = rng.uniform(-3.0, 3.0)
+        fa, fb = field({"type": "circle", "radius": ra}), field({"type": "circle", "radius": rb})
+        _, _, rotation, offset, _, pair_of, points, sigma, tol = placed_starts(
+            np.asarray(fa.bounds(), float), np.asarray(fb.bounds(), float),
+            d * np.array([[np.cos(theta), np.sin(theta)]]), np.cos([angle]), np.sin([angle]),
+            0.0, field_pairs._starts(7))
+        compiled = descent.descend_pairs((compile_field(fa), compile_field(fb)), rotation,
+                                         offset, pair_of, points, sigma, tol.copy(), 16)
+        problem = field_pairs._PairProblem(Opaque(fa), Opaque(fb), rotation, offset, pair_of)
+        python = descent._descend(problem, points, 16, sigma, tol.copy())
+        np.testing.assert_array_equal(compiled[3], 2)
+        np.testing.assert_array_equal(python[3], 2)
