@@ -554,12 +554,9 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
 
             alone = flags[i, OSCULATING] == 2
             flags[i, OSCULATING] = 1 if improved and win == COLUMN_OSCULATING else 0
-            if win == COLUMN_OSCULATING and improved:
-                # The osculating point won: the next round tries the next one alone.
-                has = False
-                new_sigma = scale
-            elif alone:
-                # It failed alone: the ladders come back next round, at the same scale.
+            if alone or (improved and win == COLUMN_OSCULATING):
+                # The osculating point won (the next round tries the next one alone) or
+                # failed alone (the ladders come back): no bracket, the same scale.
                 has = False
                 new_sigma = scale
             elif improved and win < COLUMN_MODEL:

@@ -411,15 +411,14 @@ def _along(curved: bool, t: float, v: float, s: float, f: float, k: float, l: fl
 
 
 @njit(cache=True, error_model="numpy")
-def _root_on(curved_a: bool, curved_b: bool, ta: float, tb: float, va: float, vb: float,
-             sa: float, sb: float, fa: float, fb: float, ka: float, kb: float, la: float,
-             lb: float, lo: float, hi: float, near: float, found: bool, u: float
-             ) -> tuple[bool, float]:
-    """The balance f_a = f_b of the two models (``_along``) on their linear piece [lo,
-    hi] of the line, when it lies on it and closer to ``near`` than the root u found so
-    far (if found); else (found, u)."""
+def _root_on(curved_a: bool, curved_b: bool, tb: float, va: float, vb: float, sa: float,
+             sb: float, fa: float, fb: float, ka: float, kb: float, la: float, lb: float,
+             lo: float, hi: float, near: float, found: bool, u: float) -> tuple[bool, float]:
+    """The balance f_a = f_b of the two models (``_along``; a's centre, if curved, at 0,
+    b's at tb) on their linear piece [lo, hi] of the line, when it lies on it and closer
+    to ``near`` than the root u found so far (if found); else (found, u)."""
     inside = hi - 1.0 if lo == -np.inf else (lo + 1.0 if hi == np.inf else 0.5 * (lo + hi))
-    slope_a, at_a = _along(curved_a, ta, va, sa, fa, ka, la, inside)
+    slope_a, at_a = _along(curved_a, 0.0, va, sa, fa, ka, la, inside)
     slope_b, at_b = _along(curved_b, tb, vb, sb, fb, kb, lb, inside)
     slope = slope_a - slope_b
     if abs(slope) > 1e-12:
@@ -473,11 +472,11 @@ def _osculating_point(fa: float, fb: float, gax: float, gay: float, gbx: float,
     ka, la = fa + gax * (ox - bx) + gay * (oy - by), gax * ex + gay * ey
     kb, lb = fb + gbx * (ox - bx) + gby * (oy - by), gbx * ex + gby * ey
     near = (bx - ox) * ex + (by - oy) * ey
-    found, u = _root_on(curved_a, curved_b, 0.0, tb, va, vb, sa, sb, fa, fb, ka, kb, la, lb,
+    found, u = _root_on(curved_a, curved_b, tb, va, vb, sa, sb, fa, fb, ka, kb, la, lb,
                         -np.inf, 0.0, near, False, 0.0)
-    found, u = _root_on(curved_a, curved_b, 0.0, tb, va, vb, sa, sb, fa, fb, ka, kb, la, lb,
+    found, u = _root_on(curved_a, curved_b, tb, va, vb, sa, sb, fa, fb, ka, kb, la, lb,
                         0.0, tb, near, found, u)
-    found, u = _root_on(curved_a, curved_b, 0.0, tb, va, vb, sa, sb, fa, fb, ka, kb, la, lb,
+    found, u = _root_on(curved_a, curved_b, tb, va, vb, sa, sb, fa, fb, ka, kb, la, lb,
                         tb, np.inf, near, found, u)
     if not found:
         return False, bx, by
