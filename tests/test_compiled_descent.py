@@ -13,6 +13,7 @@ from test_descent import CIRCLE, FIELDS, UNION, random_triangles
 
 from sdfphys.collide import descent, field_pairs
 from sdfphys.sdf import compiled, field
+from sdfphys.sdf.program_table import pair_table
 
 CASES = dict(FIELDS, plain_circle=CIRCLE, union_again=UNION,
              rounded={"op": "round", "r": 0.1, "of": {"type": "box", "size": [1.0, 0.5]}},
@@ -170,9 +171,10 @@ def test_the_descent_bundles_hold_their_fields_in_order_and_type_the_shared_sign
     tri = random_triangles(f, 40, np.random.default_rng(9))
     points, owner, sigma, at_vertex = descent.start_kernels.triangle_starts(
         tri, np.ascontiguousarray(descent.START_BARYCENTRIC))
-    problem = cd.descent_problem(cd.TRIANGLE, False, 2, program, program, np.zeros((1, 2, 2)),
-                                 np.zeros((1, 2)), owner, tri, owner, at_vertex, 7, True,
-                                 False)
+    first = np.zeros(1, np.int64)
+    problem = cd.descent_problem(cd.TRIANGLE, False, 2, pair_table(program, program), first,
+                                 first, first, np.zeros((1, 2, 2)), np.zeros((1, 2)), owner, tri,
+                                 owner, at_vertex, 7, True, False)
     assert typeof(problem) == cd.PROBLEM
     tol = np.full(len(points), 1e-12)
     results = [cd.descend(problem, points, sigma, 16, tol, descent.SHAPE_TOL, work)

@@ -222,7 +222,8 @@ def test_overlap_regions_are_the_rotated_corners_extremes():
         offset = rng.uniform(-2.0, 2.0, (50, 2))
         angle = rng.uniform(-4.0, 4.0, 50)
         cos, sin = np.cos(angle), np.sin(angle)
-        got = overlap_regions(bounds_a, bounds_b, offset, cos, sin, 0.01)
+        got = overlap_regions(np.tile(bounds_a, (50, 1)), np.tile(bounds_b, (50, 1)), offset,
+                              cos, sin, np.full(50, 0.01))
         for k in range(50):
             xs = [(cos[k] * x - sin[k] * y) + offset[k, 0]
                   for x in bounds_b[[0, 2]] for y in bounds_b[[1, 3]]]

@@ -251,11 +251,13 @@ def test_starts_on_two_crossing_circles_converge_in_two_rounds():
         angle = rng.uniform(-3.0, 3.0)
         fa, fb = field({"type": "circle", "radius": ra}), field({"type": "circle", "radius": rb})
         _, _, rotation, offset, _, pair_of, points, sigma, tol = placed_starts(
-            np.asarray(fa.bounds(), float), np.asarray(fb.bounds(), float),
+            np.array([fa.bounds()], float), np.array([fb.bounds()], float),
             d * np.array([[np.cos(theta), np.sin(theta)]]), np.cos([angle]), np.sin([angle]),
-            0.0, field_pairs._starts(7))
-        compiled = descent.descend_pairs((compile_field(fa), compile_field(fb)), rotation,
-                                         offset, pair_of, points, sigma, tol.copy(), 16)
+            np.zeros(1), field_pairs._starts(7))
+        programs = field_pairs.PairPrograms.of(compile_field(fa), compile_field(fb), 1)
+        compiled = descent.descend_pairs(programs.table, programs.prog_a, programs.prog_b,
+                                         programs.run, rotation, offset, pair_of, points, sigma,
+                                         tol.copy(), 16)
         problem = field_pairs._PairProblem(Opaque(fa), Opaque(fb), rotation, offset, pair_of)
         python = descent._descend(problem, points, 16, sigma, tol.copy())
         np.testing.assert_array_equal(compiled[3], 2)

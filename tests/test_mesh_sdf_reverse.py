@@ -203,13 +203,13 @@ def test_a_flat_sdf_skips_the_reverse_direction(field, monkeypatch):
     corner, the normal the plane's."""
     mesh_sdf = importlib.import_module("sdfphys.collide.mesh_sdf")
     calls = []
-    real = mesh_sdf.sdf_in_mesh
+    real = mesh_sdf.sdf_in_meshes
 
     def spy(*args, **kwargs):
-        calls.append(args[1].field)
+        calls.append(len(args[1]))
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(mesh_sdf, "sdf_in_mesh", spy)
+    monkeypatch.setattr(mesh_sdf, "sdf_in_meshes", spy)
     mesh = {"type": "box", "size": [1.0, 0.5]}
     c = collide({"type": "sdf", "field": field}, (0.0, 0.0, 0.0), mesh, (0.3, 0.1, 0.2))
     assert calls == []
@@ -345,14 +345,14 @@ def test_field_descent_knobs_reach_mesh_sdf_pairs(monkeypatch):
     from sdfphys.collide import field_pairs
 
     seen = []
-    real = field_pairs.placed_field_contacts
+    real = field_pairs.placed_contacts
 
     def spy(*args, **kwargs):
         given = inspect.signature(real).bind(*args, **kwargs).arguments
         seen.append((given["n_starts"], given["iterations"]))
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(field_pairs, "placed_field_contacts", spy)
+    monkeypatch.setattr(field_pairs, "placed_contacts", spy)
     settings = Settings(field_descent_starts=3, field_descent_iterations=5)
     collide(PLANK, (0.0, 0.0, 0.0), SDF_BOX, (0.3, 0.34, 0.0), settings=settings)
     assert seen == [(3, 5)]

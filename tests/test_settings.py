@@ -157,14 +157,14 @@ def test_field_descent_knobs_reach_sdf_pairs(monkeypatch):
     from sdfphys.collide import field_pairs
 
     seen = []
-    real = field_pairs.placed_field_contacts
+    real = field_pairs.placed_contacts
 
     def spy(*args, **kwargs):
         given = inspect.signature(real).bind(*args, **kwargs).arguments
         seen.append((given["n_starts"], given["iterations"]))
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(field_pairs, "placed_field_contacts", spy)
+    monkeypatch.setattr(field_pairs, "placed_contacts", spy)
     settings = Settings(field_descent_starts=3, field_descent_iterations=5,
                         descent_starts=7, descent_iterations=16)
     collide(SDF_BOX, (0.0, 0.0, 0.0), SDF_BOX, (0.0, 0.99, 0.0), margin=0.02,

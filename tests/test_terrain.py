@@ -323,3 +323,18 @@ def test_ray_casts_see_every_edit():
     w.carve("ground", {"type": "circle", "radius": 0.3}, (-2.0, 0.5))  # tables cached now
     hit = w.ray_cast(origins, down, bodies=np.array([0]))
     np.testing.assert_allclose(hit.point[:, 1], [0.2, 0.2], atol=0.05 / np.sqrt(2))
+
+
+def test_contacts_see_every_edit():
+    """The collision tables hold copies of the fields' constants (``collide.shape_fields``,
+    built at the first step after the first edit): a later edit reaches them too, and a
+    crate falls into the hole a second edit carves under it."""
+    w = _two_crates(GROUND)
+    w.carve("ground", {"type": "circle", "radius": 0.3}, (2.0, 0.5))   # the first edit
+    for _ in range(5):
+        w.step()
+    w.carve("ground", HOLE, (0.0, 0.5))                                 # tables cached now
+    for _ in range(90):
+        w.step()
+    assert w.position[2, 1] < 0.2
+    assert np.all(w.contacts.depth < 0.01)

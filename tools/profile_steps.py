@@ -33,8 +33,9 @@ Kernels against Python by stage (``--glue``; no perf, no gdb): every sdfphys ker
 called from Python is timed (the outermost call: a kernel's calls of others are
 compiled code), and so are the stages ``World.step`` runs (``world_stages``,
 ``world_sleep``), the predicted contacts (``collide._with_predicted``) and each pair
-function by kind (``collide.narrowphase.PAIR_FUNCTIONS``), each exclusive of the stages
-it calls. Printed: per stage its calls, milliseconds a step in all, in kernels and in
+function by kind (``collide.narrowphase.PAIR_FUNCTIONS``; ``BATCH_FUNCTIONS``: one call
+for all the pairs of a kind), each exclusive of the stages it calls. Printed: per stage
+its calls, milliseconds a step in all, in kernels and in
 Python (the rest: numpy and the interpreter), then the kernels' own table. Python's
 share is what batching work into fewer calls can save; a kernel's share is arithmetic
 (perf's report) or reference counts (``--refcounts``). Found so: the showcase's 6.3
@@ -289,7 +290,7 @@ def install_glue_timers() -> _Timers:
     import sdfphys.collide as collide
     import sdfphys.world_sleep as world_sleep
     import sdfphys.world_stages as world_stages
-    from sdfphys.collide.narrowphase import PAIR_FUNCTIONS
+    from sdfphys.collide.narrowphase import BATCH_FUNCTIONS, PAIR_FUNCTIONS
 
     timers = _Timers()
     wrapped: dict[int, object] = {}
@@ -313,6 +314,8 @@ def install_glue_timers() -> _Timers:
                                                f"{module.__name__.split('.')[-1]}.{name}"))
     for kinds, function in list(PAIR_FUNCTIONS.items()):
         PAIR_FUNCTIONS[kinds] = timers.stage(function, "pair " + "-".join(kinds))
+    for kinds, function in list(BATCH_FUNCTIONS.items()):
+        BATCH_FUNCTIONS[kinds] = timers.stage(function, "batch " + "-".join(kinds))
     return timers
 
 

@@ -84,7 +84,7 @@ from .circle_kernels import (
 from .contact_cache import ContactCache, body_turns
 from .contacts import Contacts
 from .filter import PairFilter
-from .narrowphase import KIND_ORDER, PAIR_FUNCTIONS
+from .narrowphase import BATCH_FUNCTIONS, KIND_ORDER, PAIR_FUNCTIONS
 from .polygons import SOURCE_CLIP, polygon_table
 from .predicted import (
     IMPLIED_COSINE,
@@ -94,6 +94,7 @@ from .predicted import (
     predicted_mesh_contacts,
 )
 from .reduce import reduce_contacts
+from .shape_fields import ShapeFields
 
 __all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "ContactCache", "Contacts", "collide",
            "compile_behind", "compile_evaluator", "find_contacts", "speculative_reach"]
@@ -133,7 +134,8 @@ class _ShapeTables:
     meshes; sdf, concave (S,) bool: sdf shapes, triangulated meshes that are not convex;
     kind_rank (S,) int64: each shape's kind's place in KIND_ORDER; mixed, any_sdf,
     any_concave: whether the shapes hold a circle and a shape that is not one, an sdf
-    shape, a concave mesh (the predicted contacts' kinds, ``_with_predicted``).
+    shape, a concave mesh (the predicted contacts' kinds, ``_with_predicted``); fields:
+    ``shape_fields.ShapeFields`` (built when first read).
     """
 
     def __init__(self, shapes: Sequence[Shape]):
@@ -153,6 +155,18 @@ class _ShapeTables:
         self.mixed = bool(np.any(circle) and not np.all(circle))
         self.any_sdf = bool(np.any(self.sdf))
         self.any_concave = bool(np.any(self.concave))
+        self.shapes = list(shapes)
+        self._fields: tuple[int, ShapeFields] | None = None
+
+    @property
+    def fields(self) -> ShapeFields:
+        """The shapes' ``ShapeFields`` (their fields' programs in one table), built on
+        first use and again after a program's constants changed in place (a terrain
+        edit, ``sdf.compiled.consts_changed``): the batched pair functions'
+        (``BATCH_FUNCTIONS``)."""
+        if self._fields is None or self._fields[0] != compiled.consts_version():
+            self._fields = (compiled.consts_version(), ShapeFields.of(self.shapes))
+        return self._fields[1]
 
 
 _TABLES: dict[tuple[Shape, ...], _ShapeTables] = {}
@@ -184,10 +198,10 @@ def speculative_reach(radius: np.ndarray, velocity: np.ndarray,
 
 
 def _groups(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray
-            ) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The pairs (P, 2) as (first, second) bodies, the lower kind first (KIND_ORDER, then
-    the lower shape index), sorted stably by their two shapes, and the [lo, hi) rows of
-    each group of pairs sharing two shapes (one pair-function call each)."""
+    the lower shape index), sorted stably by their two shapes, and the first and end
+    rows (G,) of each group of pairs sharing two shapes."""
     kind_rank = _tables(shapes).kind_rank
     sa, sb = body_shape[pairs[:, 0]], body_shape[pairs[:, 1]]
     ka, kb = kind_rank[sa], kind_rank[sb]
@@ -197,9 +211,50 @@ def _groups(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray
     group = body_shape[first] * len(shapes) + body_shape[second]
     order = np.argsort(group, kind="stable")
     first, second, group = first[order], second[order], group[order]
-    bounds = np.flatnonzero(np.diff(group)) + 1
-    return first, second, [(int(lo), int(hi)) for lo, hi
-                           in zip(np.r_[0, bounds], np.r_[bounds, len(group)]) if lo < hi]
+    lo = np.flatnonzero(np.r_[True, np.diff(group) != 0]) if len(group) else np.zeros(0, int)
+    return first, second, lo, np.r_[lo[1:], len(group)].astype(lo.dtype)
+
+
+#: The kind pairs with a batched pair function, as kind_rank[a] * 3 + kind_rank[b].
+_BATCHED = {KIND_ORDER.index(a) * 3 + KIND_ORDER.index(b): (a, b) for a, b in BATCH_FUNCTIONS}
+
+
+def _pair_calls(shapes: list[Shape], body_shape: np.ndarray, first: np.ndarray,
+                second: np.ndarray, lo: np.ndarray, hi: np.ndarray, pose: np.ndarray,
+                group_margin: np.ndarray, settings: Settings,
+                ran: set[tuple[str, str]] | None) -> list[Contacts]:
+    """The contacts of the groups [lo, hi) (G,) of pairs (first, second), each group's
+    pairs with its margin (G,) m: one batched call (``BATCH_FUNCTIONS``) per kind pair
+    for the groups whose two fields compile, a pair-function call per group for the
+    others (``_narrowphase``)."""
+    tables = _tables(shapes)
+    sa, sb = body_shape[first[lo]], body_shape[second[lo]]
+    kind = tables.kind_rank[sa] * 3 + tables.kind_rank[sb]
+    batched = np.isin(kind, list(_BATCHED))
+    if batched.any():
+        fields = tables.fields
+        batched &= (fields.program[sa] >= 0) & (fields.program[sb] >= 0)
+    parts = []
+    for g in np.flatnonzero(~batched):
+        shape_a, shape_b = shapes[sa[g]], shapes[sb[g]]
+        kinds = (shape_a.kind, shape_b.kind)
+        if ran is not None:
+            ran.add(kinds)
+        a, b = first[lo[g]:hi[g]], second[lo[g]:hi[g]]
+        parts.append(PAIR_FUNCTIONS[kinds](shape_a, shape_b, a, b, pose[a], pose[b],
+                                           float(group_margin[g]), settings))
+    count = hi - lo
+    for code in np.unique(kind[batched]):
+        kinds = _BATCHED[int(code)]
+        if ran is not None:
+            ran.add(kinds)
+        chosen = np.repeat(batched & (kind == code), count)
+        run = np.repeat(np.arange(len(lo)), count)[chosen]
+        a, b = first[chosen], second[chosen]
+        parts.append(BATCH_FUNCTIONS[kinds](tables.fields, body_shape[a], body_shape[b], a, b,
+                                            pose[a], pose[b], group_margin[run], run,
+                                            settings))
+    return parts
 
 
 def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
@@ -228,23 +283,14 @@ def _narrowphase(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray,
         reused, kept = cache.reuse(pairs, pose, turns, radius, round_, body_shape,
                                    pair_margin, tau, settings)
         pairs = pairs[~reused]
-    first, second, groups = _groups(shapes, body_shape, pairs)
-    found_margin = np.empty(len(first))
-    parts = []
+    first, second, lo, hi = _groups(shapes, body_shape, pairs)
     # Each group's largest reach_a + reach_b, all groups at once.
-    largest = (np.maximum.reduceat(reach[first] + reach[second], [lo for lo, _ in groups])
-               if groups else [])
-    for (lo, hi), group_reach in zip(groups, largest, strict=True):
-        shape_a = shapes[body_shape[first[lo]]]
-        shape_b = shapes[body_shape[second[lo]]]
-        fn = PAIR_FUNCTIONS[(shape_a.kind, shape_b.kind)]
-        if ran is not None:
-            ran.add((shape_a.kind, shape_b.kind))
-        a, b = first[lo:hi], second[lo:hi]
-        group_margin = margin + float(group_reach) + tau
-        found_margin[lo:hi] = group_margin
-        parts.append(fn(shape_a, shape_b, a, b, pose[a], pose[b], group_margin, settings))
-    c = Contacts.concatenate(parts)
+    largest = (np.maximum.reduceat(reach[first] + reach[second], lo) if len(lo)
+               else np.zeros(0))
+    group_margin = margin + largest + tau
+    found_margin = np.repeat(group_margin, hi - lo)
+    c = Contacts.concatenate(_pair_calls(shapes, body_shape, first, second, lo, hi, pose,
+                                         group_margin, settings, ran))
     flip = c.body_a > c.body_b
     c.body_a, c.body_b = np.where(flip, c.body_b, c.body_a), np.where(flip, c.body_a, c.body_b)
     c.normal = np.where(flip[:, None], -c.normal, c.normal)
@@ -513,7 +559,7 @@ def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     placed on its first (the same pose: they overlap). What it finds is dropped: it
     runs for the kernels it compiles."""
     from .mesh_sdf import sdf_in_mesh
-    from .narrowphase import _flat
+    from .shape_fields import flat_field
 
     distinct, canonical = _distinct(shapes)
     body_shape = canonical[np.asarray(shape_id, np.int64)]
@@ -533,25 +579,25 @@ def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
         shape_a, shape_b = distinct[body_shape[a]], distinct[body_shape[b]]
         return (shape_a.kind, shape_b.kind, bool(tables.concave[body_shape[a]]),
                 bool(tables.concave[body_shape[b]]),
-                shape_b.kind == "sdf" and _flat(shape_b.field))
+                shape_b.kind == "sdf" and flat_field(shape_b))
 
     def run(a: np.ndarray, b: np.ndarray, pose_a: np.ndarray, pose_b: np.ndarray) -> None:
         shape_a, shape_b = distinct[body_shape[a[0]]], distinct[body_shape[b[0]]]
         kinds = (shape_a.kind, shape_b.kind)
-        if kinds == ("mesh", "sdf") and not _flat(shape_b.field):
+        if kinds == ("mesh", "sdf") and not flat_field(shape_b):
             sdf_in_mesh(shape_a, shape_b, pose_a, pose_b, margin, settings)
         PAIR_FUNCTIONS[kinds](shape_a, shape_b, a, b, pose_a, pose_b, margin, settings)
 
     rest = pairs[~analytic_pair(shape_class[pairs[:, 0]], shape_class[pairs[:, 1]])]
-    first, second, groups = _groups(distinct, body_shape, rest)
+    first, second, lo, hi = _groups(distinct, body_shape, rest)
     if not later:
-        for lo, hi in reversed(groups):
-            a, b = first[lo:hi], second[lo:hi]
+        for g in reversed(range(len(lo))):
+            a, b = first[lo[g]:hi[g]], second[lo[g]:hi[g]]
             run(a, b, pose[a], pose[b])
         return
     # Among two bodies of each shape (movable ones first), every pair with a movable
     # body whose path no pair meeting now runs.
-    seen = {path(first[lo], second[lo]) for lo, _ in groups}
+    seen = {path(first[g], second[g]) for g in lo}
     order = np.lexsort((~movable, body_shape))
     run_start = np.r_[True, body_shape[order][1:] != body_shape[order][:-1]]
     some = order[run_start | (np.r_[False, run_start[:-1]] & ~run_start)]
@@ -559,12 +605,12 @@ def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     maybe = np.column_stack([some[i], some[j]])
     maybe = maybe[movable[maybe[:, 0]] | movable[maybe[:, 1]]]
     maybe = maybe[~analytic_pair(shape_class[maybe[:, 0]], shape_class[maybe[:, 1]])]
-    first, second, groups = _groups(distinct, body_shape, maybe)
-    for lo, _ in groups:
-        key = path(first[lo], second[lo])
+    first, second, lo, _ = _groups(distinct, body_shape, maybe)
+    for g in lo:
+        key = path(first[g], second[g])
         if key not in seen:
             seen.add(key)
-            a, b = first[lo:lo + 1], second[lo:lo + 1]
+            a, b = first[g:g + 1], second[g:g + 1]
             run(a, b, pose[a], pose[a])
 
 

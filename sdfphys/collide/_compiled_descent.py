@@ -39,6 +39,7 @@ from .._bundles import PlainFields
 from .._jit import njit
 from .._shared_kernel import F1, F2, F3, I1, I2, shared
 from ..sdf.compiled import run_shared, scratch
+from ..sdf.program_table import ProgramTable
 from ._descent_kernels import (
     accept_shared,
     bound,
@@ -65,6 +66,7 @@ from ._descent_starts import (
     triangle_starts,
     with_dips,
 )
+from ._runs import run_starts
 
 __all__ = ["PROBLEM_FIELDS", "WORK_FIELDS", "DescentProblem", "DescentWork", "descend",
            "descend_sampled", "descent_problem", "descent_work", "enclosing_circles",
@@ -108,41 +110,44 @@ class DescentProblem(structref.StructRefProxy):
     the Barzilai-Borwein scale; kd: int, the data width (2 TRIANGLE, 6 PAIR). Fields
     rather than constants, so that the kernels are the same compiled functions as the
     Python-driven loop's (a literal would compile them again, costing seconds at a cold
-    start). code_a (I, 4) int64, consts_a (F,), depth_a, nesting_a (int): field a's
-    program (``sdf.compiled.Program``); code_b .. nesting_b: field b's (PAIR; any
-    program for TRIANGLE). rotation (L, 2, 2), offset (L, 2) m: pair k places b in a's
-    frame by p_a = R_k p_b + o_k; pair_of (P,) int64: each start's pair (PAIR; unused
+    start). code (I, 4) int64, consts (F,), program_start (S + 1,) int64, depth,
+    nesting (int): the fields' programs (``sdf.program_table.ProgramTable``); prog_a,
+    prog_b (L,) int64: pair k's fields a and b, run (L,) int64 its batch (the points of
+    consecutive pairs of one run are evaluated together, ``program_table``; TRIANGLE:
+    field prog_a[0], one batch). rotation (L, 2, 2), offset (L, 2) m: pair k places b in
+    a's frame by p_a = R_k p_b + o_k; pair_of (P,) int64: each start's pair (PAIR; unused
     for TRIANGLE). tri (T, 3, 2) m, owner (P,) int64, at_vertex (T, 3) int64, n_start
     (int, starts per triangle), spanning, convex (bool): as ``descent._TriangleProblem``
     (PAIR: one dummy triangle, owner empty).
     """
 
 
-PROBLEM_FIELDS = ("kind", "barzilai_borwein", "kd", "code_a", "consts_a", "depth_a",
-                  "nesting_a", "code_b", "consts_b", "depth_b", "nesting_b", "rotation",
-                  "offset", "pair_of", "tri", "owner", "at_vertex", "n_start", "spanning",
-                  "convex")
+PROBLEM_FIELDS = ("kind", "barzilai_borwein", "kd", "code", "consts", "program_start", "depth",
+                  "nesting", "prog_a", "prog_b", "run", "rotation", "offset", "pair_of", "tri",
+                  "owner", "at_vertex", "n_start", "spanning", "convex")
 structref.define_proxy(DescentProblem, _DescentProblemType, list(PROBLEM_FIELDS))
 
 
 @njit(cache=True)
-def _descent_problem(kind, barzilai_borwein, kd, code_a, consts_a, depth_a, nesting_a, code_b,
-                     consts_b, depth_b, nesting_b, rotation, offset, pair_of, tri, owner,
-                     at_vertex, n_start, spanning, convex):
-    return DescentProblem(kind, barzilai_borwein, kd, code_a, consts_a, depth_a, nesting_a,
-                          code_b, consts_b, depth_b, nesting_b, rotation, offset, pair_of, tri,
-                          owner, at_vertex, n_start, spanning, convex)
+def _descent_problem(kind, barzilai_borwein, kd, code, consts, program_start, depth, nesting,
+                     prog_a, prog_b, run, rotation, offset, pair_of, tri, owner, at_vertex,
+                     n_start, spanning, convex):
+    return DescentProblem(kind, barzilai_borwein, kd, code, consts, program_start, depth,
+                          nesting, prog_a, prog_b, run, rotation, offset, pair_of, tri, owner,
+                          at_vertex, n_start, spanning, convex)
 
 
-def descent_problem(kind: int, barzilai_borwein: bool, kd: int, a, b, rotation: np.ndarray,
-                    offset: np.ndarray, pair_of: np.ndarray, tri: np.ndarray,
-                    owner: np.ndarray, at_vertex: np.ndarray, n_start: int, spanning: bool,
-                    convex: bool) -> DescentProblem:
-    """``DescentProblem`` of programs a and b (``sdf.compiled.Program``) and the arrays
-    (C-contiguous, of the field types of ``PROBLEM``)."""
-    return _descent_problem(kind, barzilai_borwein, kd, a.code, a.consts, a.depth, a.nesting,
-                            b.code, b.consts, b.depth, b.nesting, rotation, offset, pair_of,
-                            tri, owner, at_vertex, n_start, spanning, convex)
+def descent_problem(kind: int, barzilai_borwein: bool, kd: int, table: ProgramTable,
+                    prog_a: np.ndarray, prog_b: np.ndarray, run: np.ndarray,
+                    rotation: np.ndarray, offset: np.ndarray, pair_of: np.ndarray,
+                    tri: np.ndarray, owner: np.ndarray, at_vertex: np.ndarray, n_start: int,
+                    spanning: bool, convex: bool) -> DescentProblem:
+    """``DescentProblem`` of the programs of ``table`` (``sdf.program_table``), pair k's
+    fields prog_a[k], prog_b[k] and batch run[k], and the arrays (C-contiguous, of the
+    field types of ``PROBLEM``)."""
+    return _descent_problem(kind, barzilai_borwein, kd, table.code, table.consts, table.start,
+                            table.depth, table.nesting, prog_a, prog_b, run, rotation, offset,
+                            pair_of, tri, owner, at_vertex, n_start, spanning, convex)
 
 
 @structref.register
@@ -180,53 +185,61 @@ def descent_work(rows: int = 64) -> DescentWork:
 @njit(cache=True, error_model="numpy")
 def _evaluate(problem, points: np.ndarray, pair: np.ndarray, n: int, phi: np.ndarray,
               grad: np.ndarray, data: np.ndarray) -> None:
-    """The problem at points[:n] (of pairs pair[:n], PAIR): phi, grad phi, data rows.
+    """The problem at points[:n] (of pairs pair[:n]: PAIR's pairs, TRIANGLE's triangles,
+    read where the problem has several): phi, grad phi, data rows.
 
     The operations are those of ``field_pairs._PairProblem.values`` / ``evaluate``
-    (``_times`` writes v @ M as v_x M_0j + v_y M_1j), in chunks of ``_CHUNK`` points.
+    (``_times`` writes v @ M as v_x M_0j + v_y M_1j). The points of consecutive pairs of
+    one run (all, with one pair) are evaluated in chunks of ``_CHUNK`` points from the
+    run's first: the batches a call of that run alone made.
     """
     kind, rotation, offset = problem.kind, problem.rotation, problem.offset
-    code_a, consts_a, depth_a, nesting_a = (problem.code_a, problem.consts_a, problem.depth_a,
-                                            problem.nesting_a)
-    code_b, consts_b, depth_b, nesting_b = (problem.code_b, problem.consts_b, problem.depth_b,
-                                            problem.nesting_b)
+    code, consts, program_start = problem.code, problem.consts, problem.program_start
+    prog_a, prog_b, run = problem.prog_a, problem.prog_b, problem.run
     size = min(n, _CHUNK)
-    stack_a, frames_a, cur_a = scratch(depth_a, nesting_a, size)
+    stack, frames, cur = scratch(problem.depth, problem.nesting, size)
     fa, ga = np.empty(size), np.empty((size, 2))
-    if kind != TRIANGLE:
-        stack_b, frames_b, cur_b = scratch(depth_b, nesting_b, size)
-    else:
-        stack_b, frames_b, cur_b = stack_a, frames_a, cur_a
     q, fb, gb = np.empty((size, 2)), np.empty(size), np.empty((size, 2))
-    for lo in range(0, n, _CHUNK):
-        m = min(n - lo, _CHUNK)
-        run_shared(code_a, consts_a, points[lo:lo + m], m, stack_a, frames_a, cur_a, fa, ga,
-                   0, 0, 0)
-        if kind == TRIANGLE:
+    multi = prog_a.shape[0] > 1
+    first = 0
+    while first < n:
+        k = pair[first] if multi else 0
+        a, b = prog_a[k], prog_b[k]
+        last = first + 1 if multi else n
+        while last < n and run[pair[last]] == run[k]:
+            last += 1
+        code_a = code[program_start[a]:program_start[a + 1]]
+        code_b = code[program_start[b]:program_start[b + 1]]
+        for lo in range(first, last, _CHUNK):
+            m = min(last - lo, _CHUNK)
+            run_shared(code_a, consts, points[lo:lo + m], m, stack, frames, cur, fa, ga, 0, 0,
+                       0)
+            if kind == TRIANGLE:
+                for j in range(m):
+                    phi[lo + j], grad[lo + j, 0], grad[lo + j, 1] = fa[j], ga[j, 0], ga[j, 1]
+                    data[lo + j, 0], data[lo + j, 1] = ga[j, 0], ga[j, 1]
+                continue
             for j in range(m):
-                phi[lo + j], grad[lo + j, 0], grad[lo + j, 1] = fa[j], ga[j, 0], ga[j, 1]
-                data[lo + j, 0], data[lo + j, 1] = ga[j, 0], ga[j, 1]
-            continue
-        for j in range(m):
-            k = pair[lo + j]
-            px, py = points[lo + j, 0] - offset[k, 0], points[lo + j, 1] - offset[k, 1]
-            q[j, 0] = px * rotation[k, 0, 0] + py * rotation[k, 1, 0]
-            q[j, 1] = px * rotation[k, 0, 1] + py * rotation[k, 1, 1]
-        run_shared(code_b, consts_b, q, m, stack_b, frames_b, cur_b, fb, gb, 0, 0, 0)
-        for j in range(m):
-            i = lo + j
-            k = pair[i]
-            r00, r01, r10, r11 = rotation[k, 0, 0], rotation[k, 0, 1], rotation[k, 1, 0], \
-                rotation[k, 1, 1]
-            gax, gay = ga[j, 0], ga[j, 1]
-            gbx = gb[j, 0] * r00 + gb[j, 1] * r01                   # times the transpose
-            gby = gb[j, 0] * r10 + gb[j, 1] * r11
-            data[i, 0], data[i, 1], data[i, 2], data[i, 3], data[i, 4], data[i, 5] = \
-                fa[j], fb[j], gax, gay, gbx, gby
-            sign = 1.0 if fa[j] >= fb[j] else -1.0
-            phi[i] = 0.5 * (fa[j] + fb[j]) + IMBALANCE * abs(fa[j] - fb[j])
-            grad[i, 0] = 0.5 * (gax + gbx) + (IMBALANCE * sign) * (gax - gbx)
-            grad[i, 1] = 0.5 * (gay + gby) + (IMBALANCE * sign) * (gay - gby)
+                k = pair[lo + j]
+                px, py = points[lo + j, 0] - offset[k, 0], points[lo + j, 1] - offset[k, 1]
+                q[j, 0] = px * rotation[k, 0, 0] + py * rotation[k, 1, 0]
+                q[j, 1] = px * rotation[k, 0, 1] + py * rotation[k, 1, 1]
+            run_shared(code_b, consts, q, m, stack, frames, cur, fb, gb, 0, 0, 0)
+            for j in range(m):
+                i = lo + j
+                k = pair[i]
+                r00, r01, r10, r11 = rotation[k, 0, 0], rotation[k, 0, 1], rotation[k, 1, 0], \
+                    rotation[k, 1, 1]
+                gax, gay = ga[j, 0], ga[j, 1]
+                gbx = gb[j, 0] * r00 + gb[j, 1] * r01                   # times the transpose
+                gby = gb[j, 0] * r10 + gb[j, 1] * r11
+                data[i, 0], data[i, 1], data[i, 2], data[i, 3], data[i, 4], data[i, 5] = \
+                    fa[j], fb[j], gax, gay, gbx, gby
+                sign = 1.0 if fa[j] >= fb[j] else -1.0
+                phi[i] = 0.5 * (fa[j] + fb[j]) + IMBALANCE * abs(fa[j] - fb[j])
+                grad[i, 0] = 0.5 * (gax + gbx) + (IMBALANCE * sign) * (gax - gbx)
+                grad[i, 1] = 0.5 * (gay + gby) + (IMBALANCE * sign) * (gay - gby)
+        first = last
 
 
 @njit(cache=True, error_model="numpy")
@@ -257,6 +270,33 @@ def descend(problem, points: np.ndarray, sigma: np.ndarray, iterations: int, tol
 
 
 @njit(cache=True, error_model="numpy")
+def _block_ends(bounds: np.ndarray, block: int) -> np.ndarray:
+    """The ends of the blocks of starts (B,): whole runs (``bounds`` (R + 1,), the runs'
+    first starts, then the count), as many as fit in ``block`` starts, or the next
+    ``block`` starts of a longer run (counted from its first start, as a call of that
+    run alone)."""
+    n_runs = bounds.shape[0] - 1
+    ends = np.empty(bounds[n_runs] + 1, np.int64)
+    n_blocks = 0
+    r = 0
+    end = 0
+    while end < bounds[n_runs]:
+        first = end
+        while bounds[r + 1] <= first:
+            r += 1
+        end = bounds[r + 1]
+        if end - first > block:
+            end = first + block
+        else:
+            while r + 1 < n_runs and bounds[r + 2] - first <= block:
+                r += 1
+                end = bounds[r + 1]
+        ends[n_blocks] = end
+        n_blocks += 1
+    return ends[:n_blocks]
+
+
+@njit(cache=True, error_model="numpy")
 def _rounds(problem, points: np.ndarray, phi: np.ndarray, grad: np.ndarray, data: np.ndarray,
             corner: np.ndarray, shape: np.ndarray, sigma: np.ndarray, iterations: int,
             tol: np.ndarray, shape_tol: float, work):
@@ -272,25 +312,41 @@ def _rounds(problem, points: np.ndarray, phi: np.ndarray, grad: np.ndarray, data
     work.running = _grown(work.running, n_points)
     state, flags, running = work.state[:n_points], work.flags[:n_points], work.running
     cand, cand_i, candidates = work.cand, work.cand_i, work.candidates
-    least = np.inf
-    most = -np.inf
-    for i in range(n_points):
-        least = min(least, tol[i])
-        most = max(most, tol[i])
-    uneven = n_points > 0 and most > least
+    # Runs of starts: those of consecutive pairs (PAIR) or triangles (TRIANGLE) of one
+    # run id, all when the problem has one pair. ``accept`` stops a start that moved
+    # less than its run's least tol; where a run's tols differ, each start stops also
+    # once it moved less than its own (as a call of that run alone).
+    multi = problem.prog_a.shape[0] > 1
+    run_of = np.zeros(n_points, np.int64)
+    if multi:
+        for i in range(n_points):
+            run_of[i] = problem.run[pair_of[i]]
+    bounds = run_starts(run_of)
+    least = np.empty(n_points)
+    uneven = np.zeros(n_points, dtype=np.bool_)
+    any_uneven = False
+    for r in range(bounds.shape[0] - 1):
+        low, high = np.inf, -np.inf
+        for i in range(bounds[r], bounds[r + 1]):
+            low, high = min(low, tol[i]), max(high, tol[i])
+        for i in range(bounds[r], bounds[r + 1]):
+            least[i], uneven[i] = low, high > low
+        any_uneven = any_uneven or high > low
     initialize(points, phi, grad, sigma, state, flags)
     evaluated = n_points
     value = np.empty(0)
     gradient = np.empty((0, 2))
     cand_data = np.empty((0, kd))
     pair = np.empty(0, dtype=np.int64)
-    before = np.empty((n_points if uneven else 0, 2))
-    # The starts descend block by block (whole triangles per block), each block
-    # through all its rounds: a start's rounds depend on its own state only (and
-    # on ``least``, the smallest tol of all), so the results are those of one batch.
+    before = np.empty((n_points if any_uneven else 0, 2))
+    # The starts descend block by block (whole triangles and runs per block), each
+    # block through all its rounds: a start's rounds depend on its own state only (and
+    # on its run's ``least``), so the results are those of one batch.
     block = _BLOCK if kind != TRIANGLE else max(1, _BLOCK // max(n_start, 1)) * n_start
-    for first in range(0, n_points, block):
-        n_running = min(n_points, first + block) - first
+    end = 0
+    for b_end in _block_ends(bounds, block):
+        first, end = end, b_end
+        n_running = end - first
         for r in range(n_running):
             running[r] = first + r
         size = bound(kind, owner, shape, state, flags, running[:n_running])
@@ -309,10 +365,10 @@ def _rounds(problem, points: np.ndarray, phi: np.ndarray, grad: np.ndarray, data
                 m = max(n_eval, 2 * value.shape[0])
                 value, gradient, cand_data = np.empty(m), np.empty((m, 2)), np.empty((m, kd))
                 pair = np.empty(m, dtype=np.int64)
-            if kind != TRIANGLE:
-                # The pair of each evaluated point: the starts wrote their candidates
-                # one after the other (flags[i, COUNT] each); a source >= 0 is a
-                # point's row.
+            if kind != TRIANGLE or multi:
+                # The pair (triangle) of each evaluated point: the starts wrote their
+                # candidates one after the other (flags[i, COUNT] each); a source >= 0
+                # is a point's row.
                 row = 0
                 for r in range(n_running):
                     i = running[r]
@@ -323,7 +379,7 @@ def _rounds(problem, points: np.ndarray, phi: np.ndarray, grad: np.ndarray, data
                         row += 1
             _evaluate(problem, candidates, pair, n_eval, value, gradient, cand_data)
             evaluated += n_eval
-            if uneven:
+            if any_uneven:
                 for r in range(n_running):
                     i = running[r]
                     before[i, 0], before[i, 1] = state[i, BEST], state[i, BEST + 1]
@@ -331,13 +387,13 @@ def _rounds(problem, points: np.ndarray, phi: np.ndarray, grad: np.ndarray, data
                 kind, tri, owner, corner, state, flags, data, cand[:size], cand_i[:size],
                 value[:n_eval], gradient[:n_eval], cand_data[:n_eval], least,
                 running[:n_running], shape, shape_tol)
-            if uneven:
+            if any_uneven:
                 kept = 0
                 for r in range(n_running):
                     i = running[r]
                     dx, dy = state[i, BEST] - before[i, 0], state[i, BEST + 1] - before[i, 1]
                     moved = math.sqrt(dx * dx + dy * dy)
-                    if not (flags[i, HAS_PREVIOUS] != 0 and moved < tol[i]):
+                    if not (uneven[i] and flags[i, HAS_PREVIOUS] != 0 and moved < tol[i]):
                         running[kept] = i
                         kept += 1
                 if kept < n_running:
@@ -353,7 +409,7 @@ def _rounds(problem, points: np.ndarray, phi: np.ndarray, grad: np.ndarray, data
 # bundles' types as ``descent_problem`` and ``descent_work`` make them:
 _INT = types.int64
 PROBLEM = _DescentProblemType(list(zip(PROBLEM_FIELDS, (
-    _INT, types.boolean, _INT, I2, F1, _INT, _INT, I2, F1, _INT, _INT, F3, F2, I1, F3, I1, I2,
+    _INT, types.boolean, _INT, I2, F1, I1, _INT, _INT, I1, I1, I1, F3, F2, I1, F3, I1, I2,
     _INT, types.boolean, types.boolean))))
 WORK = _DescentWorkType(list(zip(WORK_FIELDS, (F2, I2, I1, F2, I2, F2))))
 rounds_shared = shared(
@@ -387,10 +443,12 @@ def descend_sampled(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nest
     no_pair = np.empty(0, dtype=np.int64)
     # The triangle problem of field a (no field b, no placements); its starts' owners
     # are set once chosen.
-    problem = DescentProblem(TRIANGLE, False, 2, code_a, consts_a, depth_a, nesting_a, code_a,
-                             consts_a, depth_a, nesting_a, np.zeros((1, 2, 2)),
-                             np.zeros((1, 2)), no_pair, tri, no_pair,
-                             np.full((1, 3), -1, np.int64), k, True, False)
+    one = np.zeros(1, dtype=np.int64)
+    program_start = np.array([0, code_a.shape[0]], dtype=np.int64)
+    problem = DescentProblem(TRIANGLE, False, 2, code_a, consts_a, program_start, depth_a,
+                             nesting_a, one, one, one, np.zeros((1, 2, 2)), np.zeros((1, 2)),
+                             no_pair, tri, no_pair, np.full((1, 3), -1, np.int64), k, True,
+                             False)
     corner = np.empty((n_tri, 3, 3))
     shape = np.empty((n_tri, 4))
     points, phi = np.empty((n_tri * k, 2)), np.empty(n_tri * k)

@@ -28,15 +28,16 @@ __all__ = ["field_contacts", "patch_ends"]
 # --------------------------------------------------------------------------------------
 
 @njit(cache=True, error_model="numpy", refcounts=False)
-def _h(code_a: np.ndarray, consts_a: np.ndarray, work_a, code_b: np.ndarray,
-       consts_b: np.ndarray, work_b, rotation: np.ndarray, offset: np.ndarray, k: int,
-       ox: float, oy: float, dx: float, dy: float, sx: float, sy: float, s: np.ndarray,
-       m: int, value: np.ndarray, slope: np.ndarray) -> None:
+def _h(code_a: np.ndarray, code_b: np.ndarray, consts: np.ndarray, work,
+       rotation: np.ndarray, offset: np.ndarray, k: int, ox: float, oy: float, dx: float,
+       dy: float, sx: float, sy: float, s: np.ndarray, m: int, value: np.ndarray,
+       slope: np.ndarray) -> None:
     """h(s) = max(f_a(x), f_b(x - shift)), x = origin + s direction, and its slope in s,
     at s[:m] into value, slope (``field_pairs._patch_ends``'s ``h``, pair k, the same
-    operations). work_*: (stack, frames, cur, points (M, 2), f (M,), grad (M, 2))."""
-    stack_a, frames_a, cur_a, xa, fa, ga = work_a
-    stack_b, frames_b, cur_b, xb, fb, gb = work_b
+    operations). code_a, code_b: the programs' rows, consts: their table's constants;
+    work: (stack, frames, cur, points a (M, 2), f_a (M,), grad a (M, 2), points b, f_b,
+    grad b)."""
+    stack, frames, cur, xa, fa, ga, xb, fb, gb = work
     r00, r01, r10, r11 = rotation[k, 0, 0], rotation[k, 0, 1], rotation[k, 1, 0], \
         rotation[k, 1, 1]
     for j in range(m):
@@ -44,8 +45,8 @@ def _h(code_a: np.ndarray, consts_a: np.ndarray, work_a, code_b: np.ndarray,
         xa[j, 0], xa[j, 1] = x, y
         px, py = (x - sx) - offset[k, 0], (y - sy) - offset[k, 1]
         xb[j, 0], xb[j, 1] = px * r00 + py * r10, px * r01 + py * r11
-    run_shared(code_a, consts_a, xa, m, stack_a, frames_a, cur_a, fa, ga, 0, 0, 0)
-    run_shared(code_b, consts_b, xb, m, stack_b, frames_b, cur_b, fb, gb, 0, 0, 0)
+    run_shared(code_a, consts, xa, m, stack, frames, cur, fa, ga, 0, 0, 0)
+    run_shared(code_b, consts, xb, m, stack, frames, cur, fb, gb, 0, 0, 0)
     for j in range(m):
         if fa[j] >= fb[j]:
             value[j], slope[j] = fa[j], ga[j, 0] * dx + ga[j, 1] * dy
@@ -60,25 +61,28 @@ def _work(depth: int, nesting: int):
     """Work arrays of ``_h`` for up to 3 points."""
     points = np.empty((3, 2))
     stack, frames, cur = scratch(depth, nesting, points.shape[0])   # not a literal 3
-    return stack, frames, cur, points, np.empty(3), np.empty((3, 2))
+    return (stack, frames, cur, points, np.empty(3), np.empty((3, 2)), np.empty((3, 2)),
+            np.empty(3), np.empty((3, 2)))
 
 
 @njit(cache=True, error_model="numpy")
-def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
-               code_b: np.ndarray, consts_b: np.ndarray, depth_b: int, nesting_b: int,
+def patch_ends(code: np.ndarray, consts: np.ndarray, program_start: np.ndarray,
+               table_depth: int, nesting: int, prog_a: np.ndarray, prog_b: np.ndarray,
                rotation: np.ndarray, offset: np.ndarray, pair: np.ndarray, centre: np.ndarray,
                normal: np.ndarray, depth: np.ndarray, sliver: np.ndarray, reach: np.ndarray,
                iterations: int, tol: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``field_pairs._patch_ends`` with both fields given by their programs.
+    """``field_pairs._patch_ends`` with both fields given by their programs: those of
+    pair k are programs prog_a[k], prog_b[k] of the table code, consts, program_start,
+    table_depth, nesting (``sdf.program_table.ProgramTable``).
 
-    Same arguments (pair (K,), centre (K, 2), normal (K, 2), depth, sliver, reach,
+    Same other arguments (pair (K,), centre (K, 2), normal (K, 2), depth, sliver, reach,
     tol (K,)) and results (s (K, 2), found (K, 2): column 0 the -t end, 1 the +t
     end). The Python version iterates all search directions at once while any is
     unfinished; each direction's iterates depend on its own values only, so here
     each runs its own loop, with the same steps.
     """
     n = depth.shape[0]
-    work_a, work_b = _work(depth_a, nesting_a), _work(depth_b, nesting_b)
+    work = _work(table_depth, nesting)
     ends = np.zeros((n, 2))
     found = np.zeros((n, 2), dtype=np.bool_)
     trials = np.empty(3)
@@ -88,6 +92,9 @@ def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a
     two, three = trials.shape[0] - 1, trials.shape[0]
     for c in range(n):
         k = pair[c]
+        a, b = prog_a[k], prog_b[k]
+        code_a = code[program_start[a]:program_start[a + 1]]
+        code_b = code[program_start[b]:program_start[b + 1]]
         nx, ny = normal[c, 0], normal[c, 1]
         half = 0.5 * depth[c] - 0.5 * sliver[c]
         ox, oy = centre[c, 0] + half * nx, centre[c, 1] + half * ny
@@ -96,8 +103,8 @@ def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a
             dx, dy = (ny, -nx) if side == 0 else (-ny, nx)       # -t, then t = perp(n)
             lo, hi = 0.0, reach[c]
             trials[0], trials[1] = lo, hi
-            _h(code_a, consts_a, work_a, code_b, consts_b, work_b, rotation, offset, k, ox, oy,
-               dx, dy, sx, sy, trials, two, value, slope)
+            _h(code_a, code_b, consts, work, rotation, offset, k, ox, oy, dx, dy, sx, sy,
+               trials, two, value, slope)
             h_lo, h_hi, d_hi = value[0], value[1], slope[1]
             found[c, side] = h_lo < 0.0
             if not found[c, side]:
@@ -125,8 +132,8 @@ def patch_ends(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a
                     trials[1], trials[2] = trials[2], trials[1]
                 if trials[0] > trials[1]:
                     trials[0], trials[1] = trials[1], trials[0]
-                _h(code_a, consts_a, work_a, code_b, consts_b, work_b, rotation, offset, k, ox,
-                   oy, dx, dy, sx, sy, trials, three, value, slope)
+                _h(code_a, code_b, consts, work, rotation, offset, k, ox, oy, dx, dy, sx, sy,
+                   trials, three, value, slope)
                 # The new bracket: the last trial with h < 0 and the first with h >= 0 after it.
                 last_in = -1
                 for j in range(3):
@@ -205,26 +212,29 @@ def _safe_unit(x: float, y: float) -> tuple[float, float]:
 
 
 @njit(cache=True, error_model="numpy")
-def field_contacts(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
-                   code_b: np.ndarray, consts_b: np.ndarray, depth_b: int, nesting_b: int,
+def field_contacts(code: np.ndarray, consts: np.ndarray, program_start: np.ndarray,
+                   table_depth: int, nesting: int, prog_a: np.ndarray, prog_b: np.ndarray,
                    rotation: np.ndarray, offset: np.ndarray, pair_of: np.ndarray,
                    best: np.ndarray, phi: np.ndarray, data: np.ndarray, scale: np.ndarray,
-                   n_starts: int, margin: float, iterations: int, merge: float, sliver: float):
+                   n_starts: int, margin: np.ndarray, iterations: int, merge: float,
+                   sliver: float):
     """``field_pairs.field_field_contacts`` from the descent's results on: contacts of the
     starts that hit, merged (``_clusters``), flat patches replaced by their ends
     (``patch_ends``), merged again. The same operations in the same order.
 
-    rotation (L, 2, 2), offset (L, 2): b's placements; pair_of (S,): each start's
-    pair (S = L n_starts, start id = row % n_starts); best (S, 2), phi (S,),
-    data (S, 6): the descent's results; scale (L,): the regions' diagonals;
-    merge, sliver: ``field_pairs._MERGE`` and ``field_pairs._SLIVER``. Returns (pair (K,)
-    into the L placements, point (K, 2), depth (K,), normal (K, 2), start id (K,)).
+    code .. nesting: the fields' ``ProgramTable``, pair k's fields its programs
+    prog_a[k], prog_b[k] (L,); rotation (L, 2, 2), offset (L, 2): b's placements;
+    pair_of (S,): each start's pair (S = L n_starts, start id = row % n_starts);
+    best (S, 2), phi (S,), data (S, 6): the descent's results; scale (L,): the
+    regions' diagonals; margin (L,) m, each pair's; merge, sliver: ``field_pairs._MERGE``
+    and ``field_pairs._SLIVER``. Returns (pair (K,) into the L placements, point (K,
+    2), depth (K,), normal (K, 2), start id (K,)).
     """
     n_s = phi.shape[0]
     hits = np.empty(n_s, dtype=np.int64)
     n_hit = 0
     for i in range(n_s):
-        if phi[i] < 0.5 * margin:
+        if phi[i] < 0.5 * margin[pair_of[i]]:
             hits[n_hit] = i
             n_hit += 1
     group = np.empty(n_hit, dtype=np.int64)
@@ -270,9 +280,9 @@ def field_contacts(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesti
         start_id[c] = key[head[c]]
         s = scale[pair[c]]
         c_sliver[c], reach[c], tol[c] = sliver * s, 2.0 * s, 1e-12 * s
-    ends, found = patch_ends(code_a, consts_a, depth_a, nesting_a, code_b, consts_b, depth_b,
-                             nesting_b, rotation, offset, pair, c_point, c_normal, c_depth,
-                             c_sliver, reach, iterations, tol)
+    ends, found = patch_ends(code, consts, program_start, table_depth, nesting, prog_a, prog_b,
+                             rotation, offset, pair, c_point, c_normal, c_depth, c_sliver,
+                             reach, iterations, tol)
     # Per pair: its contacts kept as they are, then the -t ends, then the +t ends.
     flat = np.empty(n_c, dtype=np.bool_)
     n_flat = 0

@@ -4,9 +4,12 @@ feature and the speculative samples along each contact's tangent.
 ``field_pairs.one_sided_depths`` and ``field_pairs.tangent_samples`` with both fields
 given by their stack-machine programs (``sdf.compiled``): the same operations in the
 same order, so the same bits, in one call instead of some forty small numpy
-operations per group of pairs. b is placed in a's frame by placement k's cosine,
-sine (cos[k], sin[k], numpy's, as the numpy glue computes them) and offset[k]: a
-point p of a's frame is R^T (p - offset) in b's, and b's gradient g is R g in a's.
+operations per group of pairs. Pair k's fields are programs prog_a[k], prog_b[k] of a
+``ProgramTable`` (``sdf.program_table``: ``table`` below stands for its code, consts,
+start, depth and nesting), their points evaluated in batches by run[k]. b is placed
+in a's frame by placement k's cosine, sine (cos[k], sin[k], numpy's, as the numpy glue
+computes them) and offset[k]: a point p of a's frame is R^T (p - offset) in b's, and
+b's gradient g is R g in a's.
 """
 
 from __future__ import annotations
@@ -14,16 +17,17 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
+from ..sdf.program_table import evaluate_runs
 from ..sorting import stable_argsort
 from ._compiled_field_contacts import _safe_unit
-from ._mesh_contacts_kernels import _evaluate
 
 __all__ = ["one_sided", "tangent_points"]
 
 
 @njit(cache=True, error_model="numpy")
-def _in_b(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int, cos: np.ndarray,
-          sin: np.ndarray, offset: np.ndarray, placed: np.ndarray, q: np.ndarray
+def _in_b(code: np.ndarray, consts: np.ndarray, start: np.ndarray, depth: int, nesting: int,
+          prog_b: np.ndarray, run: np.ndarray, cos: np.ndarray, sin: np.ndarray,
+          offset: np.ndarray, placed: np.ndarray, q: np.ndarray
           ) -> tuple[np.ndarray, np.ndarray]:
     """f_b and grad f_b (a's frame) at points q (N, 2) of a's frame, b placed by
     placements ``placed`` (N,) (``field_pairs._in_b``)."""
@@ -33,7 +37,8 @@ def _in_b(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int, cos: n
         c, s = cos[placed[i]], sin[placed[i]]
         rx, ry = q[i, 0] - offset[placed[i], 0], q[i, 1] - offset[placed[i], 1]
         local[i, 0], local[i, 1] = c * rx + s * ry, c * ry - s * rx
-    value, grad = _evaluate(code, consts, depth, nesting, local, n)
+    value, grad = evaluate_runs(code, consts, start, depth, nesting, prog_b, run, placed, local,
+                                n)
     for i in range(n):
         c, s = cos[placed[i]], sin[placed[i]]
         gx, gy = grad[i, 0], grad[i, 1]
@@ -42,16 +47,16 @@ def _in_b(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int, cos: n
 
 
 @njit(cache=True, error_model="numpy")
-def one_sided(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
-              code_b: np.ndarray, consts_b: np.ndarray, depth_b: int, nesting_b: int,
+def one_sided(code: np.ndarray, consts: np.ndarray, start: np.ndarray, table_depth: int,
+              nesting: int, prog_a: np.ndarray, prog_b: np.ndarray, run: np.ndarray,
               cos: np.ndarray, sin: np.ndarray, offset: np.ndarray, pair: np.ndarray,
               point: np.ndarray, depth: np.ndarray, normal: np.ndarray, ring: np.ndarray,
               relative: float, absolute: float
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``field_pairs.one_sided_depths``: (point (K, 2), depth (K,), normal (K, 2)) of the
-    contacts pair (K,), point, depth, normal (a's frame), re-measured from each side
-    where deeper by ``relative`` of the depth and by ``absolute`` m. ring (M, 2): the
-    sample directions (the contact point's own first, (0, 0)). New arrays."""
+    contacts pair (K,) (in pair order), point, depth, normal (a's frame), re-measured
+    from each side where deeper by ``relative`` of the depth and by ``absolute`` m. ring
+    (M, 2): the sample directions (the contact point's own first, (0, 0)). New arrays."""
     point, depth, normal = point.copy(), depth.copy(), normal.copy()
     m = ring.shape[0]
     count = 0
@@ -76,17 +81,20 @@ def one_sided(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a:
             q[i, 1] = point[k, 1] + radius * ring[t, 1]
             placed[i] = pair[k]
     # b's surface near q, measured in a; a's surface near q, measured in b.
-    f_b, g_b = _in_b(code_b, consts_b, depth_b, nesting_b, cos, sin, offset, placed, q)
+    f_b, g_b = _in_b(code, consts, start, table_depth, nesting, prog_b, run, cos, sin, offset,
+                     placed, q)
     on_b = np.empty_like(q)
     for i in range(q.shape[0]):
         on_b[i, 0], on_b[i, 1] = q[i, 0] - f_b[i] * g_b[i, 0], q[i, 1] - f_b[i] * g_b[i, 1]
-    f_a_on_b, g_a_on_b = _evaluate(code_a, consts_a, depth_a, nesting_a, on_b, q.shape[0])
-    f_a, g_a = _evaluate(code_a, consts_a, depth_a, nesting_a, q, q.shape[0])
+    f_a_on_b, g_a_on_b = evaluate_runs(code, consts, start, table_depth, nesting, prog_a, run,
+                                       placed, on_b, on_b.shape[0])
+    f_a, g_a = evaluate_runs(code, consts, start, table_depth, nesting, prog_a, run, placed, q,
+                             q.shape[0])
     on_a = np.empty_like(q)
     for i in range(q.shape[0]):
         on_a[i, 0], on_a[i, 1] = q[i, 0] - f_a[i] * g_a[i, 0], q[i, 1] - f_a[i] * g_a[i, 1]
-    f_b_on_a, g_b_on_a = _in_b(code_b, consts_b, depth_b, nesting_b, cos, sin, offset,
-                               placed, on_a)
+    f_b_on_a, g_b_on_a = _in_b(code, consts, start, table_depth, nesting, prog_b, run, cos,
+                               sin, offset, placed, on_a)
     for r in range(count):
         k = rows[r]
         # The deepest sample of each side (the first of equals, numpy's argmax).
@@ -118,37 +126,41 @@ def one_sided(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a:
 
 
 @njit(cache=True, error_model="numpy")
-def tangent_points(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesting_a: int,
-                   code_b: np.ndarray, consts_b: np.ndarray, depth_b: int, nesting_b: int,
-                   cos: np.ndarray, sin: np.ndarray, offset: np.ndarray, pair: np.ndarray,
-                   point: np.ndarray, depth: np.ndarray, normal: np.ndarray,
-                   start: np.ndarray, margin: float, extent: float, per_side: int):
-    """``field_pairs.tangent_samples`` (k > 0, per_side >= 1, extent finite): the contacts
-    pair (K,), point (K, 2), depth (K,), normal (K, 2), start (K,) with the samples
-    within the margin after their pair's contacts, and each row's element (0 for a
-    contact, 1 .. 2 per_side for its samples). New arrays."""
+def tangent_points(code: np.ndarray, consts: np.ndarray, program_start: np.ndarray,
+                   table_depth: int, nesting: int, prog_a: np.ndarray, prog_b: np.ndarray,
+                   run: np.ndarray, cos: np.ndarray, sin: np.ndarray, offset: np.ndarray,
+                   pair: np.ndarray, point: np.ndarray, depth: np.ndarray, normal: np.ndarray,
+                   start: np.ndarray, margin: np.ndarray, extent: np.ndarray, per_side: int):
+    """``field_pairs.tangent_samples`` (k > 0, per_side >= 1): the contacts pair (K,) (in
+    pair order), point (K, 2), depth (K,), normal (K, 2), start (K,) with the samples
+    within their pair's margin (L,) m after their pair's contacts, out to their pair's
+    extent (L,) m (finite), and each row's element (0 for a contact, 1 .. 2 per_side for
+    its samples). New arrays."""
     k = pair.shape[0]
     width = 2 * per_side
     t = np.empty(width)
-    spacing = extent / per_side
-    for i in range(per_side):
-        t[i] = (i + 1) * spacing
-        t[per_side + i] = -t[i]
     n = k * width
     q = np.empty((n, 2))
     placed = np.empty(n, np.int64)
     for c in range(k):
+        spacing = extent[pair[c]] / per_side
+        for i in range(per_side):
+            t[i] = (i + 1) * spacing
+            t[per_side + i] = -t[i]
         tx, ty = -normal[c, 1], normal[c, 0]
         for s in range(width):
             i = c * width + s
             q[i, 0], q[i, 1] = point[c, 0] + t[s] * tx, point[c, 1] + t[s] * ty
             placed[i] = pair[c]
-    f_a, g_a = _evaluate(code_a, consts_a, depth_a, nesting_a, q, n)
-    f_b, g_b = _in_b(code_b, consts_b, depth_b, nesting_b, cos, sin, offset, placed, q)
+    f_a, g_a = evaluate_runs(code, consts, program_start, table_depth, nesting, prog_a, run,
+                             placed, q, n)
+    f_b, g_b = _in_b(code, consts, program_start, table_depth, nesting, prog_b, run, cos, sin,
+                     offset, placed, q)
     count = 0
     for i in range(n):
         gap = f_a[i] + f_b[i]
-        count += gap >= 0.0 and gap < margin and f_a[i] < margin and f_b[i] < margin
+        m = margin[placed[i]]
+        count += gap >= 0.0 and gap < m and f_a[i] < m and f_b[i] < m
     total = k + count
     all_pair = np.empty(total, np.int64)
     for c in range(k):
@@ -157,7 +169,8 @@ def tangent_points(code_a: np.ndarray, consts_a: np.ndarray, depth_a: int, nesti
     count = 0
     for i in range(n):
         gap = f_a[i] + f_b[i]
-        if gap >= 0.0 and gap < margin and f_a[i] < margin and f_b[i] < margin:
+        m = margin[placed[i]]
+        if gap >= 0.0 and gap < m and f_a[i] < m and f_b[i] < m:
             rows[count] = i
             all_pair[k + count] = placed[i]
             count += 1

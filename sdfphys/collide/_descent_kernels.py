@@ -431,13 +431,14 @@ def propose(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
 def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
            state: np.ndarray,
            flags: np.ndarray, data: np.ndarray, cand: np.ndarray, cand_i: np.ndarray,
-           value: np.ndarray, gradient: np.ndarray, cand_data: np.ndarray, tol: float,
+           value: np.ndarray, gradient: np.ndarray, cand_data: np.ndarray, tol: np.ndarray,
            running: np.ndarray, shape: np.ndarray, shape_tol: float) -> tuple[int, int]:
     """Update the starts that proposed candidates (``running``) from the values (U,),
     gradients (U, 2) and data (U, kd) at the evaluated points (see ``descent``'s
     module docstring for the rules). Returns R, the number of starts still running
     (``running[:R]`` on return), and ``bound`` of them for the next round. A start
-    that stops at a stationary point is dropped here rather than next round; one
+    that stops at a stationary point (its step shorter than tol[i], m) is dropped
+    here rather than next round; one
     that tried its triangle model's minimiser stops there when f has the value the
     model predicts (to ``shape_tol``)."""
     table = np.empty(N_COLUMNS)                         # value per column (inf: none)
@@ -653,7 +654,7 @@ def accept(kind: int, tri: np.ndarray, owner: np.ndarray, corner: np.ndarray,
             elif not alone:
                 flags[i, FAILS] += 1
             flags[i, HAS_PREVIOUS] = improved
-            keep = flags[i, FAILS] < 2 and not (improved and moved < tol)
+            keep = flags[i, FAILS] < 2 and not (improved and moved < tol[i])
         if keep:
             steep = _steep_path(kind, state, data, i)
             if _moving(kind, _vertices(tri, t), steep, state[i, SIGMA])[0]:
@@ -670,6 +671,6 @@ propose_shared = shared(
     propose, (types.int64, F3, I1, F3, F2, F2, I2, F2, types.boolean, I1, F2, I2, F2),
     "sdfphys_collide_descent_propose", types.UniTuple(types.int64, 3))
 accept_shared = shared(
-    accept, (types.int64, F3, I1, F3, F2, I2, F2, F2, I2, F1, F2, F2, types.float64, I1, F2,
+    accept, (types.int64, F3, I1, F3, F2, I2, F2, F2, I2, F1, F2, F2, F1, I1, F2,
              types.float64),
     "sdfphys_collide_descent_accept", types.UniTuple(types.int64, 2))

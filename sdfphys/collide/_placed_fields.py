@@ -26,14 +26,14 @@ __all__ = ["overlap_regions", "placed_starts"]
 
 
 @njit(cache=True, error_model="numpy")
-def overlap_regions(bounds_a: np.ndarray, bounds_b: np.ndarray, offset: np.ndarray, cos: np.ndarray,
-             sin: np.ndarray, margin: float) -> np.ndarray:
+def overlap_regions(bounds_a: np.ndarray, bounds_b: np.ndarray, offset: np.ndarray,
+                    cos: np.ndarray, sin: np.ndarray, margin: np.ndarray) -> np.ndarray:
     """(n, 4) boxes (xmin, ymin, xmax, ymax) in a's frame where a and b may overlap,
-    grown by ``margin`` (m): b's body-frame AABB bounds_b (4,), rotated by (cos, sin)
-    (n,) and moved by offset (n, 2) (b's placement in a's frame), is bounded by
-    interval arithmetic, as in the broadphase, and intersected with a's bounds_a (4,)
+    grown by ``margin`` (n,) (m): b's body-frame AABB bounds_b (n, 4), rotated by (cos,
+    sin) (n,) and moved by offset (n, 2) (b's placement in a's frame), is bounded by
+    interval arithmetic, as in the broadphase, and intersected with a's bounds_a (n, 4)
     (possibly infinite: a half-plane; b is bounded, two unbounded shapes are both
-    static and never pair).
+    static and never pair); row k of each is pair k's.
 
     A rotated corner is x = (c x_b - s y_b) + o_x, y = (s x_b + c y_b) + o_y; each
     rounded operation is monotone in its operands, so the extremes over the four
@@ -43,24 +43,26 @@ def overlap_regions(bounds_a: np.ndarray, bounds_b: np.ndarray, offset: np.ndarr
     region = np.empty((n, 4))
     for k in range(n):
         c, s = cos[k], sin[k]
-        cx0, cx1, sx0, sx1 = c * bounds_b[0], c * bounds_b[2], s * bounds_b[0], s * bounds_b[2]
-        cy0, cy1, sy0, sy1 = c * bounds_b[1], c * bounds_b[3], s * bounds_b[1], s * bounds_b[3]
-        region[k, 0] = max((min(cx0, cx1) - max(sy0, sy1)) + offset[k, 0], bounds_a[0]) - margin
-        region[k, 1] = max((min(sx0, sx1) + min(cy0, cy1)) + offset[k, 1], bounds_a[1]) - margin
-        region[k, 2] = min((max(cx0, cx1) - min(sy0, sy1)) + offset[k, 0], bounds_a[2]) + margin
-        region[k, 3] = min((max(sx0, sx1) + max(cy0, cy1)) + offset[k, 1], bounds_a[3]) + margin
+        b0, b1, b2, b3 = bounds_b[k, 0], bounds_b[k, 1], bounds_b[k, 2], bounds_b[k, 3]
+        cx0, cx1, sx0, sx1 = c * b0, c * b2, s * b0, s * b2
+        cy0, cy1, sy0, sy1 = c * b1, c * b3, s * b1, s * b3
+        m = margin[k]
+        region[k, 0] = max((min(cx0, cx1) - max(sy0, sy1)) + offset[k, 0], bounds_a[k, 0]) - m
+        region[k, 1] = max((min(sx0, sx1) + min(cy0, cy1)) + offset[k, 1], bounds_a[k, 1]) - m
+        region[k, 2] = min((max(cx0, cx1) - min(sy0, sy1)) + offset[k, 0], bounds_a[k, 2]) + m
+        region[k, 3] = min((max(sx0, sx1) + max(cy0, cy1)) + offset[k, 1], bounds_a[k, 3]) + m
     return region
 
 
 @njit(cache=True, error_model="numpy")
 def placed_starts(bounds_a: np.ndarray, bounds_b: np.ndarray, offset: np.ndarray,
-                  cos: np.ndarray, sin: np.ndarray, margin: float, unit: np.ndarray):
+                  cos: np.ndarray, sin: np.ndarray, margin: np.ndarray, unit: np.ndarray):
     """The descent's problem and starts for field b placed in field a's frame (n pairs).
 
-    bounds_a, bounds_b (4,): body-frame AABBs (a's may be infinite, b's finite);
-    offset (n, 2), cos, sin (n,): b's origin and the cos and sin of its angle in a's
-    frame (numpy's); margin: m; unit (S, 2): the Halton starts in the unit square
-    (``field_pairs._starts``).
+    bounds_a, bounds_b (n, 4): each pair's body-frame AABBs (a's may be infinite, b's
+    finite); offset (n, 2), cos, sin (n,): b's origin and the cos and sin of its angle
+    in a's frame (numpy's); margin (n,): m; unit (S, 2): the Halton starts in the unit
+    square (``field_pairs._starts``).
 
     Returns region (n, 4) (``overlap_regions``), live (L,) the rows
     whose region is not empty, and for them (``field_pairs.field_field_contacts``'

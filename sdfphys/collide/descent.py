@@ -150,6 +150,7 @@ import numpy as np
 from ..sdf import Field
 from ..sdf.compiled import Program, compile_field
 from ..sdf.compiled import distance as compiled_distance
+from ..sdf.program_table import ProgramTable, pair_table
 from . import _descent_kernels as kernels
 from . import _descent_paths as paths
 from . import _descent_starts as start_kernels
@@ -268,7 +269,7 @@ class _TriangleProblem:
     def __init__(self, field: Field, triangles: np.ndarray, owner: np.ndarray,
                  at_vertex: np.ndarray, n_start: int, spanning: bool):
         self.field = field
-        self.convex = _field_convex(field)
+        self.convex = field_convex(field)
         self.triangles = triangles
         self.owner = owner
         self.at_vertex = at_vertex
@@ -364,7 +365,7 @@ def _descend(problem: _TriangleProblem | field_pairs._PairProblem, points: np.nd
     stops when its accepted step is shorter (m). At most ``iterations`` rounds,
     each ONE ``problem.evaluate`` call over the candidates of all running starts
     between two compiled kernels (``_descent_kernels.propose`` and ``accept``).
-    ``accept`` takes one tol: given the smallest, the starts whose own tol is
+    ``accept`` takes the smallest tol for every start; the starts whose own tol is
     larger and whose accepted step is shorter than it are then stopped here.
     Returns the best point (P, 2), its objective (P,), its data (P, kd) and the
     number of rounds each start ran (P,).
@@ -409,7 +410,8 @@ def _descend(problem: _TriangleProblem | field_pairs._PairProblem, points: np.nd
         before = state[:, paths.BEST:paths.BEST + 2].copy() if uneven else None
         n_running, size = kernels.accept(problem.kind, problem.triangles, problem.owner, corner,
                                          state, flags, data, cand, cand_i, value, gradient,
-                                         cand_data, least, running[:n_running], shape, SHAPE_TOL)
+                                         cand_data, np.full(n_points, least),
+                                         running[:n_running], shape, SHAPE_TOL)
         if uneven:
             kept = running[:n_running]
             step = state[kept, paths.BEST:paths.BEST + 2] - before[kept]
@@ -436,32 +438,36 @@ def _descend_compiled(problem: _TriangleProblem | field_pairs._PairProblem,
     """``_descend`` in one compiled call (``_compiled_descent.descend``): the same
     arguments (tol: (P,) float64, writable, as the kernel is compiled for) and results,
     the problem's fields given by their ``programs`` (a, b)."""
+    table = pair_table(*programs)
     if problem.kind == paths.PAIR:
-        return descend_pairs(programs, problem.rotation, problem.offset, problem.pair_of,
-                             points, sigma, tol, iterations)
-    a, b = programs
+        n = len(problem.offset)
+        return descend_pairs(table, np.zeros(n, np.int64), np.ones(n, np.int64),
+                             np.zeros(n, np.int64), problem.rotation, problem.offset,
+                             problem.pair_of, points, sigma, tol, iterations)
     best, phi, data, rounds, _ = descend(
-        descent_problem(problem.kind, problem.barzilai_borwein, 2, a, b, _NO_ROTATION,
-                        _NO_OFFSET, problem.owner, problem.triangles, problem.owner,
-                        problem.at_vertex, problem.n_start, problem.spanning, problem.convex),
+        descent_problem(problem.kind, problem.barzilai_borwein, 2, table, _FIRST, _FIRST,
+                        _FIRST, _NO_ROTATION, _NO_OFFSET, problem.owner, problem.triangles,
+                        problem.owner, problem.at_vertex, problem.n_start, problem.spanning,
+                        problem.convex),
         points, np.ascontiguousarray(sigma, dtype=np.float64), iterations, tol, SHAPE_TOL,
         work())
     return best, phi, data, rounds
 
 
-def descend_pairs(programs: tuple[Program, Program], rotation: np.ndarray, offset: np.ndarray,
-                  pair_of: np.ndarray, points: np.ndarray, sigma: np.ndarray, tol: np.ndarray,
-                  iterations: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The compiled descent of a pair problem (``field_pairs._PairProblem``: fields a and b
-    given by their ``programs``, b placed by rotation (L, 2, 2) and offset (L, 2), start i
-    of pair pair_of[i]) from points (P, 2), first step scales sigma (P,), tolerances tol
-    (P,) float64 (m, writable); ``_descend``'s results: best (P, 2), phi (P,), data (P, 6),
-    rounds (P,)."""
-    a, b = programs
+def descend_pairs(table: ProgramTable, prog_a: np.ndarray, prog_b: np.ndarray, run: np.ndarray,
+                  rotation: np.ndarray, offset: np.ndarray, pair_of: np.ndarray,
+                  points: np.ndarray, sigma: np.ndarray, tol: np.ndarray, iterations: int
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The compiled descent of a pair problem (``field_pairs._PairProblem``) over L pairs:
+    pair k's fields a and b are programs prog_a[k], prog_b[k] (L,) of ``table``, its
+    points evaluated in batches by run[k] (L,) (``sdf.program_table``), b placed by
+    rotation (L, 2, 2) and offset (L, 2); start i of pair pair_of[i] from points (P, 2),
+    first step scales sigma (P,), tolerances tol (P,) float64 (m, writable);
+    ``_descend``'s results: best (P, 2), phi (P,), data (P, 6), rounds (P,)."""
     best, phi, data, rounds, _ = descend(
-        descent_problem(paths.PAIR, True, 6, a, b, np.ascontiguousarray(rotation),
-                        np.ascontiguousarray(offset), pair_of, NO_TRIANGLE, NO_OWNER,
-                        NO_CORNERS, 0, False, False),
+        descent_problem(paths.PAIR, True, 6, table, prog_a, prog_b, run,
+                        np.ascontiguousarray(rotation), np.ascontiguousarray(offset), pair_of,
+                        NO_TRIANGLE, NO_OWNER, NO_CORNERS, 0, False, False),
         np.ascontiguousarray(points, dtype=np.float64),
         np.ascontiguousarray(sigma, dtype=np.float64), iterations, tol, SHAPE_TOL, work())
     return best, phi, data, rounds
@@ -472,6 +478,8 @@ def descend_pairs(programs: tuple[Program, Program], rotation: np.ndarray, offse
 # (1, 3, 2), owners (0,) and vertex starts (1, 3)); read only.
 _NO_ROTATION = np.zeros((1, 2, 2))
 _NO_OFFSET = np.zeros((1, 2))
+#: A triangle problem's field: program 0 of its table, its one batch.
+_FIRST = np.zeros(1, dtype=np.int64)
 NO_TRIANGLE = np.zeros((1, 3, 2))
 NO_OWNER = np.zeros(0, dtype=np.int64)
 NO_CORNERS = np.zeros((1, 3), dtype=np.int64)
@@ -532,6 +540,36 @@ def triangle_deepest(field: Field, triangles: np.ndarray, iterations: int = 16,
     return point, value
 
 
+def triangle_deepest_programs(table: ProgramTable, program: np.ndarray, run: np.ndarray,
+                              convex: np.ndarray, triangles: np.ndarray, iterations: int,
+                              starts: np.ndarray, tol: float = 1e-12
+                              ) -> tuple[np.ndarray, np.ndarray]:
+    """``triangle_deepest`` of triangles (T, 3, 2) in many fields, compiled: triangle t in
+    field program[t] (T,) of ``table``, its points evaluated in batches by run[t] (T,)
+    (``sdf.program_table``; the triangles of a run are consecutive and share one field),
+    convex[t] (T,) bool that field's ``field_convex``. One descent call per convexity
+    present; the same minima, to the bit, as a ``triangle_deepest`` call per run.
+    starts: (K, 3) barycentric weights. Returns point (T, K, 2), value (T, K)."""
+    tri = np.ascontiguousarray(triangles, dtype=np.float64).reshape(-1, 3, 2)
+    weights = np.ascontiguousarray(starts, dtype=np.float64).reshape(-1, 3)
+    n_tri, n_start = len(tri), len(weights)
+    point, value = np.empty((n_tri, n_start, 2)), np.empty((n_tri, n_start))
+    for kind in (False, True):
+        rows = np.flatnonzero(convex == kind)
+        if len(rows) == 0:
+            continue
+        part = np.ascontiguousarray(tri[rows])
+        points, owner, sigma, at_vertex = start_kernels.triangle_starts(part, weights)
+        prog = np.ascontiguousarray(program[rows])
+        best, phi, _, _, _ = descend(
+            descent_problem(paths.TRIANGLE, False, 2, table, prog, prog,
+                            np.ascontiguousarray(run[rows]), _NO_ROTATION, _NO_OFFSET, owner,
+                            part, owner, at_vertex, n_start, _spanning(weights), bool(kind)),
+            points, sigma, iterations, np.full(len(points), float(tol)), SHAPE_TOL, work())
+        point[rows], value[rows] = best.reshape(-1, n_start, 2), phi.reshape(-1, n_start)
+    return point, value
+
+
 def merge_minima(point: np.ndarray, radius: float) -> np.ndarray:
     """(T, K) bool: True for the starts to keep, one per distinct minimum of each triangle.
 
@@ -542,7 +580,7 @@ def merge_minima(point: np.ndarray, radius: float) -> np.ndarray:
     return compiled_merge_minima(np.ascontiguousarray(point, dtype=np.float64), float(radius))
 
 
-def _field_convex(field: Field) -> bool:
+def field_convex(field: Field) -> bool:
     """``_convex`` of the field's spec, cached on the field object."""
     cached = getattr(field, "_descent_convex", None)
     if cached is None:

@@ -18,12 +18,14 @@ starts over the intersection of the bounding boxes, normal from grad f_a - grad 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
 from ..sdf import Field, compiled, safe_normalize
 from ..sdf.compiled import Program, compile_field
+from ..sdf.program_table import ProgramTable, pair_table
 from ..vec2 import TINY
 from . import _descent_paths as paths
 from . import descent
@@ -31,13 +33,43 @@ from ._compiled_field_contacts import field_contacts, patch_ends
 from ._compiled_samples import one_sided, tangent_points
 from ._placed_fields import overlap_regions, placed_starts
 
-__all__ = ["field_field_contacts", "field_field_contacts_single", "one_sided_depths",
-           "placed_field_contacts", "tangent_samples"]
+__all__ = ["PairPrograms", "field_field_contacts", "field_field_contacts_single",
+           "one_sided_depths", "one_sided_programs", "placed_contacts", "placed_field_contacts",
+           "tangent_programs", "tangent_samples"]
 
 #: Contacts of two fields closer than this fraction of the region's diagonal are one.
 _MERGE = 1e-3
 #: Thickness of the sliver measuring a flat patch, as a fraction of the region's diagonal.
 _SLIVER = 1e-9
+
+
+@dataclass(frozen=True)
+class PairPrograms:
+    """The fields of L pairs as the compiled kernels take them: pair k's fields a and b
+    are programs prog_a[k], prog_b[k] (L,) int64 of ``table``, its points evaluated in
+    batches by run[k] (L,) int64 (``sdf.program_table``: the pairs of one shape pair
+    share a run, so that the batches are those of a call of that shape pair alone)."""
+
+    table: ProgramTable
+    prog_a: np.ndarray
+    prog_b: np.ndarray
+    run: np.ndarray
+
+    @classmethod
+    def of(cls, a: Program, b: Program, n: int) -> PairPrograms:
+        """n pairs of fields a and b, one run."""
+        first = np.zeros(n, np.int64)
+        return cls(pair_table(a, b), first, np.ones(n, np.int64), first)
+
+    def take(self, rows: np.ndarray) -> PairPrograms:
+        """The pairs ``rows``, in that order."""
+        return PairPrograms(self.table, self.prog_a[rows], self.prog_b[rows], self.run[rows])
+
+    def args(self) -> tuple:
+        """(code, consts, start, depth, nesting, prog_a, prog_b): the kernels' leading
+        arguments (``run`` follows where a kernel evaluates batches of several pairs)."""
+        t = self.table
+        return t.code, t.consts, t.start, t.depth, t.nesting, self.prog_a, self.prog_b
 
 
 def _rotations(angle: np.ndarray) -> np.ndarray:
@@ -205,10 +237,9 @@ def _patch_ends(problem: _PairProblem, pair: np.ndarray, centre: np.ndarray,
     """
     programs = problem.programs()
     if programs is not None:                          # the same search, compiled
-        a, b = programs
         c = np.ascontiguousarray
-        return patch_ends(a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
-                          b.nesting, c(problem.rotation), c(problem.offset), c(pair), c(centre),
+        return patch_ends(*PairPrograms.of(*programs, len(problem.offset)).args(),
+                          c(problem.rotation), c(problem.offset), c(pair), c(centre),
                           c(normal), c(depth), c(sliver), c(reach), iterations, c(tol))
     n_contacts = len(depth)
     tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
@@ -344,8 +375,9 @@ def field_field_contacts(field_a: Field, field_b: Field, poses_b_in_a: np.ndarra
     programs = problem.programs()
     if programs is not None:                          # compiled, the same operations
         pair, point, depth, normal, start_id = _compiled_contacts(
-            programs, problem.rotation, problem.offset, pair_of, starts, 0.25 * scale_of,
-            1e-12 * scale_of, scale, n_starts, margin, iterations)
+            PairPrograms.of(*programs, len(live)), problem.rotation, problem.offset, pair_of,
+            starts, 0.25 * scale_of, 1e-12 * scale_of, scale, n_starts,
+            np.full(len(live), float(margin)), iterations)
         return live[pair], point, depth, normal, start_id
     best, phi, data, _ = descent._descend(problem, starts, iterations, 0.25 * scale_of,
                                           1e-12 * scale_of)
@@ -400,48 +432,62 @@ def placed_field_contacts(field_a: Field, field_b: Field, offset: np.ndarray, an
     m, the regions are grown by it and contacts with depth > -margin reported.
     Returns the regions (n, 4) (``_placed_fields.overlap_regions``) and
     ``field_field_contacts``' five results for those regions. When both fields
-    compile, three compiled calls (``_placed_fields.placed_starts``, the descent,
-    the merges) with the operations of the numpy glue, so the same bits.
+    compile, ``placed_contacts`` (the same bits).
     """
-    cos, sin = np.cos(angle), np.sin(angle)
-    bounds_a, bounds_b = np.asarray(bounds_a, np.float64), np.asarray(bounds_b, np.float64)
-    offset = np.ascontiguousarray(offset, np.float64)
-    programs = ((compile_field(field_a), compile_field(field_b))
-                if n_starts >= 1 else (None, None))
-    if programs[0] is None or programs[1] is None:
-        region = overlap_regions(bounds_a, bounds_b, offset, cos, sin, float(margin))
+    n = len(angle)
+    bounds_a = np.tile(np.asarray(bounds_a, np.float64), (n, 1))
+    bounds_b = np.tile(np.asarray(bounds_b, np.float64), (n, 1))
+    margins = np.full(n, float(margin))
+    a, b = ((compile_field(field_a), compile_field(field_b)) if n_starts >= 1 else (None, None))
+    if a is None or b is None:
+        region = overlap_regions(bounds_a, bounds_b, np.ascontiguousarray(offset, np.float64),
+                                 np.cos(angle), np.sin(angle), margins)
         return (region, *field_field_contacts(field_a, field_b,
                                               np.column_stack([offset, angle]), region,
                                               n_starts=n_starts, iterations=iterations,
                                               margin=margin))
+    return placed_contacts(PairPrograms.of(a, b, n), offset, angle, bounds_a, bounds_b,
+                           margins, n_starts, iterations)
+
+
+def placed_contacts(programs: PairPrograms, offset: np.ndarray, angle: np.ndarray,
+                    bounds_a: np.ndarray, bounds_b: np.ndarray, margin: np.ndarray,
+                    n_starts: int, iterations: int
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                               np.ndarray]:
+    """``placed_field_contacts`` of n pairs of compiled fields (``programs``), each its
+    own bounds_a, bounds_b (n, 4) and margin (n,) m: three compiled calls
+    (``_placed_fields.placed_starts``, the descent, the merges) with the operations of
+    the numpy glue, so the same bits as a call per pair's fields. Returns the regions
+    (n, 4), then pair (K,) into the n pairs, point (K, 2), depth (K,), normal (K, 2),
+    start id (K,) in a's frames, in pair order."""
     region, live, rotation, placed, scale, pair_of, points, sigma, tol = placed_starts(
-        bounds_a, bounds_b, offset, cos, sin, float(margin), _starts(n_starts))
+        bounds_a, bounds_b, np.ascontiguousarray(offset, np.float64), np.cos(angle),
+        np.sin(angle), margin, _starts(n_starts))
     pair, point, depth, normal, start_id = _compiled_contacts(
-        programs, rotation, placed, pair_of, points, sigma, tol, scale, n_starts, margin,
-        iterations)
+        programs.take(live), rotation, placed, pair_of, points, sigma, tol, scale, n_starts,
+        margin[live], iterations)
     return region, live[pair], point, depth, normal, start_id
 
 
-def _compiled_contacts(programs: tuple[Program, Program], rotation: np.ndarray,
-                       offset: np.ndarray, pair_of: np.ndarray, starts: np.ndarray,
-                       sigma: np.ndarray, tol: np.ndarray, scale: np.ndarray, n_starts: int,
-                       margin: float, iterations: int
+def _compiled_contacts(programs: PairPrograms, rotation: np.ndarray, offset: np.ndarray,
+                       pair_of: np.ndarray, starts: np.ndarray, sigma: np.ndarray,
+                       tol: np.ndarray, scale: np.ndarray, n_starts: int, margin: np.ndarray,
+                       iterations: int
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``field_field_contacts`` from its starts on, compiled: the descent
     (``descent.descend_pairs``), then the merges and the patch search
-    (``field_contacts``). programs: the two fields'; rotation (L, 2, 2), offset (L, 2):
-    b's placements; pair_of (S,), starts (S, 2), sigma, tol (S,): the starts, their
-    pairs, first step scales and tolerances (m); scale (L,): the regions' diagonals.
-    Returns pair (K,) into the L placements, point (K, 2), depth (K,), normal (K, 2),
-    start id (K,)."""
-    best, phi, data, _ = descent.descend_pairs(programs, rotation, offset, pair_of, starts,
-                                               sigma, np.array(tol, dtype=np.float64),
-                                               iterations)
-    a, b = programs
+    (``field_contacts``). programs: the L pairs' fields; rotation (L, 2, 2), offset (L,
+    2): b's placements; pair_of (S,), starts (S, 2), sigma, tol (S,): the starts, their
+    pairs, first step scales and tolerances (m); scale (L,): the regions' diagonals;
+    margin (L,) m. Returns pair (K,) into the L placements, point (K, 2), depth (K,),
+    normal (K, 2), start id (K,)."""
+    best, phi, data, _ = descent.descend_pairs(
+        programs.table, programs.prog_a, programs.prog_b, programs.run, rotation, offset,
+        pair_of, starts, sigma, np.array(tol, dtype=np.float64), iterations)
     rotation, offset = np.ascontiguousarray(rotation), np.ascontiguousarray(offset)
-    return field_contacts(a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
-                          b.nesting, rotation, offset, pair_of, best, phi, data, scale,
-                          n_starts, float(margin), iterations, _MERGE, _SLIVER)
+    return field_contacts(*programs.args(), rotation, offset, pair_of, best, phi, data, scale,
+                          n_starts, margin, iterations, _MERGE, _SLIVER)
 
 
 def _in_b(field_b: Field, offset: np.ndarray, angle: np.ndarray, placed: np.ndarray,
@@ -490,11 +536,12 @@ def tangent_samples(field_a: Field, field_b: Field, offset: np.ndarray, angle: n
     element = np.zeros(k, np.int64)
     if k == 0 or per_side < 1 or not np.isfinite(extent):
         return pair, point, depth, normal, start, element
-    programs = _programs(field_a, field_b)
-    if programs is not None:
-        return tangent_points(*programs, np.cos(angle), np.sin(angle),
-                              np.ascontiguousarray(offset, np.float64), pair, point, depth,
-                              normal, start, float(margin), float(extent), int(per_side))
+    a, b = compile_field(field_a), compile_field(field_b)
+    if a is not None and b is not None:
+        n = len(angle)
+        return tangent_programs(PairPrograms.of(a, b, n), offset, angle, pair, point, depth,
+                                normal, start, np.full(n, float(margin)),
+                                np.full(n, float(extent)), per_side)
     steps = np.arange(1, per_side + 1) * (extent / per_side)
     t = np.concatenate([steps, -steps])                                    # (2 per_side,)
     tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
@@ -517,6 +564,24 @@ def tangent_samples(field_a: Field, field_b: Field, offset: np.ndarray, angle: n
             np.concatenate([element, np.tile(np.arange(1, len(t) + 1), k)[rows]])[order])
 
 
+def tangent_programs(programs: PairPrograms, offset: np.ndarray, angle: np.ndarray,
+                     pair: np.ndarray, point: np.ndarray, depth: np.ndarray,
+                     normal: np.ndarray, start: np.ndarray, margin: np.ndarray,
+                     extent: np.ndarray, per_side: int
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                np.ndarray]:
+    """``tangent_samples`` of n pairs of compiled fields (``programs``), contacts in pair
+    order, each pair its own margin and extent (n,) m (finite where a pair has
+    contacts): ``_compiled_samples.tangent_points``, the same bits as a call per pair's
+    fields."""
+    k = len(pair)
+    if k == 0 or per_side < 1:
+        return pair, point, depth, normal, start, np.zeros(k, np.int64)
+    return tangent_points(*programs.args(), programs.run, np.cos(angle), np.sin(angle),
+                          np.ascontiguousarray(offset, np.float64), pair, point, depth, normal,
+                          start, margin, extent, int(per_side))
+
+
 #: Directions of the samples around a contact for its one-sided depths.
 _RING = np.exp(2j * np.pi * np.arange(8) / 8)
 #: A contact is re-measured one-sided when that depth exceeds the balance depth by
@@ -532,13 +597,16 @@ _FEATURE_ABSOLUTE = 1e-4
 _RING_POINTS = np.column_stack([np.r_[0.0, _RING.real], np.r_[0.0, _RING.imag]])
 
 
-def _programs(field_a: Field, field_b: Field) -> tuple | None:
-    """The two fields' programs as the compiled kernels take them (code, consts, depth,
-    nesting of a, then of b), None when one does not compile."""
-    a, b = compile_field(field_a), compile_field(field_b)
-    if a is None or b is None:
-        return None
-    return a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth, b.nesting
+def one_sided_programs(programs: PairPrograms, offset: np.ndarray, angle: np.ndarray,
+                       pair: np.ndarray, point: np.ndarray, depth: np.ndarray,
+                       normal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``one_sided_depths`` of n pairs of compiled fields (``programs``), contacts in pair
+    order: ``_compiled_samples.one_sided``, the same bits as a call per pair's fields."""
+    if not np.any(depth > 0.0):
+        return point, depth, normal
+    return one_sided(*programs.args(), programs.run, np.cos(angle), np.sin(angle),
+                     np.ascontiguousarray(offset, np.float64), pair, point, depth, normal,
+                     _RING_POINTS, _FEATURE_RELATIVE, _FEATURE_ABSOLUTE)
 
 
 def one_sided_depths(field_a: Field, field_b: Field, offset: np.ndarray, angle: np.ndarray,
@@ -574,11 +642,10 @@ def one_sided_depths(field_a: Field, field_b: Field, offset: np.ndarray, angle: 
     rows = np.flatnonzero(depth > 0.0)
     if len(rows) == 0:
         return point, depth, normal
-    programs = _programs(field_a, field_b)
-    if programs is not None:
-        return one_sided(*programs, np.cos(angle), np.sin(angle),
-                         np.ascontiguousarray(offset, np.float64), pair, point, depth, normal,
-                         _RING_POINTS, _FEATURE_RELATIVE, _FEATURE_ABSOLUTE)
+    a, b = compile_field(field_a), compile_field(field_b)
+    if a is not None and b is not None:
+        return one_sided_programs(PairPrograms.of(a, b, len(angle)), offset, angle, pair,
+                                  point, depth, normal)
     m = len(_RING) + 1
     ring = np.concatenate([[0.0], _RING])
     owner = np.repeat(rows, m)

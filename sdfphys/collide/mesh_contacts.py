@@ -28,10 +28,11 @@ Stages (derivations in each function's docstring):
 
 When the other field compiles (``sdf.compiled``), the stages run in two compiled
 kernels around the descent, with the field's program evaluated inside them:
-``_place`` (the mesh in other's frame and ``descent.triangle_cull``) and
-``_finish`` (stages 1 after the descent to 4, the first row per key and the world
+``place_runs`` (the mesh in other's frame and ``descent.triangle_cull``) and
+``finish_runs`` (stages 1 after the descent to 4, the first row per key and the world
 frame), each stage's points still evaluated in one batch; a call then costs a
-fixed handful of Python calls, nothing per pair or candidate. Otherwise the
+fixed handful of Python calls, nothing per pair or candidate, and takes the pairs of
+many meshes and fields (``mesh_in_fields``: a batched pair function's). Otherwise the
 numpy stages run (``_mesh_in_field_numpy``: the functions above, the reference
 the compiled kernels are tested against, bit for bit, with the field wrapped so
 that it does not compile: tests/oracles.py).
@@ -64,11 +65,12 @@ from ._mesh_contacts_kernels import (
     _RUNS_ALONG,
     EDGE_START,
     VERTEX_START,
-    _finish,
-    _place,
+    finish_runs,
+    place_runs,
 )
+from .shape_fields import ShapeFields, pair_fields
 
-__all__ = ["EDGE_START", "SAMPLED_START", "VERTEX_START", "mesh_in_field"]
+__all__ = ["EDGE_START", "SAMPLED_START", "VERTEX_START", "mesh_in_field", "mesh_in_fields"]
 
 #: Descent start ids in the order ``settings.descent_starts`` takes them: centroid, edge
 #: midpoints, then vertices (the vertices are sampled anyway, see ``_samples``).
@@ -352,22 +354,23 @@ _STARTS = {k: np.ascontiguousarray(descent.START_BARYCENTRIC[_START_PRIORITY[:k]
 
 
 def compile_finish(mesh: Shape, other: Shape, settings: Settings) -> None:
-    """``_finish`` compiled (or loaded) with the argument types of ``mesh_in_field``'s
+    """``finish_runs`` compiled (or loaded) with the argument types of ``mesh_in_fields``'
     call, on no pairs (one compilation serves every mesh and field: the types do not
     depend on them): a cold start's parent compiles the end of the path while it waits
     for the compiling child, which compiles its start (``collide.compile_behind``).
-    Nothing where the path does not call it (a field that does not compile, sampled
-    starts)."""
-    program = compiled.compile_field(other.field)
-    if program is None or settings.descent_lattice > 0:
+    Nothing where the path does not call it (a field that does not compile)."""
+    fields = pair_fields(mesh, other)
+    if fields.program[1] < 0:
         return
     start_ids = _START_PRIORITY[:max(1, min(settings.descent_starts, len(_START_PRIORITY)))]
     starts = len(start_ids)
-    _finish(mesh.triangles, mesh.outline_edges, np.zeros((0, len(mesh.vertices), 2)),
-            np.zeros(0, np.int64), np.zeros((0, starts, 2)), np.zeros((0, starts)),
-            np.zeros((0, starts), np.bool_), start_ids, program.code, program.consts,
-            program.depth, program.nesting, 0.0, True, float(settings.linear_slop),
-            np.zeros(0), np.zeros(0), np.zeros((0, 3)))
+    table, none, no_pose = fields.table, np.zeros(0, np.int64), np.zeros((0, 3))
+    finish_runs(fields.triangles, fields.outline_edges, fields.triangle_start, none,
+                np.zeros((0, 2)), np.zeros(1, np.int64), none, none, np.zeros((0, starts, 2)),
+                np.zeros((0, starts)), np.zeros((0, starts), np.bool_), start_ids, table.code,
+                table.consts, table.start, table.depth, table.nesting, none, none,
+                np.zeros(0), True, float(settings.linear_slop), np.zeros(0), np.zeros(0),
+                no_pose)
 
 
 def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: np.ndarray,
@@ -384,32 +387,72 @@ def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: 
     toward the mesh), depth (C,), key element (C,) and key start (C,).
 
     When other's field compiles (``sdf.compiled``) the stages run in two compiled
-    kernels around the descent (``_place``, ``_finish``); otherwise in numpy
+    kernels around the descent (``place_runs``, ``finish_runs``); otherwise in numpy
     (``_mesh_in_field_numpy``). Same results.
     """
-    program = compiled.compile_field(other.field)
-    if program is None:
+    fields = pair_fields(mesh, other)
+    if fields.program[1] < 0:
         return _mesh_in_field_numpy(mesh, other, pose_mesh, pose_other, margin, settings,
                                     polygon_pair)
+    n = len(pose_mesh)
+    zero = np.zeros(n, np.int64)
+    return mesh_in_fields(fields, zero, zero + 1, pose_mesh, pose_other, np.full(n, margin),
+                          zero, settings, polygon_pair)
+
+
+def mesh_in_fields(fields: ShapeFields, mesh_of: np.ndarray, other_of: np.ndarray,
+                   pose_mesh: np.ndarray, pose_other: np.ndarray, margin: np.ndarray,
+                   run: np.ndarray, settings: Settings, polygon_pair: bool
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                              np.ndarray]:
+    """``mesh_in_field`` of n pairs of any meshes and other shapes whose fields compile:
+    pair k's mesh is shape mesh_of[k], its other shape other_of[k] (n,) of ``fields``,
+    its margin margin[k] (n,) m, its run run[k] (n,) (the pairs of one shape pair:
+    consecutive, one run id, one margin). The compiled stages run run by run
+    (``place_runs``, ``finish_runs``) and the descent over all kept triangles at once
+    (``descent.triangle_deepest_programs``; with sampled starts, a call per run): the
+    same contacts, to the bit, as a ``mesh_in_field`` call per shape pair. Returns its
+    six arrays, pairs into the n."""
     angle = pose_mesh[:, 2] - pose_other[:, 2]
     cos, sin = np.cos(angle), np.sin(angle)
     co, so = np.cos(pose_other[:, 2]), np.sin(pose_other[:, 2])
     pose_mesh = np.ascontiguousarray(pose_mesh, dtype=np.float64)
     pose_other = np.ascontiguousarray(pose_other, dtype=np.float64)
-    code, consts, depth, nesting = program.code, program.consts, program.depth, program.nesting
-    margin = float(margin)
-    vertices, _, kept, tri = _place(mesh.vertices, mesh.triangles, cos, sin, co, so, pose_mesh,
-                                    pose_other, code, consts, depth, nesting, margin)
+    table, program = fields.table, fields.program[other_of]
+    placed, vertex_at, kept_pair, kept_element, tri = place_runs(
+        fields.vertices, fields.vertex_start, fields.triangles, fields.triangle_start, mesh_of,
+        cos, sin, co, so, pose_mesh, pose_other, table.code, table.consts, table.start,
+        table.depth, table.nesting, program, run, margin)
     n_starts = max(1, min(settings.descent_starts, len(_START_PRIORITY)))
     if settings.descent_lattice > 0:
-        point, value, start_ids = _sampled_minima(other.field, tri, settings)
+        point, value, start_ids = _sampled_runs(fields, other_of, run, kept_pair, tri, settings)
     else:
-        point, value = descent.triangle_deepest(other.field, tri,
-                                                iterations=settings.descent_iterations,
-                                                starts=_STARTS[n_starts])
+        point, value = descent.triangle_deepest_programs(
+            table, program[kept_pair], run[kept_pair], fields.convex[other_of[kept_pair]], tri,
+            settings.descent_iterations, _STARTS[n_starts])
         start_ids = _START_PRIORITY[:n_starts]
     distinct = descent.merge_minima(point, _MERGE_RADIUS)
-    return _finish(mesh.triangles, mesh.outline_edges, vertices, kept,
-                   np.ascontiguousarray(point), np.ascontiguousarray(value), distinct,
-                   start_ids, code, consts, depth, nesting, margin,
-                   bool(polygon_pair), float(settings.linear_slop), co, so, pose_other)
+    return finish_runs(fields.triangles, fields.outline_edges, fields.triangle_start, mesh_of,
+                       placed, vertex_at, kept_pair, kept_element, np.ascontiguousarray(point),
+                       np.ascontiguousarray(value), distinct, start_ids, table.code,
+                       table.consts, table.start, table.depth, table.nesting, program, run,
+                       margin, bool(polygon_pair), float(settings.linear_slop), co, so,
+                       pose_other)
+
+
+def _sampled_runs(fields: ShapeFields, other_of: np.ndarray, run: np.ndarray,
+                  kept_pair: np.ndarray, tri: np.ndarray, settings: Settings
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``_sampled_minima`` of the kept triangles (K, 3, 2), run by run (each run's field
+    is one shape's, ``settings.descent_lattice`` > 0): point (K, k, 2), value (K, k),
+    the start ids (k,)."""
+    k = settings.descent_starts
+    point, value = np.empty((len(tri), k, 2)), np.empty((len(tri), k))
+    start_ids = SAMPLED_START + np.arange(k, dtype=np.int64)
+    of_run = run[kept_pair]
+    bounds = np.flatnonzero(np.r_[True, of_run[1:] != of_run[:-1], True])
+    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+        field = fields.field_of[other_of[kept_pair[lo]]]
+        p, v, start_ids = _sampled_minima(field, tri[lo:hi], settings)
+        point[lo:hi], value[lo:hi] = p, v
+    return point, value, start_ids

@@ -56,9 +56,10 @@ Cost: one ``field_field_contacts`` call (each of its rounds one evaluation of ea
 field for all pairs), then ``1 + REFINE_ROUNDS`` evaluations of the mesh field and
 ``SDF_CALLS`` of the sdf field for all contacts of all pairs; nothing is per pair or
 per contact in Python. When both fields compile (``sdf.compiled``), stages 2 and 3
-run in one compiled kernel (``_mesh_sdf_kernels._support``: the same batches, the
-programs evaluated inside it); otherwise in numpy (``_support_numpy``, with ``_deepest_on_sdf``,
-``_far_ends`` and ``_nearest_edges``: the reference the kernel is tested against,
+run in one compiled kernel (``_mesh_sdf_kernels.support_runs``: the same batches, the
+programs evaluated inside it, many shape pairs run by run); otherwise in numpy
+(``_support_numpy``, with ``_deepest_on_sdf``, ``_far_ends`` and ``_nearest_edges``:
+the reference the kernel is tested against,
 bit for bit, with a field that does not compile: tests/oracles.py).
 """
 
@@ -89,10 +90,11 @@ from ._mesh_sdf_kernels import (
     _SMOOTH,
     FAR_END,
     REFINE_ROUNDS,
-    _support,
+    support_runs,
 )
+from .shape_fields import ShapeFields, pair_fields
 
-__all__ = ["FAR_END", "REFINE_ROUNDS", "SDF_CALLS", "sdf_in_mesh"]
+__all__ = ["FAR_END", "REFINE_ROUNDS", "SDF_CALLS", "sdf_in_mesh", "sdf_in_meshes"]
 
 #: Evaluations of the sdf field after the field-field descent: the projection of
 #: the starts, one per support-search round, the far ends' probes, anchors and two
@@ -340,24 +342,58 @@ def sdf_in_mesh(mesh: Shape, sdf: Shape, pose_mesh: np.ndarray, pose_sdf: np.nda
     ``field_descent_starts``; + ``FAR_END`` for the far end of its incident face),
     pair by pair.
     """
+    fields = pair_fields(mesh, sdf)
+    if fields.program[0] >= 0 and fields.program[1] >= 0:
+        n = len(pose_mesh)
+        zero = np.zeros(n, np.int64)
+        return sdf_in_meshes(fields, zero, zero + 1, pose_mesh, pose_sdf, np.full(n, margin),
+                             zero, settings)
     angle = pose_mesh[:, 2] - pose_sdf[:, 2]
     co, so = np.cos(pose_sdf[:, 2]), np.sin(pose_sdf[:, 2])
     offset = rotate_cs(pose_mesh[:, :2] - pose_sdf[:, :2], co, -so)      # mesh in sdf frame
     region, pair, point, depth, _, start = field_pairs.placed_field_contacts(
         sdf.field, mesh.field, offset, angle, sdf.bounds(), mesh.bounds(), margin,
         settings.field_descent_starts, settings.field_descent_iterations)
-    empty = (pair, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), pair.copy(), pair.copy())
     if len(pair) == 0:
-        return empty
-    programs = (compiled.compile_field(sdf.field), compiled.compile_field(mesh.field))
-    if programs[0] is not None and programs[1] is not None:
-        a, b = programs
-        return _support(a.code, a.consts, a.depth, a.nesting, b.code, b.consts, b.depth,
-                        b.nesting, mesh.vertices, np.cos(angle), np.sin(angle), offset, co, so,
-                        np.ascontiguousarray(pose_sdf, dtype=np.float64), region, float(margin),
-                        pair, point, depth, start)
+        return _no_contacts()
     return _support_numpy(mesh, sdf, pose_sdf, angle, offset, co, so, region, margin, pair,
                           point, depth, start)
+
+
+def sdf_in_meshes(fields: ShapeFields, mesh_of: np.ndarray, sdf_of: np.ndarray,
+                  pose_mesh: np.ndarray, pose_sdf: np.ndarray, margin: np.ndarray,
+                  run: np.ndarray, settings: Settings
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                             np.ndarray]:
+    """``sdf_in_mesh`` of n pairs of any meshes and sdf shapes whose fields compile: pair
+    k's mesh is shape mesh_of[k], its sdf shape sdf_of[k] (n,) of ``fields``, its margin
+    margin[k] (n,) m, its run run[k] (n,) (the pairs of one shape pair: consecutive, one
+    run id, one margin). The field-field contacts of all pairs in one pass
+    (``field_pairs.placed_contacts``), then the support search and the far ends run by
+    run (``_mesh_sdf_kernels.support_runs``): the same contacts, to the bit, as an
+    ``sdf_in_mesh`` call per shape pair. Returns its six arrays, pairs into the n."""
+    angle = pose_mesh[:, 2] - pose_sdf[:, 2]
+    co, so = np.cos(pose_sdf[:, 2]), np.sin(pose_sdf[:, 2])
+    offset = rotate_cs(pose_mesh[:, :2] - pose_sdf[:, :2], co, -so)      # mesh in sdf frame
+    programs = field_pairs.PairPrograms(fields.table, fields.program[sdf_of],
+                                        fields.program[mesh_of], run)
+    region, pair, point, depth, _, start = field_pairs.placed_contacts(
+        programs, offset, angle, fields.bounds[sdf_of], fields.bounds[mesh_of], margin,
+        settings.field_descent_starts, settings.field_descent_iterations)
+    if len(pair) == 0:
+        return _no_contacts()
+    t = fields.table
+    return support_runs(t.code, t.consts, t.start, t.depth, t.nesting, programs.prog_a,
+                        programs.prog_b, fields.vertices, fields.vertex_start, mesh_of, run,
+                        np.cos(angle), np.sin(angle), np.ascontiguousarray(offset), co, so,
+                        np.ascontiguousarray(pose_sdf, dtype=np.float64), region, margin,
+                        pair, point, depth, start)
+
+
+def _no_contacts() -> tuple[np.ndarray, ...]:
+    """``sdf_in_mesh``'s six arrays, empty."""
+    none = np.zeros(0, np.int64)
+    return none, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), none.copy(), none.copy()
 
 
 def _support_numpy(mesh: Shape, sdf: Shape, pose_sdf: np.ndarray, angle: np.ndarray,
@@ -368,7 +404,7 @@ def _support_numpy(mesh: Shape, sdf: Shape, pose_sdf: np.ndarray, angle: np.ndar
                               np.ndarray]:
     """Stages 2 and 3 of ``sdf_in_mesh`` in numpy from the field-field contacts (pair,
     point, depth, start), for fields that do not compile; the reference of the
-    compiled ``_support`` (same results, bit for bit). angle (n,): the mesh's angle
+    compiled ``support_runs`` (same results, bit for bit). angle (n,): the mesh's angle
     in the sdf's frame, offset (n, 2) its position there; co, so (n,): cos and sin
     of the sdf's angle."""
     in_sdf = _MeshInSdfFrame(mesh.field, angle, offset)

@@ -65,24 +65,26 @@ from collections.abc import Callable
 import numpy as np
 
 from ..sdf import compiled, safe_normalize
-from ..sdf.base import Field
-from ..sdf.operators import Scale, Transform
-from ..sdf.polygonal import HalfPlane
 from ..settings import Settings
 from ..shapes import Shape
 from ..vec2 import rotate
 from .contacts import Contacts
 from .mesh_contacts import EDGE_START, VERTEX_START, mesh_in_field
 from .polygons import polygon_contacts, polygon_table
+from .shape_fields import ShapeFields, flat_field, pair_fields
 
 __all__ = [
+    "BATCH_FUNCTIONS",
     "KIND_ORDER",
     "PAIR_FUNCTIONS",
+    "BatchFunction",
     "PairFunction",
     "collide_circle_and_field",
     "collide_circles",
     "collide_mesh_and_sdf",
+    "collide_mesh_sdf_pairs",
     "collide_meshes",
+    "collide_sdf_pairs",
     "collide_sdfs",
     "feature_key",
 ]
@@ -92,6 +94,17 @@ KIND_ORDER = ("circle", "mesh", "sdf")
 
 PairFunction = Callable[[Shape, Shape, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                          float, Settings], Contacts]
+
+
+#: A batched pair function: ``fn(fields, shape_a, shape_b, body_a, body_b, pose_a, pose_b,
+#: margin, run, settings) -> Contacts`` over P pairs of one kind pair and any shapes
+#: whose fields compile: shape_a, shape_b (P,) int64 rows of ``fields``
+#: (``ShapeFields``), margin (P,) m each pair's, run (P,) int64 each pair's batch (the
+#: pairs of one shape pair share one: ``sdf.program_table``); the other arguments and
+#: the result as a ``PairFunction``'s. One call for all of a query's pairs of the kind:
+#: the same contacts as a ``PairFunction`` call per shape pair.
+BatchFunction = Callable[[ShapeFields, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                          np.ndarray, np.ndarray, np.ndarray, np.ndarray, Settings], Contacts]
 
 SOURCE_ANALYTIC, SOURCE_A_IN_B, SOURCE_B_IN_A, SOURCE_FIELDS = 0, 1, 2, 3
 #: Source of mesh-sdf contacts found from the sdf's side (``mesh_sdf.sdf_in_mesh``).
@@ -259,18 +272,6 @@ def collide_meshes(mesh_a: Shape, mesh_b: Shape, body_a: np.ndarray, body_b: np.
     return Contacts.concatenate([first, second])
 
 
-def _flat(field: Field) -> bool:
-    """True when ``field``'s solid is a half-plane (through rigid motions and scaling).
-
-    A half-plane has no corner and no bulge that could press into a mesh face: the
-    mesh's vertices in it are the exact deepest points, so the reverse view of
-    ``collide_mesh_and_sdf`` adds nothing and is skipped (the ground of most scenes).
-    """
-    while isinstance(field, (Transform, Scale)):
-        field = field.of
-    return isinstance(field, HalfPlane)
-
-
 def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
                          pose_a: np.ndarray, pose_b: np.ndarray, margin: float,
                          settings: Settings) -> Contacts:
@@ -290,7 +291,8 @@ def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b
        underestimates the depth (a square corner pressed straight in: by 29 %) and
        takes the corner's side as normal.
 
-    A flat sdf (a half-plane, ``_flat``) runs the first direction only: it is exact there.
+    A flat sdf (a half-plane, ``shape_fields.flat_field``) runs the first direction only:
+    it is exact there.
     Each direction's wrong view of the other's case (shallower, within its depth of
     the right one) is shadowed in the reduction (``reduce``). Cost per group: the
     first direction's ``descent_iterations + 3`` evaluations of the sdf field, one
@@ -299,14 +301,48 @@ def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b
     """
     from .mesh_sdf import sdf_in_mesh
 
+    fields = pair_fields(mesh_a, sdf_b)
+    if fields.program[0] >= 0 and fields.program[1] >= 0:
+        n = len(body_a)
+        zero = np.zeros(n, np.int64)
+        return collide_mesh_sdf_pairs(fields, zero, zero + 1, body_a, body_b, pose_a, pose_b,
+                                      np.full(n, float(margin)), zero, settings)
     pair, point, out_b, depth, tri, start = mesh_in_field(mesh_a, sdf_b, pose_a, pose_b,
                                                           margin, settings, False)
     forward = Contacts(body_a[pair], body_b[pair], point, -out_b, depth,
                        feature_key(SOURCE_A_IN_B, tri, start))
-    if _flat(sdf_b.field):
+    if flat_field(sdf_b):
         return forward
     pair, point, normal, depth, edge, start = sdf_in_mesh(mesh_a, sdf_b, pose_a, pose_b,
                                                           margin, settings)
+    reverse = Contacts(body_a[pair], body_b[pair], point, normal, depth,
+                       feature_key(SOURCE_SDF_IN_MESH, edge << _EDGE_SHIFT, start))
+    return Contacts.concatenate([forward, reverse])
+
+
+def collide_mesh_sdf_pairs(fields: ShapeFields, shape_a: np.ndarray, shape_b: np.ndarray,
+                           body_a: np.ndarray, body_b: np.ndarray, pose_a: np.ndarray,
+                           pose_b: np.ndarray, margin: np.ndarray, run: np.ndarray,
+                           settings: Settings) -> Contacts:
+    """``collide_mesh_and_sdf`` of mesh-sdf pairs of any shapes whose fields compile (a
+    ``BatchFunction``): the meshes in the sdf fields (``mesh_contacts.mesh_in_fields``),
+    then the sdf bodies in the meshes where the sdf is not flat
+    (``mesh_sdf.sdf_in_meshes``), each a pass of compiled calls over all pairs, run by
+    run: the same contacts, to the bit, as a call per shape pair."""
+    from .mesh_contacts import mesh_in_fields
+    from .mesh_sdf import sdf_in_meshes
+
+    pair, point, out_b, depth, tri, start = mesh_in_fields(fields, shape_a, shape_b, pose_a,
+                                                           pose_b, margin, run, settings, False)
+    forward = Contacts(body_a[pair], body_b[pair], point, -out_b, depth,
+                       feature_key(SOURCE_A_IN_B, tri, start))
+    rows = np.flatnonzero(~fields.flat[shape_b])
+    if len(rows) == 0:
+        return forward
+    pair, point, normal, depth, edge, start = sdf_in_meshes(
+        fields, shape_a[rows], shape_b[rows], pose_a[rows], pose_b[rows], margin[rows],
+        run[rows], settings)
+    pair = rows[pair]
     reverse = Contacts(body_a[pair], body_b[pair], point, normal, depth,
                        feature_key(SOURCE_SDF_IN_MESH, edge << _EDGE_SHIFT, start))
     return Contacts.concatenate([forward, reverse])
@@ -320,23 +356,28 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
     Each pair is solved in a's body frame: b placed by the relative pose (angle
     a_b - a_a, offset R_a^T (x_b - x_a)), ``settings.field_descent_starts`` Halton
     starts over the overlap of the two bounds (grown by the margin), at most
-    ``settings.field_descent_iterations`` descent iterations on max(f_a, f_b).
-    Points, normals (a toward b) and depths come back in a's frame and are rotated
-    to the world; keys are (source 3, start id).
+    ``settings.field_descent_iterations`` descent iterations on max(f_a, f_b); the
+    overlapping contacts re-measured one-sided at sharp features
+    (``field_pairs.one_sided_depths``), then speculative points along each contact's
+    tangent (``field_pairs.tangent_samples``). Points, normals (a toward b) and depths
+    come back in a's frame and are rotated to the world; keys are (source 3, start id).
 
     The region needs b bounded: when only a is bounded (an sdf body whose shape was
     made before the sdf ground's), the pair is solved the other way round and flipped.
 
-    Cost: one ``field_field_contacts`` call for the whole group (the pairs share
-    the two fields; only b's pose in a's frame and the region differ), so each
-    descent iteration is one evaluation of each field over the points of all
-    pairs.
+    When both fields compile this is ``collide_sdf_pairs`` (the batched pair function
+    ``_narrowphase`` calls for all sdf-sdf pairs of a query at once); otherwise the
+    numpy path of the same stages, the tests' reference.
     """
     from .field_pairs import one_sided_depths, placed_field_contacts, tangent_samples
 
+    fields = pair_fields(sdf_a, sdf_b)
+    if fields.program[0] >= 0 and fields.program[1] >= 0:
+        n = len(body_a)
+        zero = np.zeros(n, np.int64)
+        return collide_sdf_pairs(fields, zero, zero + 1, body_a, body_b, pose_a, pose_b,
+                                 np.full(n, float(margin)), zero, settings)
     if not math.isfinite(sdf_b.radius) and math.isfinite(sdf_a.radius):   # bounded: finite
-        # The descent's region is b's bounds placed in a's frame: solve with the
-        # unbounded shape (a ground) as a, then give the contacts back a -> b.
         c = collide_sdfs(sdf_b, sdf_a, body_b, body_a, pose_b, pose_a, margin, settings)
         return Contacts(c.body_b, c.body_a, c.point, -c.normal, c.depth, c.feature)
     angle = pose_b[:, 2] - pose_a[:, 2]
@@ -354,6 +395,48 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
                     rotate(normal, rot), depth, feature_key(SOURCE_FIELDS, element, start))
 
 
+def collide_sdf_pairs(fields: ShapeFields, shape_a: np.ndarray, shape_b: np.ndarray,
+                      body_a: np.ndarray, body_b: np.ndarray, pose_a: np.ndarray,
+                      pose_b: np.ndarray, margin: np.ndarray, run: np.ndarray,
+                      settings: Settings) -> Contacts:
+    """``collide_sdfs`` of sdf-sdf pairs of any shapes whose fields compile, in one pass
+    of compiled calls (a ``BatchFunction``): the placements, the descent and the merges
+    (``field_pairs.placed_contacts``), the one-sided depths and the tangent samples,
+    each pair with its own fields, bounds and margin, each shape pair's points in its
+    own batches: the same contacts, to the bit, as a call per shape pair. A pair whose
+    b is unbounded and a bounded is solved the other way round and flipped back."""
+    from .field_pairs import PairPrograms, one_sided_programs, placed_contacts, tangent_programs
+
+    radius = fields.radius
+    flip = ~np.isfinite(radius[shape_b]) & np.isfinite(radius[shape_a])
+    if flip.any():
+        swap = flip[:, None]
+        shape_a, shape_b = np.where(flip, shape_b, shape_a), np.where(flip, shape_a, shape_b)
+        body_a, body_b = np.where(flip, body_b, body_a), np.where(flip, body_a, body_b)
+        pose_a, pose_b = np.where(swap, pose_b, pose_a), np.where(swap, pose_a, pose_b)
+    programs = PairPrograms(fields.table, fields.program[shape_a], fields.program[shape_b],
+                            run)
+    angle = pose_b[:, 2] - pose_a[:, 2]
+    offset = _to_local(pose_b[:, :2], pose_a)
+    _, pair, point, depth, normal, start = placed_contacts(
+        programs, offset, angle, fields.bounds[shape_a], fields.bounds[shape_b], margin,
+        settings.field_descent_starts, settings.field_descent_iterations)
+    point, depth, normal = one_sided_programs(programs, offset, angle, pair, point, depth,
+                                              normal)
+    pair, point, depth, normal, start, element = tangent_programs(
+        programs, offset, angle, pair, point, depth, normal, start, margin,
+        np.minimum(radius[shape_a], radius[shape_b]), settings.field_tangent_samples)
+    rot = pose_a[pair, 2]
+    normal = rotate(normal, rot)
+    lo, hi = body_a[pair], body_b[pair]
+    if flip.any():
+        back = flip[pair]
+        lo, hi = np.where(back, hi, lo), np.where(back, lo, hi)
+        normal = np.where(back[:, None], -normal, normal)
+    return Contacts(lo, hi, rotate(point, rot) + pose_a[pair, :2], normal, depth,
+                    feature_key(SOURCE_FIELDS, element, start))
+
+
 #: (kind_a, kind_b) -> pair function, kind_a <= kind_b in KIND_ORDER.
 PAIR_FUNCTIONS: dict[tuple[str, str], PairFunction] = {
     ("circle", "circle"): collide_circles,
@@ -362,4 +445,10 @@ PAIR_FUNCTIONS: dict[tuple[str, str], PairFunction] = {
     ("mesh", "mesh"): collide_meshes,
     ("mesh", "sdf"): collide_mesh_and_sdf,
     ("sdf", "sdf"): collide_sdfs,
+}
+
+#: (kind_a, kind_b) -> batched pair function (``BatchFunction``), where there is one.
+BATCH_FUNCTIONS: dict[tuple[str, str], BatchFunction] = {
+    ("mesh", "sdf"): collide_mesh_sdf_pairs,
+    ("sdf", "sdf"): collide_sdf_pairs,
 }

@@ -137,8 +137,9 @@ from .opcodes import (
 )
 from .primitive_kernels import _box, _polygon, _segment, _shape
 
-__all__ = ["RUN_RESULT", "RUN_TYPES", "Program", "compile_field", "distance", "evaluate",
-           "field_program", "run", "run_shared", "scratch"]
+__all__ = ["RUN_RESULT", "RUN_TYPES", "Program", "compile_field", "consts_changed",
+           "consts_version", "distance", "evaluate", "field_program", "run", "run_shared",
+           "scratch"]
 
 @dataclass(frozen=True)
 class Program:
@@ -154,6 +155,22 @@ class Program:
     depth: int
     nesting: int
     externals: tuple[Field, ...] = ()
+
+
+#: How many times a program's constants were changed in place (a baked grid's nodes
+#: edited, ``sdf.edit``): the tables that hold copies of programs' constants
+#: (``sdf.program_table``, ``collide.shape_fields``) are rebuilt when it moved.
+_CONSTS_VERSION = [0]
+
+
+def consts_changed() -> None:
+    """Note that some program's constants were changed in place."""
+    _CONSTS_VERSION[0] += 1
+
+
+def consts_version() -> int:
+    """The count of in-place changes of programs' constants so far."""
+    return _CONSTS_VERSION[0]
 
 
 class _Builder:

@@ -49,6 +49,7 @@ import numpy as np
 
 from .._jit import njit
 from .base import Field
+from .compiled import consts_changed
 from .grid import GridField
 from .opcodes import GRID
 
@@ -132,6 +133,7 @@ def edit_grid(grid: GridField, shape: Field, position, angle: float, deposit: bo
     program = grid.__dict__.get("_compiled_program")
     if program:
         write_window(program.code, program.consts, 0, grid, (i0, i1, j0, j1))
+    consts_changed()
     return i0, i1, j0, j1
 
 
