@@ -28,13 +28,24 @@ SDF_SPECS = [
                               "distance": 0.35}},
     {"type": "sdf", "field": {"type": "circle", "radius": 0.4}},
 ]
+#: Shapes of the other kinds: circles and meshes (a box, a concave L) meet the sdf shapes
+#: in the circle-sdf and mesh-sdf batches.
+OTHER_SPECS = [
+    {"type": "circle", "radius": 0.25},
+    {"type": "circle", "radius": 0.4},
+    {"type": "box", "size": [0.6, 0.3]},
+    {"type": "polygon", "points": [[-0.5, -0.5], [0.5, -0.5], [0.5, -0.2], [-0.2, -0.2],
+                                   [-0.2, 0.5], [-0.5, 0.5]]},
+]
 
 
-def _scene(rng, n_bodies: int):
+def _scene(rng, n_bodies: int, others: bool = False):
     """Shapes, each body's shape (B,) and poses (B, 3): bodies of every shape (two or more
-    of most, so that groups hold several pairs), heaped near the ground at y = 0."""
-    shapes = [shape_from_spec(spec, f"shape {k}") for k, spec in enumerate(SDF_SPECS)]
-    body_shape = np.r_[1, rng.choice([0, 2, 3, 4, 5], n_bodies - 1)]
+    of most, so that groups hold several pairs), heaped near the ground at y = 0; with
+    ``others``, circles and meshes among them."""
+    specs = SDF_SPECS + (OTHER_SPECS if others else [])
+    shapes = [shape_from_spec(spec, f"shape {k}") for k, spec in enumerate(specs)]
+    body_shape = np.r_[1, rng.choice(np.delete(np.arange(len(specs)), 1), n_bodies - 1)]
     pose = np.column_stack([rng.uniform(-1.5, 1.5, n_bodies), rng.uniform(-0.3, 1.2, n_bodies),
                             rng.uniform(-np.pi, np.pi, n_bodies)])
     pose[0] = 0.0
@@ -48,23 +59,25 @@ def _sorted(c):
 
 
 @pytest.mark.parametrize("seed", [3, 11, 29])
-def test_sdf_pairs_in_one_call_equal_a_call_per_shape_pair(seed, monkeypatch):
+def test_pairs_of_a_kind_in_one_call_equal_a_call_per_shape_pair(seed, monkeypatch):
     rng = np.random.default_rng(seed)
-    shapes, body_shape, pose = _scene(rng, 14)
+    shapes, body_shape, pose = _scene(rng, 24, others=True)
     distinct, canonical = _distinct(shapes)
     i, j = np.triu_indices(len(body_shape), 1)
     pairs = np.column_stack([i, j])
     reach = rng.uniform(0.0, 0.05, len(body_shape))
     settings = Settings()
-    calls = []
-    batch = BATCH_FUNCTIONS[("sdf", "sdf")]
-    monkeypatch.setitem(BATCH_FUNCTIONS, ("sdf", "sdf"),
-                        lambda *args: calls.append(len(args[1])) or batch(*args))
+    calls = {kinds: [] for kinds in BATCH_FUNCTIONS}
+    for kinds, batch in list(BATCH_FUNCTIONS.items()):
+        monkeypatch.setitem(BATCH_FUNCTIONS, kinds,
+                            lambda *args, _k=kinds, _f=batch: calls[_k].append(len(args[1]))
+                            or _f(*args))
     together = _narrowphase(distinct, canonical[body_shape], pairs, pose, 0.02, reach, settings)
-    assert len(calls) == 1 and calls[0] > 20       # all searched sdf-sdf pairs in one call
+    for kinds, made in calls.items():               # all of a kind's pairs in one call
+        assert len(made) == 1 and made[0] >= 2, kinds
     monkeypatch.setattr(collide, "_BATCHED", {})
     apart = _narrowphase(distinct, canonical[body_shape], pairs, pose, 0.02, reach, settings)
-    assert len(together) > 20 and len(np.unique(together.body_a * 100 + together.body_b)) > 8
+    assert len(together) > 40 and len(np.unique(together.body_a * 100 + together.body_b)) > 20
     for mine, theirs in zip(_sorted(together), _sorted(apart), strict=True):
         np.testing.assert_array_equal(mine, theirs)
 

@@ -90,8 +90,7 @@ from .predicted import (
     IMPLIED_COSINE,
     IMPLIED_ROUND_OFF,
     predicted_contacts,
-    predicted_field_contacts,
-    predicted_mesh_contacts,
+    predicted_pair_contacts,
 )
 from .reduce import reduce_contacts
 from .shape_fields import ShapeFields
@@ -512,12 +511,11 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], tables: _ShapeTable
         key = key[np.concatenate([[True], key[1:] != key[:-1]])]
         return _without_sensors(np.column_stack([key // n, key % n]), pair_filter)
 
-    if fields.any():
-        extra = Contacts.concatenate([extra, predicted_field_contacts(
-            shapes, body_shape, touching(fields), *state)])
-    if meshes.any():
-        extra = Contacts.concatenate([extra, predicted_mesh_contacts(
-            shapes, body_shape, contacts, touching(meshes), *state)])
+    if fields.any() or meshes.any():
+        none = np.zeros((0, 2), np.int64)
+        extra = Contacts.concatenate([extra, predicted_pair_contacts(
+            shapes, body_shape, contacts, touching(fields) if fields.any() else none,
+            touching(meshes) if meshes.any() else none, *state)])
     if len(extra) == 0:
         return contacts
     c = Contacts.concatenate([contacts, extra])

@@ -452,7 +452,7 @@ def _sampled_runs(fields: ShapeFields, other_of: np.ndarray, run: np.ndarray,
     of_run = run[kept_pair]
     bounds = np.flatnonzero(np.r_[True, of_run[1:] != of_run[:-1], True])
     for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-        field = fields.field_of[other_of[kept_pair[lo]]]
+        field = fields.shape_of[other_of[kept_pair[lo]]].field
         p, v, start_ids = _sampled_minima(field, tri[lo:hi], settings)
         point[lo:hi], value[lo:hi] = p, v
     return point, value, start_ids

@@ -65,6 +65,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..sdf import compiled, safe_normalize
+from ..sdf.program_table import evaluate_runs
 from ..settings import Settings
 from ..shapes import Shape
 from ..vec2 import rotate
@@ -80,8 +81,10 @@ __all__ = [
     "BatchFunction",
     "PairFunction",
     "collide_circle_and_field",
+    "collide_circle_field_pairs",
     "collide_circles",
     "collide_mesh_and_sdf",
+    "collide_mesh_pairs",
     "collide_mesh_sdf_pairs",
     "collide_meshes",
     "collide_sdf_pairs",
@@ -171,18 +174,20 @@ def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray
     touches two of Box2D's convex pieces.
     """
     r = circle_a.radius
+    concave = shape_b.kind == "mesh" and not shape_b.convex
+    if not concave and compiled.compile_field(shape_b.field) is not None:
+        n = len(body_a)
+        zero = np.zeros(n, np.int64)
+        return collide_circle_field_pairs(pair_fields(circle_a, shape_b), zero, zero + 1,
+                                          body_a, body_b, pose_a, pose_b,
+                                          np.full(n, float(margin)), zero, settings)
     centre = _to_local(pose_a[:, :2], pose_b)
     d, g = compiled.evaluate(shape_b.field, centre)
-    depth = r - d
-    keep = depth > -margin
-    concave = shape_b.kind == "mesh" and not shape_b.convex
+    keep = r - d > -margin
     if concave:
         outside = d > 0.0            # these get a contact per outline feature within reach
         keep &= ~outside
-    g_world = rotate(safe_normalize(g[keep]), pose_b[keep, 2])
-    point = pose_a[keep, :2] - (0.5 * (d[keep] + r))[:, None] * g_world
-    contacts = Contacts(body_a[keep], body_b[keep], point, -g_world, depth[keep],
-                        np.full(len(point), _ANALYTIC_KEY, np.int64))
+    contacts = _circle_rows(np.full(len(d), r), d, g, keep, body_a, body_b, pose_a, pose_b)
     if not concave:
         return contacts
     row, out, s, element, start = _circle_outside_concave_mesh(shape_b, centre[outside], r,
@@ -193,6 +198,35 @@ def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray
     return Contacts.concatenate([contacts, Contacts(
         body_a[rows], body_b[rows], point, -normal, r - s,
         feature_key(SOURCE_ANALYTIC, element, start))])
+
+
+def collide_circle_field_pairs(fields: ShapeFields, shape_a: np.ndarray, shape_b: np.ndarray,
+                               body_a: np.ndarray, body_b: np.ndarray, pose_a: np.ndarray,
+                               pose_b: np.ndarray, margin: np.ndarray, run: np.ndarray,
+                               settings: Settings) -> Contacts:
+    """``collide_circle_and_field`` of circle-sdf pairs of any shapes whose fields compile
+    (a ``BatchFunction``): one evaluation of all the fields at the circles' centres
+    (``sdf.program_table.evaluate_runs``, each shape pair's centres one batch), the same
+    contacts, to the bit, as a call per shape pair."""
+    r = fields.radius[shape_a]
+    centre = _to_local(pose_a[:, :2], pose_b)
+    table = fields.table
+    d, g = evaluate_runs(table.code, table.consts, table.start, table.depth, table.nesting,
+                         fields.program[shape_b], run, np.arange(len(run)),
+                         np.ascontiguousarray(centre), len(run))
+    return _circle_rows(r, d, g, r - d > -margin, body_a, body_b, pose_a, pose_b)
+
+
+def _circle_rows(r: np.ndarray, d: np.ndarray, g: np.ndarray, keep: np.ndarray,
+                 body_a: np.ndarray, body_b: np.ndarray, pose_a: np.ndarray,
+                 pose_b: np.ndarray) -> Contacts:
+    """The contacts of circles of radii r (n,) whose centres have the values d (n,) and
+    gradients g (n, 2) of the other fields (their frames), the rows ``keep`` (n,) bool
+    (``collide_circle_and_field``'s formulas)."""
+    g_world = rotate(safe_normalize(g[keep]), pose_b[keep, 2])
+    point = pose_a[keep, :2] - (0.5 * (d[keep] + r[keep]))[:, None] * g_world
+    return Contacts(body_a[keep], body_b[keep], point, -g_world, (r - d)[keep],
+                    np.full(len(point), _ANALYTIC_KEY, np.int64))
 
 
 @functools.lru_cache(maxsize=64)
@@ -261,15 +295,49 @@ def collide_meshes(mesh_a: Shape, mesh_b: Shape, body_a: np.ndarray, body_b: np.
             np.ascontiguousarray(pose_a, np.float64), np.ascontiguousarray(pose_b, np.float64),
             float(margin), float(settings.linear_slop))
         return Contacts(body_a[pair], body_b[pair], point, normal, depth, feature)
-    pair, point, out_b, depth, tri, start = mesh_in_field(mesh_a, mesh_b, pose_a, pose_b,
-                                                          margin, settings, True)
-    first = Contacts(body_a[pair], body_b[pair], point, -out_b, depth,
-                     feature_key(SOURCE_A_IN_B, tri, start))
-    pair, point, out_a, depth, tri, start = mesh_in_field(mesh_b, mesh_a, pose_b, pose_a,
-                                                          margin, settings, True)
-    second = Contacts(body_a[pair], body_b[pair], point, out_a, depth,
-                      feature_key(SOURCE_B_IN_A, tri, start))
-    return Contacts.concatenate([first, second])
+    n = len(body_a)
+    zero = np.zeros(n, np.int64)
+    return collide_mesh_pairs(pair_fields(mesh_a, mesh_b), zero, zero + 1, body_a, body_b,
+                              pose_a, pose_b, np.full(n, float(margin)), zero, settings)
+
+
+def collide_mesh_pairs(fields: ShapeFields, shape_a: np.ndarray, shape_b: np.ndarray,
+                       body_a: np.ndarray, body_b: np.ndarray, pose_a: np.ndarray,
+                       pose_b: np.ndarray, margin: np.ndarray, run: np.ndarray,
+                       settings: Settings) -> Contacts:
+    """``collide_meshes`` of mesh-mesh pairs of any shapes (a ``BatchFunction``; mesh
+    fields always compile): the pairs with a concave mesh, each mesh in the other's
+    field both ways, in two passes of compiled calls over all of them
+    (``mesh_contacts.mesh_in_fields``, run by run); pairs of two convex meshes (met here
+    only off the closed-form fast path) by a ``collide_meshes`` call per shape pair. The
+    same contacts, to the bit, as a call per shape pair."""
+    from .mesh_contacts import mesh_in_fields
+
+    convex = fields.convex_mesh[shape_a] & fields.convex_mesh[shape_b]
+    parts = []
+    bounds = np.flatnonzero(np.r_[True, run[1:] != run[:-1], True])
+    shapes = fields.shape_of
+    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+        if convex[lo]:
+            parts.append(collide_meshes(shapes[shape_a[lo]], shapes[shape_b[lo]],
+                                        body_a[lo:hi], body_b[lo:hi], pose_a[lo:hi],
+                                        pose_b[lo:hi], float(margin[lo]), settings))
+    rows = np.flatnonzero(~convex)
+    if len(rows) == 0:
+        return Contacts.concatenate(parts)
+    a, b, pa, pb = shape_a[rows], shape_b[rows], pose_a[rows], pose_b[rows]
+    m, r = margin[rows], run[rows]
+    pair, point, out_b, depth, tri, start = mesh_in_fields(fields, a, b, pa, pb, m, r, settings,
+                                                           True)
+    pair = rows[pair]
+    parts.append(Contacts(body_a[pair], body_b[pair], point, -out_b, depth,
+                          feature_key(SOURCE_A_IN_B, tri, start)))
+    pair, point, out_a, depth, tri, start = mesh_in_fields(fields, b, a, pb, pa, m, r, settings,
+                                                           True)
+    pair = rows[pair]
+    parts.append(Contacts(body_a[pair], body_b[pair], point, out_a, depth,
+                          feature_key(SOURCE_B_IN_A, tri, start)))
+    return Contacts.concatenate(parts)
 
 
 def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndarray,
@@ -449,6 +517,8 @@ PAIR_FUNCTIONS: dict[tuple[str, str], PairFunction] = {
 
 #: (kind_a, kind_b) -> batched pair function (``BatchFunction``), where there is one.
 BATCH_FUNCTIONS: dict[tuple[str, str], BatchFunction] = {
+    ("circle", "sdf"): collide_circle_field_pairs,
+    ("mesh", "mesh"): collide_mesh_pairs,
     ("mesh", "sdf"): collide_mesh_sdf_pairs,
     ("sdf", "sdf"): collide_sdf_pairs,
 }

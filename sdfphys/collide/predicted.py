@@ -46,8 +46,8 @@ Kept when within the pair's margin (depth > -(speculative distance + reach_a +
 reach_b)); key ``source SOURCE_PREDICTED`` (6), element 0, start 0, one per pair. The
 caller drops the rows that only repeat a contact of the pair (``collide._implied``).
 
-Sdf pairs (``predicted_field_contacts``). A corner of a turning sdf body sweeps into
-the other body the same way (scenes/sdf_primitives.toml: a hexagram and a pie
+Sdf pairs (``predicted_pair_contacts``, ``_field_corners``). A corner of a turning sdf
+body sweeps into the other body the same way (scenes/sdf_primitives.toml: a hexagram and a pie
 spinning at -3.1 and +3.7 rad/s, touching at one place, met at another 0.4 m away
 32 mm deep within a step). For each sdf-sdf pair with a contact and a body turning
 more than the slop at its bounding radius this step, the pair's own query runs at the
@@ -61,7 +61,7 @@ row on the material point its end-pose contact is made of, ahead of the current 
 brakes it (an sdf disc rolling down a ramp: acceleration 0.3 % -> 6 % off). Key:
 source 6, bit FIELD_PAIR, then the end contact's source, element and start.
 
-Mesh pairs (``predicted_mesh_contacts``). A contact of a concave (triangulated) mesh
+Mesh pairs (``predicted_pair_contacts``, ``_new_faces``). A contact of a concave (triangulated) mesh
 is an element (a vertex, a triangle's deepest point) measured against the face of the
 other body nearest it; its row holds that face only. An element sliding along one face
 toward another that rises ahead of it (into a concave corner), or pushed around a
@@ -75,7 +75,7 @@ pair's query runs at the end poses as for sdf pairs, and an end contact is kept 
 its element has no contact now along the same normal (to the bodies' turn in the step
 plus ``NEW_FACE_ANGLE``): the face it will meet. Carried back and keyed as the sdf
 pairs' rows. Convex pairs (boxes, convex polygons) are clipped as Box2D clips them and
-get none.
+get none. The sdf pairs' and the mesh pairs' end poses are one narrowphase query.
 """
 
 from __future__ import annotations
@@ -93,8 +93,7 @@ from .contacts import Contacts
 from .curvature import curvature_radii
 
 __all__ = ["FIELD_PAIR", "IMPLIED_COSINE", "IMPLIED_ROUND_OFF", "SOURCE_PREDICTED",
-           "predicted_contacts", "predicted_field_contacts", "predicted_mesh_contacts",
-           "predicted_pairs"]
+           "predicted_contacts", "predicted_pair_contacts", "predicted_pairs"]
 
 #: Feature key source of predicted contacts (``narrowphase``'s key layout).
 SOURCE_PREDICTED = 6
@@ -202,57 +201,68 @@ def predicted_pairs(pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray
                              | (fast > slop * slop)))
 
 
-def predicted_field_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
-                             pairs: np.ndarray, radius: np.ndarray, position: np.ndarray,
-                             angle: np.ndarray, velocity: np.ndarray,
-                             angular_velocity: np.ndarray, reach: np.ndarray,
-                             settings: Settings) -> Contacts:
-    """The predicted contacts of sdf-sdf ``pairs`` (P, 2) (pairs of two sdf bodies with a
-    contact) with a body that turns more than the slop at its bounding radius this step,
-    at its corners (module docstring, "Sdf pairs").
+def predicted_pair_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
+                            contacts: Contacts, field_pairs: np.ndarray, mesh_pairs: np.ndarray,
+                            radius: np.ndarray, position: np.ndarray, angle: np.ndarray,
+                            velocity: np.ndarray, angular_velocity: np.ndarray,
+                            reach: np.ndarray, settings: Settings) -> Contacts:
+    """The predicted contacts of sdf-sdf ``field_pairs`` (P, 2) with a contact, where a
+    body turns more than the slop at its bounding radius this step, at its corners
+    (module docstring, "Sdf pairs"), and of ``mesh_pairs`` (Q, 2) with a concave mesh and
+    a contact (``contacts``, sorted by pair) whose bodies move against each other by more
+    than the slop this step, where an element meets a face its contact now is not on
+    ("Mesh pairs"): both from one narrowphase query at the end poses (the two sets'
+    shape pairs differ, so each pair's contacts are those of a query of its set alone).
 
     shapes, body_shape, radius, position, angle, velocity, angular_velocity: as
     ``predicted_contacts``; reach (B,) m, the bodies' reach (the pairs keep their
-    margins); settings: the world's. Returns body_a < body_b contacts sorted by (pair,
-    feature).
+    margins); settings: the world's. Returns body_a < body_b contacts, the sdf pairs'
+    then the mesh pairs', each sorted by (pair, feature).
     """
     dt = float(settings.dt)
     turning = _turns(angular_velocity, radius, dt, float(settings.linear_slop))
-    pairs = pairs[turning[pairs[:, 0]] | turning[pairs[:, 1]]]
-    c, end = _end_contacts(shapes, body_shape, pairs, position, angle, velocity,
-                           angular_velocity, reach, settings)
+    field_pairs = field_pairs[turning[field_pairs[:, 0]] | turning[field_pairs[:, 1]]]
+    # |w| R, 0 for a body that does not turn (an unbounded one has R = inf).
+    with np.errstate(invalid="ignore"):
+        sweep = np.where(angular_velocity == 0.0, 0.0, np.abs(angular_velocity) * radius)
+    relative = velocity[mesh_pairs[:, 0]] - velocity[mesh_pairs[:, 1]]
+    travel = (np.sqrt(relative[:, 0] ** 2 + relative[:, 1] ** 2) + sweep[mesh_pairs[:, 0]]
+              + sweep[mesh_pairs[:, 1]]) * dt
+    mesh_pairs = mesh_pairs[travel > settings.linear_slop]
+    c, end = _end_contacts(shapes, body_shape, np.concatenate([field_pairs, mesh_pairs]),
+                           position, angle, velocity, angular_velocity, reach, settings)
     if len(c) == 0:
         return c
-    # A turning body's corner or flat (no centre of curvature at its end contact).
+    n = np.int64(len(angle))
+    of_field = np.isin(c.body_a * n + c.body_b, np.minimum(field_pairs[:, 0], field_pairs[:, 1])
+                       * n + np.maximum(field_pairs[:, 0], field_pairs[:, 1]))
+    return Contacts.concatenate([
+        _field_corners(shapes, body_shape, c.take(of_field), end, turning, position,
+                       angular_velocity, dt),
+        _new_faces(c.take(~of_field), contacts, end, position, angular_velocity, dt)])
+
+
+def _field_corners(shapes: Sequence[Shape], body_shape: np.ndarray, c: Contacts,
+                   end: np.ndarray, turning: np.ndarray, position: np.ndarray,
+                   angular_velocity: np.ndarray, dt: float) -> Contacts:
+    """Of sdf pairs' end-pose contacts ``c``, those at a turning body's corner or flat (no
+    centre of curvature there), carried back to the step's start."""
+    if len(c) == 0:
+        return c
     rho_a, rho_b = curvature_radii(shapes, body_shape, end[:, :2], end[:, 2],
-                                   np.ones(len(angle), bool), c)
+                                   np.ones(len(end), bool), c)
     corner = (turning[c.body_a] & (rho_a == 0.0)) | (turning[c.body_b] & (rho_b == 0.0))
     return _carried_back(c.take(corner), position, end, angular_velocity, dt)
 
 
-def predicted_mesh_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
-                            contacts: Contacts, pairs: np.ndarray, radius: np.ndarray,
-                            position: np.ndarray, angle: np.ndarray, velocity: np.ndarray,
-                            angular_velocity: np.ndarray, reach: np.ndarray,
-                            settings: Settings) -> Contacts:
-    """The predicted contacts of ``pairs`` (P, 2) with a concave mesh and a contact
-    (``contacts``, sorted by pair) whose bodies move against each other by more than the
-    slop this step, where an element meets a face its contact now is not on (module
-    docstring, "Mesh pairs"). Other arguments as ``predicted_field_contacts``."""
-    dt = float(settings.dt)
-    # |w| R, 0 for a body that does not turn (an unbounded one has R = inf).
-    with np.errstate(invalid="ignore"):
-        sweep = np.where(angular_velocity == 0.0, 0.0, np.abs(angular_velocity) * radius)
-    relative = velocity[pairs[:, 0]] - velocity[pairs[:, 1]]
-    travel = (np.sqrt(relative[:, 0] ** 2 + relative[:, 1] ** 2) + sweep[pairs[:, 0]]
-              + sweep[pairs[:, 1]]) * dt
-    c, end = _end_contacts(shapes, body_shape, pairs[travel > settings.linear_slop],
-                           position, angle, velocity, angular_velocity, reach, settings)
+def _new_faces(c: Contacts, contacts: Contacts, end: np.ndarray, position: np.ndarray,
+               angular_velocity: np.ndarray, dt: float) -> Contacts:
+    """Of mesh pairs' end-pose contacts ``c``, those whose element (feature key) has no
+    contact now (``contacts``, sorted by pair) along its normal, up to the bodies' turn in
+    the step, carried back to the step's start."""
     if len(c) == 0:
         return c
-    # New faces: an end contact whose element (feature key) has no contact now along its
-    # normal, up to the bodies' turn in the step.
-    owner, row = contacts.pair_rows(c, np.int64(len(angle)))
+    owner, row = contacts.pair_rows(c, np.int64(len(end)))
     turn = (np.abs(angular_velocity[c.body_a]) + np.abs(angular_velocity[c.body_b])) * dt
     aligned = ((contacts.feature[row] == c.feature[owner])
                & (np.einsum("ij,ij->i", contacts.normal[row], c.normal[owner])

@@ -50,8 +50,8 @@ class ShapeFields:
     outlines (body frame, m), shape s's rows ``vertex_start[s]:vertex_start[s + 1]``
     (S + 1,); ``triangles`` (T, 3) int64 their triangles (indices into the shape's own
     outline), ``outline_edges`` (T, 3) bool, shape s's rows
-    ``triangle_start[s]:triangle_start[s + 1]``. ``field_of``: the shapes' fields (S,),
-    for the paths that evaluate them from Python."""
+    ``triangle_start[s]:triangle_start[s + 1]``; ``convex_mesh`` (S,) bool, convex
+    meshes. ``shape_of``: the shapes (S,), for the paths that run per shape pair."""
 
     table: ProgramTable | None
     program: np.ndarray
@@ -64,7 +64,8 @@ class ShapeFields:
     triangles: np.ndarray
     outline_edges: np.ndarray
     triangle_start: np.ndarray
-    field_of: tuple
+    convex_mesh: np.ndarray
+    shape_of: tuple
 
     @classmethod
     def of(cls, shapes: Sequence[Shape]) -> ShapeFields:
@@ -86,7 +87,8 @@ class ShapeFields:
                    np.ascontiguousarray(np.concatenate(triangles), np.int64),
                    np.ascontiguousarray(np.concatenate(edges), bool),
                    np.cumsum([0] + [len(t) for t in triangles]).astype(np.int64),
-                   tuple(s.field for s in shapes))
+                   np.array([m is not None and bool(m.convex) for m in meshes], bool),
+                   tuple(shapes))
 
 
 #: (id(a), id(b)) -> (a, b, constants' version, their ShapeFields): the tables of one
