@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import world_sleep
-from .collide import Contacts, compile_evaluator, find_contacts
+from .collide import Contacts, compile_evaluator, find_contacts, shape_fields
 from .collide import compile_ahead as collide_ahead
 from .collide import compile_behind as collide_behind
 from .collide.curvature import curvature_radii, turning_bodies
@@ -141,15 +141,16 @@ def prepare(world: World, contacts: Contacts, bodies: BodyState) -> ContactConst
     ``collide.curvature``), masses, base separations, warm-start impulses."""
     curvature = None
     if world.settings.curvature_anchors and len(contacts):
-        sdf = np.array([shape.kind == "sdf" for shape in world._shapes])
+        fields, canonical = shape_fields(collision_shapes(world))
+        body_shape = canonical[world._view("shape_id")]
         turning = np.zeros(0, bool)                     # no sdf shape: none turns
-        if sdf.any():
-            turning = sdf[world._view("shape_id")] & turning_bodies(
+        if fields.sdf.any():
+            turning = fields.sdf[body_shape] & turning_bodies(
                 world._view("kind") == STATIC, bodies.angular_velocity, bodies.radius,
                 world.settings.dt)
         if turning.any():
-            curvature = curvature_radii(collision_shapes(world), world._view("shape_id"),
-                                        bodies.com, bodies.angle, turning, contacts)
+            curvature = curvature_radii(fields, body_shape, bodies.com, bodies.angle, turning,
+                                        contacts)
     constraints = prepare_contacts(contacts, bodies, world._view("friction"),
                                    world._view("restitution"), world._impulses,
                                    world.settings.warm_starting, world._gravity,

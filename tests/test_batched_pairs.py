@@ -122,3 +122,25 @@ def test_descent_blocks_hold_whole_runs():
     assert _block_ends(bounds, 5).tolist() == [5, 10, 13]
     assert _block_ends(np.array([0, 10], np.int64), 4).tolist() == [4, 8, 10]
     assert _block_ends(np.array([0], np.int64), 4).tolist() == []
+
+
+def test_fields_evaluated_by_shape_equal_a_call_per_shape():
+    """``shape_fields.evaluate_by_shape``: points of interleaved shapes, each shape's in
+    one batch of the table, as ``compiled.evaluate`` per shape (the same bits); a shape
+    whose field does not compile takes the call per shape."""
+    from sdfphys.collide.shape_fields import evaluate_by_shape
+    from sdfphys.sdf import compiled
+
+    rng = np.random.default_rng(4)
+    shapes = [shape_from_spec(spec, "s") for spec in SDF_SPECS + OTHER_SPECS]
+    shape = rng.integers(0, len(shapes), 300)
+    points = rng.uniform(-1.5, 1.5, (300, 2))
+    for fields in (ShapeFields.of(shapes),
+                   ShapeFields.of(shapes[:2] + [SdfShape(Opaque(shapes[2].user_field))]
+                                  + shapes[3:])):
+        f, g = evaluate_by_shape(fields, shape, points)
+        for s in range(len(shapes)):
+            at = np.flatnonzero(shape == s)
+            expected = compiled.evaluate(fields.shape_of[s].field, points[at])
+            np.testing.assert_array_equal(f[at], expected[0])
+            np.testing.assert_array_equal(g[at], expected[1])

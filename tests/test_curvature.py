@@ -9,6 +9,7 @@ import pytest
 from sdfphys import Settings, World
 from sdfphys.collide.contacts import Contacts
 from sdfphys.collide.curvature import curvature_radii
+from sdfphys.collide.shape_fields import ShapeFields
 from sdfphys.shapes import shape_from_spec
 
 DISC = {"type": "sdf", "field": {"type": "circle", "radius": 0.5}}
@@ -27,7 +28,8 @@ def _radii(spec, point, normal, depth=0.0, turning=True):
     contacts = Contacts(np.array([0]), np.array([1]), (rot @ np.asarray(point, float))[None],
                         (rot @ np.asarray(normal, float))[None], np.array([depth]),
                         np.array([0]))
-    rho_a, rho_b = curvature_radii(shapes, np.arange(2), np.array([[5.0, 5.0], [0.0, 0.0]]),
+    rho_a, rho_b = curvature_radii(ShapeFields.of(shapes), np.arange(2),
+                                   np.array([[5.0, 5.0], [0.0, 0.0]]),
                                    np.array([0.0, turn]), np.array([True, turning]), contacts)
     assert rho_a[0] == 0.0                          # circles are round bodies, not measured
     return rho_b[0]

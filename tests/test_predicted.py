@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from sdfphys.collide.predicted import SOURCE_PREDICTED, predicted_contacts
+from sdfphys.collide.shape_fields import ShapeFields
 from sdfphys.shapes import shape_from_spec
 from sdfphys.vec2 import rotate
 
@@ -20,7 +21,7 @@ def query(position, angle, velocity, spin, margin=0.5, specs=(PADDLE, BALL)):
     """predicted_contacts of body 0 and body 1 (one candidate pair)."""
     shapes = [shape_from_spec(s) for s in specs]
     return predicted_contacts(
-        shapes, np.arange(2), np.array([[0, 1]]),
+        ShapeFields.of(shapes), np.arange(2), np.array([[0, 1]]),
         np.array([s.kind == "circle" for s in shapes]), np.array([s.radius for s in shapes]),
         np.array(position, float), np.array(angle, float), np.array(velocity, float),
         np.array(spin, float), DT, SLOP, margin, np.zeros(2))

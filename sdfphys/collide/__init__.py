@@ -96,7 +96,8 @@ from .reduce import reduce_contacts
 from .shape_fields import ShapeFields
 
 __all__ = ["REACH_CAP_RADII", "UNBOUNDED_RADIUS", "ContactCache", "Contacts", "collide",
-           "compile_behind", "compile_evaluator", "find_contacts", "speculative_reach"]
+           "compile_behind", "compile_evaluator", "find_contacts", "shape_fields",
+           "speculative_reach"]
 
 #: A body's reach (extra speculative margin) is capped at this many bounding radii.
 REACH_CAP_RADII = 2.0
@@ -171,6 +172,13 @@ class _ShapeTables:
 _TABLES: dict[tuple[Shape, ...], _ShapeTables] = {}
 #: Shape lists whose tables are kept (a world keeps one; tests make many).
 _TABLES_KEPT = 16
+
+
+def shape_fields(shapes: Sequence[Shape]) -> tuple[ShapeFields, np.ndarray]:
+    """The distinct ``shapes``' ``ShapeFields`` (cached with their tables) and, per entry
+    of ``shapes``, its row in it."""
+    distinct, canonical = _distinct(shapes)
+    return _tables(distinct).fields, canonical
 
 
 def _tables(shapes: list[Shape]) -> _ShapeTables:
@@ -483,8 +491,9 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], tables: _ShapeTable
     if tables.mixed:             # a circle and a body that is not one: their pairs
         if chosen is not None:
             pairs = pairs[chosen]
-        extra = predicted_contacts(shapes, body_shape, _without_sensors(pairs, pair_filter),
-                                   is_circle, radius, position, angle, velocity,
+        extra = predicted_contacts(tables.fields, body_shape,
+                                   _without_sensors(pairs, pair_filter), is_circle, radius,
+                                   position, angle, velocity,
                                    angular_velocity, float(settings.dt),
                                    float(settings.linear_slop),
                                    float(settings.speculative_distance), reach,
@@ -514,7 +523,8 @@ def _with_predicted(contacts: Contacts, shapes: list[Shape], tables: _ShapeTable
     if fields.any() or meshes.any():
         none = np.zeros((0, 2), np.int64)
         extra = Contacts.concatenate([extra, predicted_pair_contacts(
-            shapes, body_shape, contacts, touching(fields) if fields.any() else none,
+            shapes, tables.fields, body_shape, contacts,
+            touching(fields) if fields.any() else none,
             touching(meshes) if meshes.any() else none, *state)])
     if len(extra) == 0:
         return contacts

@@ -28,14 +28,12 @@ Knob: ``Settings.curvature_anchors``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 
-from ..sdf import compiled, safe_normalize
-from ..shapes import Shape
+from ..sdf import safe_normalize
 from ..vec2 import rotate
 from .contacts import Contacts
+from .shape_fields import ShapeFields, evaluate_by_shape
 
 __all__ = ["ALIGNED", "CURVATURE_STEP", "FLAT", "ON_SURFACE", "RISE", "curvature_radii",
            "turning_bodies"]
@@ -62,19 +60,20 @@ FLAT = 10.0
 RISE = 1e-4
 
 
-def curvature_radii(shapes: Sequence[Shape], shape_id: np.ndarray, com: np.ndarray,
+def curvature_radii(fields: ShapeFields, shape_id: np.ndarray, com: np.ndarray,
                     angle: np.ndarray, turning: np.ndarray,
                     contacts: Contacts) -> tuple[np.ndarray, np.ndarray]:
     """(rho_a, rho_b) (K,) m: the radius of curvature of body a's and body b's surface at
     each contact (module docstring), 0 where not measured.
 
-    shapes: the collision shapes, shape_id (B,) into them; com (B, 2) m, angle (B,) rad:
-    the bodies' poses; turning (B,) bool: the bodies whose anchors move by turning
-    (``turning_bodies``); contacts: point midway between the surfaces, normal a -> b,
-    depth. One field evaluation per shape, of both sides' points."""
+    fields: the collision shapes' ``ShapeFields``, shape_id (B,) its rows; com (B, 2) m,
+    angle (B,) rad: the bodies' poses; turning (B,) bool: the bodies whose anchors move
+    by turning (``turning_bodies``); contacts: point midway between the surfaces, normal
+    a -> b, depth. Each shape's field evaluated once, at both sides' points
+    (``shape_fields.evaluate_by_shape``)."""
     k = len(contacts)
     radii = np.zeros(2 * k)                                 # rho_a then rho_b
-    curved_shape = np.array([s.kind == "sdf" and np.isfinite(s.radius) for s in shapes])
+    curved_shape = fields.sdf & np.isfinite(fields.radius)
     body = np.concatenate([contacts.body_a, contacts.body_b])
     rows = np.flatnonzero(turning[body] & curved_shape[shape_id[body]])
     if len(rows) == 0:
@@ -87,16 +86,10 @@ def curvature_radii(shapes: Sequence[Shape], shape_id: np.ndarray, com: np.ndarr
     surface = contacts.point[contact] + (sign * 0.5 * contacts.depth[contact])[:, None] * n
     local = rotate(surface - com[b], -angle[b])
     tangent = rotate(np.column_stack([-n[:, 1], n[:, 0]]), -angle[b])
-    reach = np.array([s.radius if curved else 0.0 for s, curved in zip(shapes, curved_shape,
-                                                                         strict=True)])[shape_id[b]]
+    reach = np.where(curved_shape, fields.radius, 0.0)[shape_id[b]]
     step = (CURVATURE_STEP * reach)[:, None] * tangent
-    f = np.empty(2 * len(rows))
-    g = np.empty((2 * len(rows), 2))
     points = np.concatenate([local + step, local - step])
-    sid = np.tile(shape_id[b], 2)
-    for s in np.unique(sid):
-        at = np.flatnonzero(sid == s)
-        f[at], g[at] = compiled.evaluate(shapes[s].field, points[at])
+    f, g = evaluate_by_shape(fields, np.tile(shape_id[b], 2), points)
     g = safe_normalize(g)
     ahead, behind = g[:len(rows)], g[len(rows):]
     kappa = np.einsum("ij,ij->i", ahead - behind, tangent) / (2.0 * CURVATURE_STEP * reach)

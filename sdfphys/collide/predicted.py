@@ -85,12 +85,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..sdf import compiled, safe_normalize
+from ..sdf import safe_normalize
 from ..settings import Settings
 from ..shapes import Shape
 from ..vec2 import rotate
 from .contacts import Contacts
 from .curvature import curvature_radii
+from .shape_fields import ShapeFields, evaluate_by_shape
 
 __all__ = ["FIELD_PAIR", "IMPLIED_COSINE", "IMPLIED_ROUND_OFF", "SOURCE_PREDICTED",
            "predicted_contacts", "predicted_pair_contacts", "predicted_pairs"]
@@ -124,14 +125,14 @@ def _turns(angular_velocity: np.ndarray, radius: np.ndarray, dt: float,
         return np.abs(angular_velocity) * radius * dt > slop
 
 
-def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: np.ndarray,
+def predicted_contacts(fields: ShapeFields, body_shape: np.ndarray, pairs: np.ndarray,
                        is_circle: np.ndarray, radius: np.ndarray, position: np.ndarray,
                        angle: np.ndarray, velocity: np.ndarray,
                        angular_velocity: np.ndarray, dt: float, slop: float,
                        margin: float, reach: np.ndarray, picked: bool = False) -> Contacts:
     """The predicted contacts (module docstring) of the candidate ``pairs`` (P, 2), i < j.
 
-    shapes: distinct Shape objects, body_shape (B,) index into them; is_circle (B,)
+    fields: the distinct shapes' ``ShapeFields``, body_shape (B,) its rows; is_circle (B,)
     bool; radius (B,) m, bounding radii about the centres of mass (a circle's is its
     radius); position (B, 2) m, angle (B,) rad, velocity (B, 2) m/s, angular_velocity
     (B,) rad/s: the step's start values; dt s; slop m (``Settings.linear_slop``);
@@ -155,11 +156,7 @@ def predicted_contacts(shapes: Sequence[Shape], body_shape: np.ndarray, pairs: n
     centre_end = position[c] + velocity[c] * dt
     body_end = position[b] + velocity[b] * dt
     local = rotate(centre_end - body_end, -(angle[b] + turn))
-    d = np.empty(len(c))
-    g = np.empty((len(c), 2))
-    for sid in np.unique(body_shape[b]):
-        at = np.flatnonzero(body_shape[b] == sid)
-        d[at], g[at] = compiled.evaluate(shapes[sid].field, local[at])
+    d, g = evaluate_by_shape(fields, body_shape[b], local)
     out = rotate(safe_normalize(g), angle[b] + turn)                   # n', out of b
     surface_end = centre_end - d[:, None] * out                        # q'
     material = position[b] + rotate(surface_end - body_end, -turn)     # q0
@@ -201,8 +198,9 @@ def predicted_pairs(pairs: np.ndarray, is_circle: np.ndarray, radius: np.ndarray
                              | (fast > slop * slop)))
 
 
-def predicted_pair_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
-                            contacts: Contacts, field_pairs: np.ndarray, mesh_pairs: np.ndarray,
+def predicted_pair_contacts(shapes: Sequence[Shape], fields: ShapeFields,
+                            body_shape: np.ndarray, contacts: Contacts,
+                            field_pairs: np.ndarray, mesh_pairs: np.ndarray,
                             radius: np.ndarray, position: np.ndarray, angle: np.ndarray,
                             velocity: np.ndarray, angular_velocity: np.ndarray,
                             reach: np.ndarray, settings: Settings) -> Contacts:
@@ -214,7 +212,7 @@ def predicted_pair_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
     ("Mesh pairs"): both from one narrowphase query at the end poses (the two sets'
     shape pairs differ, so each pair's contacts are those of a query of its set alone).
 
-    shapes, body_shape, radius, position, angle, velocity, angular_velocity: as
+    shapes, fields, body_shape, radius, position, angle, velocity, angular_velocity: as
     ``predicted_contacts``; reach (B,) m, the bodies' reach (the pairs keep their
     margins); settings: the world's. Returns body_a < body_b contacts, the sdf pairs'
     then the mesh pairs', each sorted by (pair, feature).
@@ -237,19 +235,19 @@ def predicted_pair_contacts(shapes: Sequence[Shape], body_shape: np.ndarray,
     of_field = np.isin(c.body_a * n + c.body_b, np.minimum(field_pairs[:, 0], field_pairs[:, 1])
                        * n + np.maximum(field_pairs[:, 0], field_pairs[:, 1]))
     return Contacts.concatenate([
-        _field_corners(shapes, body_shape, c.take(of_field), end, turning, position,
+        _field_corners(fields, body_shape, c.take(of_field), end, turning, position,
                        angular_velocity, dt),
         _new_faces(c.take(~of_field), contacts, end, position, angular_velocity, dt)])
 
 
-def _field_corners(shapes: Sequence[Shape], body_shape: np.ndarray, c: Contacts,
+def _field_corners(fields: ShapeFields, body_shape: np.ndarray, c: Contacts,
                    end: np.ndarray, turning: np.ndarray, position: np.ndarray,
                    angular_velocity: np.ndarray, dt: float) -> Contacts:
     """Of sdf pairs' end-pose contacts ``c``, those at a turning body's corner or flat (no
     centre of curvature there), carried back to the step's start."""
     if len(c) == 0:
         return c
-    rho_a, rho_b = curvature_radii(shapes, body_shape, end[:, :2], end[:, 2],
+    rho_a, rho_b = curvature_radii(fields, body_shape, end[:, :2], end[:, 2],
                                    np.ones(len(end), bool), c)
     corner = (turning[c.body_a] & (rho_a == 0.0)) | (turning[c.body_b] & (rho_b == 0.0))
     return _carried_back(c.take(corner), position, end, angular_velocity, dt)

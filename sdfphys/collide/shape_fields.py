@@ -19,11 +19,11 @@ import numpy as np
 from ..sdf import compiled
 from ..sdf.operators import Scale, Transform
 from ..sdf.polygonal import HalfPlane
-from ..sdf.program_table import ProgramTable, program_table
+from ..sdf.program_table import ProgramTable, evaluate_runs, program_table
 from ..shapes import Shape
 from .descent import field_convex
 
-__all__ = ["ShapeFields", "flat_field", "pair_fields"]
+__all__ = ["ShapeFields", "evaluate_by_shape", "flat_field", "pair_fields"]
 
 
 def flat_field(shape: Shape) -> bool:
@@ -46,10 +46,11 @@ class ShapeFields:
     its field does not compile, ``sdf.compiled.compile_field``); ``bounds`` (S, 4)
     body-frame AABBs; ``radius`` (S,) bounding radii (m, inf if unbounded); ``flat``
     (S,) bool (``flat_field``); ``convex`` (S,) bool, the field convex by construction
-    (``descent.field_convex``). Meshes: ``vertices`` (V, 2) their counter-clockwise
-    outlines (body frame, m), shape s's rows ``vertex_start[s]:vertex_start[s + 1]``
-    (S + 1,); ``triangles`` (T, 3) int64 their triangles (indices into the shape's own
-    outline), ``outline_edges`` (T, 3) bool, shape s's rows
+    (``descent.field_convex``); ``sdf`` (S,) bool, the sdf shapes. Meshes: ``vertices``
+    (V, 2) their counter-clockwise outlines (body frame, m), shape s's rows
+    ``vertex_start[s]:vertex_start[s + 1]`` (S + 1,); ``triangles`` (T, 3) int64 their
+    triangles (indices into the shape's own outline), ``outline_edges`` (T, 3) bool,
+    shape s's rows
     ``triangle_start[s]:triangle_start[s + 1]``; ``convex_mesh`` (S,) bool, convex
     meshes. ``shape_of``: the shapes (S,), for the paths that run per shape pair."""
 
@@ -59,6 +60,7 @@ class ShapeFields:
     radius: np.ndarray
     flat: np.ndarray
     convex: np.ndarray
+    sdf: np.ndarray
     vertices: np.ndarray
     vertex_start: np.ndarray
     triangles: np.ndarray
@@ -82,6 +84,7 @@ class ShapeFields:
                    np.array([s.radius for s in shapes], np.float64),
                    np.array([flat_field(s) for s in shapes], bool),
                    np.array([field_convex(s.field) for s in shapes], bool),
+                   np.array([s.kind == "sdf" for s in shapes], bool),
                    np.ascontiguousarray(np.concatenate(vertices), np.float64),
                    np.cumsum([0] + [len(v) for v in vertices]).astype(np.int64),
                    np.ascontiguousarray(np.concatenate(triangles), np.int64),
@@ -108,3 +111,29 @@ def pair_fields(a: Shape, b: Shape) -> ShapeFields:
             _PAIRS.pop(next(iter(_PAIRS)))
         hit = _PAIRS[key] = (a, b, compiled.consts_version(), ShapeFields.of([a, b]))
     return hit[3]
+
+
+def evaluate_by_shape(fields: ShapeFields, shape: np.ndarray, points: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Value (N,) and gradient (N, 2) of shape shape[i]'s field (rows of ``fields``) at
+    points[i] (N, 2) of its frame (m): each shape's points one batch, in their order,
+    as a ``compiled.evaluate`` call per shape (the same bits) in one kernel call; a call
+    per shape where some field does not compile."""
+    n = len(shape)
+    if n == 0:
+        return np.zeros(0), np.zeros((0, 2))
+    if np.any(fields.program[shape] < 0):
+        f, g = np.empty(n), np.empty((n, 2))
+        for s in np.unique(shape):
+            at = np.flatnonzero(shape == s)
+            f[at], g[at] = compiled.evaluate(fields.shape_of[s].field, points[at])
+        return f, g
+    order = np.argsort(shape, kind="stable")
+    t = fields.table
+    f_sorted, g_sorted = evaluate_runs(t.code, t.consts, t.start, t.depth, t.nesting,
+                                       fields.program, np.arange(len(fields.program)),
+                                       np.ascontiguousarray(shape[order]),
+                                       np.ascontiguousarray(points[order], np.float64), n)
+    f, g = np.empty(n), np.empty((n, 2))
+    f[order], g[order] = f_sorted, g_sorted
+    return f, g
