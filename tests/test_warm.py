@@ -151,7 +151,7 @@ def test_the_parent_s_share_compiles_what_its_step_calls_and_changes_nothing(mon
     w.add_body({"type": "box", "size": [1.0, 1.0]}, position=(-1.0, 1.2), velocity=(0.5, -1.0),
                restitution=0.5)
     w.add_body({"type": "sdf", "field": {"type": "box", "size": [0.8, 0.4]}}, position=(1.0, 0.7))
-    kernels = ((contact_cache, "_merged"), (reduce, "_reduce"), (mesh_contacts, "finish_runs"),
+    kernels = ((contact_cache, "_merged"), (reduce, "_reduce"), (mesh_contacts, "_finish"),
                (softness, "_row_softness_kernel"), (rows, "_prepare_kernel"),
                (restitution, "_restitution_kernel"), (warm_start, "_match_sorted"),
                (world_sleep, "falling_asleep"))

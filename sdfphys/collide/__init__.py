@@ -226,6 +226,19 @@ def _groups(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray
 _BATCHED = {KIND_ORDER.index(a) * 3 + KIND_ORDER.index(b): (a, b) for a, b in BATCH_FUNCTIONS}
 
 
+def _batched_groups(tables: _ShapeTables, sa: np.ndarray, sb: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Per group of shapes sa, sb (G,): its kind pair as kind_rank[a] * 3 + kind_rank[b],
+    and whether a batched pair function takes it (its kind pair has one and both fields
+    compile)."""
+    kind = tables.kind_rank[sa] * 3 + tables.kind_rank[sb]
+    batched = np.isin(kind, list(_BATCHED))
+    if batched.any():
+        fields = tables.fields
+        batched &= (fields.program[sa] >= 0) & (fields.program[sb] >= 0)
+    return kind, batched
+
+
 def _pair_calls(shapes: list[Shape], body_shape: np.ndarray, first: np.ndarray,
                 second: np.ndarray, lo: np.ndarray, hi: np.ndarray, pose: np.ndarray,
                 group_margin: np.ndarray, settings: Settings,
@@ -236,11 +249,7 @@ def _pair_calls(shapes: list[Shape], body_shape: np.ndarray, first: np.ndarray,
     others (``_narrowphase``)."""
     tables = _tables(shapes)
     sa, sb = body_shape[first[lo]], body_shape[second[lo]]
-    kind = tables.kind_rank[sa] * 3 + tables.kind_rank[sb]
-    batched = np.isin(kind, list(_BATCHED))
-    if batched.any():
-        fields = tables.fields
-        batched &= (fields.program[sa] >= 0) & (fields.program[sb] >= 0)
+    kind, batched = _batched_groups(tables, sa, sb)
     parts = []
     for g in np.flatnonzero(~batched):
         shape_a, shape_b = shapes[sa[g]], shapes[sb[g]]
@@ -599,7 +608,10 @@ def compile_ahead(shapes: Sequence[Shape], shape_id: np.ndarray, position: np.nd
     rest = pairs[~analytic_pair(shape_class[pairs[:, 0]], shape_class[pairs[:, 1]])]
     first, second, lo, hi = _groups(distinct, body_shape, rest)
     if not later:
-        for g in reversed(range(len(lo))):
+        # ``_pair_calls``' order (the groups without a batched function, then the batched
+        # kinds in turn), from its end.
+        kind, batched = _batched_groups(tables, body_shape[first[lo]], body_shape[second[lo]])
+        for g in reversed(np.lexsort((np.arange(len(lo)), np.where(batched, kind, -1)))):
             a, b = first[lo[g]:hi[g]], second[lo[g]:hi[g]]
             run(a, b, pose[a], pose[b])
         return

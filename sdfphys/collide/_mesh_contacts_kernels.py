@@ -1,12 +1,10 @@
 """The compiled stages of ``mesh_contacts.mesh_in_field`` around the descent.
 
-``place_runs`` puts the meshes in the other bodies' frames and culls their triangles;
-``finish_runs`` turns the descent's minima into contacts (merged starts, vertex and edge
+``_place`` puts the mesh in the other body's frame and culls its triangles;
+``_finish`` turns the descent's minima into contacts (merged starts, vertex and edge
 keys, the normals measured on faces and kinks); ``_evaluate`` runs a field program on
-a batch of points. Both take many shape pairs in one call and work run by run
-(``_runs``: the pairs of one shape pair), each run's points in its own batches. Each
-follows the numpy stages of ``mesh_contacts``, which the tests compare it with; the
-method and the constants' reasons are in that module's docstring.
+a batch of points. Each follows the numpy stages of ``mesh_contacts``, which the tests
+compare it with; the method and the constants' reasons are in that module's docstring.
 """
 
 from __future__ import annotations
@@ -14,17 +12,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import types
 
 from .._jit import njit
-from .._shared_kernel import F1, F2, F3, I1, I2, shared
 from ..sdf.compiled import run_shared, scratch
 from ..sorting import stable_argsort
 from ..vec2 import unit_or
 from ._compiled_descent import enclosing_circles
-from ._runs import run_starts
 
-__all__ = ["EDGE_START", "VERTEX_START", "finish_runs", "place_runs"]
+__all__ = ["EDGE_START", "VERTEX_START"]
 
 #: Start id of vertex keys: the key's element is then a mesh vertex index.
 VERTEX_START = 255
@@ -58,6 +53,53 @@ def _evaluate(code: np.ndarray, consts: np.ndarray, depth: int, nesting: int,
 
 
 @njit(cache=True, error_model="numpy")
+def _place(mesh_vertices: np.ndarray, triangles: np.ndarray, cos: np.ndarray, sin: np.ndarray,
+           co: np.ndarray, so: np.ndarray, pose_mesh: np.ndarray, pose_other: np.ndarray,
+           code: np.ndarray, consts: np.ndarray, depth: int, nesting: int, margin: float
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The mesh in other's frame for n pairs, and ``descent.triangle_cull``.
+
+    mesh_vertices (V, 2), triangles (T, 3): the mesh; cos, sin (n,): of the mesh's
+    angle relative to other; co, so (n,): of other's angle (numpy's cos and sin,
+    computed by the caller); poses (n, 3) world; the program of other's field.
+    Returns vertices (n, V, 2), triangles (n T, 3, 2) in other's frame, the kept
+    triangles' indices (K,) into them (f < R + margin at the enclosing circle's
+    centre) and their vertices (K, 3, 2). The operations of ``_mesh_in_field_numpy``
+    (einsum's sums start from 0.0).
+    """
+    n, m, n_tri = cos.shape[0], mesh_vertices.shape[0], triangles.shape[0]
+    vertices = np.empty((n, m, 2))
+    for k in range(n):
+        dx, dy = pose_mesh[k, 0] - pose_other[k, 0], pose_mesh[k, 1] - pose_other[k, 1]
+        ox, oy = co[k] * dx + so[k] * dy, -so[k] * dx + co[k] * dy
+        c, s = cos[k], sin[k]
+        for v in range(m):
+            x, y = mesh_vertices[v, 0], mesh_vertices[v, 1]
+            vertices[k, v, 0] = (0.0 + c * x + (-s) * y) + ox
+            vertices[k, v, 1] = (0.0 + s * x + c * y) + oy
+    local = np.empty((n * n_tri, 3, 2))
+    for k in range(n):
+        for t in range(n_tri):
+            for j in range(3):
+                local[k * n_tri + t, j, 0] = vertices[k, triangles[t, j], 0]
+                local[k * n_tri + t, j, 1] = vertices[k, triangles[t, j], 1]
+    centre, radius = enclosing_circles(local)
+    f, _ = _evaluate(code, consts, depth, nesting, centre, centre.shape[0])
+    count = 0
+    kept = np.empty(n * n_tri, dtype=np.int64)
+    for i in range(n * n_tri):
+        if f[i] < radius[i] + margin:
+            kept[count] = i
+            count += 1
+    kept = kept[:count]
+    tri = np.empty((count, 3, 2))
+    for h in range(count):
+        for j in range(3):
+            tri[h, j, 0], tri[h, j, 1] = local[kept[h], j, 0], local[kept[h], j, 1]
+    return vertices, local, kept, tri
+
+
+@njit(cache=True, error_model="numpy")
 def _first_rows(pair: np.ndarray, element: np.ndarray, start: np.ndarray, n: int
                 ) -> np.ndarray:
     """``_first_per_key`` of the first n rows (element * 256 + start: start < 256)."""
@@ -75,103 +117,19 @@ def _first_rows(pair: np.ndarray, element: np.ndarray, start: np.ndarray, n: int
     return np.flatnonzero(first)
 
 
-# --------------------------------------------------------------------------------------
-# Many shape pairs in one call, run by run (``_runs``)
-# --------------------------------------------------------------------------------------
-
 @njit(cache=True, error_model="numpy")
-def place_runs(all_vertices: np.ndarray, vertex_start: np.ndarray, all_triangles: np.ndarray,
-               triangle_start: np.ndarray, mesh_of: np.ndarray, all_cos: np.ndarray,
-               all_sin: np.ndarray, all_co: np.ndarray, all_so: np.ndarray,
-               all_pose_mesh: np.ndarray, all_pose_other: np.ndarray, all_code: np.ndarray,
-               consts: np.ndarray, program_start: np.ndarray, depth: int, nesting: int,
-               program: np.ndarray, run: np.ndarray, all_margin: np.ndarray):
-    """The meshes in the other bodies' frames for n pairs, and ``descent.triangle_cull``,
-    run by run (a run: consecutive pairs of one run id, one mesh, one other field and
-    one margin; ``_runs``).
+def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarray,
+            kept: np.ndarray, point: np.ndarray, value: np.ndarray, distinct: np.ndarray,
+            start_ids: np.ndarray, code: np.ndarray, consts: np.ndarray, depth_p: int,
+            nesting: int, margin: float, polygon_pair: bool, slop: float, co: np.ndarray,
+            so: np.ndarray, pose_other: np.ndarray):
+    """Stages 1 (after the descent) to 4 and the world frame, as ``_mesh_in_field_numpy``.
 
-    all_vertices (V, 2), vertex_start (S + 1,), all_triangles (T, 3), triangle_start
-    (S + 1,): the meshes' outlines and triangles (``shape_fields.ShapeFields``);
-    mesh_of (n,): each pair's mesh; all_cos, all_sin (n,): of the mesh's angle relative
-    to other; all_co, all_so (n,): of other's angle (numpy's cos and sin, computed by
-    the caller); poses (n, 3) world; all_code .. nesting: the fields' ``ProgramTable``,
-    program (n,) each pair's other field; run (n,), all_margin (n,) m. Per run: the
-    mesh's vertices (n_r, V_r, 2) and triangles (n_r T_r, 3, 2) in other's frame, the
-    triangles kept (f < R + margin at the enclosing circle's centre). The operations of
-    ``_mesh_in_field_numpy`` (einsum's sums start from 0.0).
-
-    Returns the placed outlines (sum of the pairs' V_k, 2), pair k's rows from
-    vertex_at[k] (n + 1,), and per kept triangle (K, in pair order) its pair, its index
-    in its mesh and its vertices (K, 3, 2) in other's frame.
-    """
-    all_n = all_cos.shape[0]
-    vertex_at = np.zeros(all_n + 1, np.int64)
-    all_tri = 0
-    for run_k in range(all_n):
-        run_shape = mesh_of[run_k]
-        vertex_at[run_k + 1] = vertex_at[run_k] + vertex_start[run_shape + 1] \
-            - vertex_start[run_shape]
-        all_tri += triangle_start[run_shape + 1] - triangle_start[run_shape]
-    placed = np.empty((vertex_at[all_n], 2))
-    kept_pair = np.empty(all_tri, np.int64)
-    kept_element = np.empty(all_tri, np.int64)
-    kept_tri = np.empty((all_tri, 3, 2))
-    n_kept = 0
-    run_bounds = run_starts(run)
-    for run_index in range(run_bounds.shape[0] - 1):
-        run_first, run_last = run_bounds[run_index], run_bounds[run_index + 1]
-        run_shape, run_program = mesh_of[run_first], program[run_first]
-        mesh_vertices = all_vertices[vertex_start[run_shape]:vertex_start[run_shape + 1]]
-        triangles = all_triangles[triangle_start[run_shape]:triangle_start[run_shape + 1]]
-        cos, sin = all_cos[run_first:run_last], all_sin[run_first:run_last]
-        co, so = all_co[run_first:run_last], all_so[run_first:run_last]
-        pose_mesh = all_pose_mesh[run_first:run_last]
-        pose_other = all_pose_other[run_first:run_last]
-        code = all_code[program_start[run_program]:program_start[run_program + 1]]
-        margin = all_margin[run_first]
-        n, m, n_tri = cos.shape[0], mesh_vertices.shape[0], triangles.shape[0]
-        vertices = placed[vertex_at[run_first]:vertex_at[run_last]].reshape((n, m, 2))
-        for k in range(n):
-            dx, dy = pose_mesh[k, 0] - pose_other[k, 0], pose_mesh[k, 1] - pose_other[k, 1]
-            ox, oy = co[k] * dx + so[k] * dy, -so[k] * dx + co[k] * dy
-            c, s = cos[k], sin[k]
-            for v in range(m):
-                x, y = mesh_vertices[v, 0], mesh_vertices[v, 1]
-                vertices[k, v, 0] = (0.0 + c * x + (-s) * y) + ox
-                vertices[k, v, 1] = (0.0 + s * x + c * y) + oy
-        local = np.empty((n * n_tri, 3, 2))
-        for k in range(n):
-            for t in range(n_tri):
-                for j in range(3):
-                    local[k * n_tri + t, j, 0] = vertices[k, triangles[t, j], 0]
-                    local[k * n_tri + t, j, 1] = vertices[k, triangles[t, j], 1]
-        centre, radius = enclosing_circles(local)
-        f, _ = _evaluate(code, consts, depth, nesting, centre, centre.shape[0])
-        for i in range(n * n_tri):
-            if f[i] < radius[i] + margin:
-                kept_pair[n_kept], kept_element[n_kept] = run_first + i // n_tri, i % n_tri
-                for j in range(3):
-                    kept_tri[n_kept, j, 0], kept_tri[n_kept, j, 1] = local[i, j, 0], local[i, j, 1]
-                n_kept += 1
-    return placed, vertex_at, kept_pair[:n_kept], kept_element[:n_kept], kept_tri[:n_kept]
-
-
-@njit(cache=True, error_model="numpy")
-def _finish_run(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarray,
-                kept: np.ndarray, point: np.ndarray, value: np.ndarray, distinct: np.ndarray,
-                start_ids: np.ndarray, code: np.ndarray, consts: np.ndarray, depth_p: int,
-                nesting: int, margin: float, polygon_pair: bool, slop: float, co: np.ndarray,
-                so: np.ndarray, pose_other: np.ndarray, pair_base: int, all_pair: np.ndarray,
-                all_mid: np.ndarray, all_normal: np.ndarray, all_depth: np.ndarray,
-                all_element: np.ndarray, all_start: np.ndarray, n_out: int) -> int:
-    """Stages 1 (after the descent) to 4 and the world frame of one run (n pairs of one
-    mesh and one other field, the first of them pair ``pair_base``), as
-    ``_mesh_in_field_numpy``: vertices (n, V, 2), kept (K,) into the run's n V placed
-    triangles; point (K, S, 2), value (K, S), distinct (K, S): the descent's minima of
-    the kept triangles and ``descent.merge_minima``; start_ids (S,): their start ids; the
-    rest as ``mesh_in_field``'s. Writes its rows into the all_* arrays from row n_out
-    (pairs + pair_base) and returns the next free row. Rows are written in the numpy stages'
-    order; sorts are stable, as lexsort.
+    vertices (n, V, 2), kept (K,): from ``_place``; point (K, S, 2), value (K, S),
+    distinct (K, S): the descent's minima of the kept triangles and
+    ``descent.merge_minima``; start_ids (S,): their start ids. The rest as
+    ``mesh_in_field``. Returns its six arrays. Rows are written in the numpy
+    stages' order; sorts are stable, as lexsort.
     """
     n, m = vertices.shape[0], vertices.shape[1]
     n_tri = triangles.shape[0]
@@ -378,91 +336,17 @@ def _finish_run(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.n
             u += 1
     take = _first_rows(o_pair, o_element, o_start, rows)
     out = take.shape[0]
+    world_mid = np.empty((out, 2))
+    world_normal = np.empty((out, 2))
     for j in range(out):
         i = take[j]
         k = o_pair[i]
         nx, ny = o_normal[i, 0], o_normal[i, 1]
         half = 0.5 * o_depth[i]
         mx, my = o_point[i, 0] + half * nx, o_point[i, 1] + half * ny
-        o = n_out + j
-        all_mid[o, 0] = (co[k] * mx - so[k] * my) + pose_other[k, 0]
-        all_mid[o, 1] = (so[k] * mx + co[k] * my) + pose_other[k, 1]
-        all_normal[o, 0] = co[k] * nx - so[k] * ny
-        all_normal[o, 1] = so[k] * nx + co[k] * ny
-        all_pair[o], all_depth[o] = pair_base + k, o_depth[i]
-        all_element[o], all_start[o] = o_element[i], o_start[i]
-    return n_out + out
-
-
-#: Boolean C-contiguous 2-D arrays (the triangles' outline edges, the merged starts).
-_B2 = types.boolean[:, ::1]
-# ``_finish_run`` for ``finish_runs``: one machine code per process
-# (``sdfphys._shared_kernel``), not optimised again inside its loop.
-_finish_run_shared = shared(
-    _finish_run, (I2, _B2, F3, I1, F3, F2, _B2, I1, I2, F1, types.int64, types.int64,
-                  types.float64, types.boolean, types.float64, F1, F1, F2, types.int64, I1, F2,
-                  F2, F1, I1, I1, types.int64),
-    "sdfphys_collide_mesh_finish_run", types.int64)
-
-
-@njit(cache=True, error_model="numpy")
-def finish_runs(all_triangles: np.ndarray, all_outline_edges: np.ndarray,
-                triangle_start: np.ndarray, mesh_of: np.ndarray, placed: np.ndarray,
-                vertex_at: np.ndarray, kept_pair: np.ndarray, kept_element: np.ndarray,
-                all_point: np.ndarray, all_value: np.ndarray, all_distinct: np.ndarray,
-                start_ids: np.ndarray, all_code: np.ndarray, consts: np.ndarray,
-                program_start: np.ndarray, depth_p: int, nesting: int, program: np.ndarray,
-                run: np.ndarray, all_margin: np.ndarray, polygon_pair: bool, slop: float,
-                all_co: np.ndarray, all_so: np.ndarray, all_pose_other: np.ndarray):
-    """Stages 1 (after the descent) to 4 and the world frame, as ``_mesh_in_field_numpy``,
-    run by run (``place_runs``' runs), from ``place_runs``' results (placed, vertex_at,
-    kept_pair, kept_element) and the descent's minima of the kept triangles (all_point
-    (K, S, 2), all_value (K, S), all_distinct (K, S): ``descent.merge_minima``);
-    start_ids (S,): their start ids. The rest as ``place_runs``' and ``mesh_in_field``'s.
-    Returns ``mesh_in_field``'s six arrays, pairs into the n, run after run. Rows are
-    written in the numpy stages' order; sorts are stable, as lexsort.
-    """
-    run_bounds = run_starts(run)
-    # At most each run's candidates (the minima and 2 samples per outline vertex) and
-    # each candidate's face measures (one per vertex) come out.
-    run_total = 0
-    for run_index in range(run_bounds.shape[0] - 1):
-        run_first, run_last = run_bounds[run_index], run_bounds[run_index + 1]
-        run_m = vertex_at[run_first + 1] - vertex_at[run_first]
-        run_count = 0
-        for run_h in range(kept_pair.shape[0]):
-            run_count += run_first <= kept_pair[run_h] < run_last
-        run_total += (run_count * all_value.shape[1] + 2 * (run_last - run_first) * run_m) \
-            * (run_m + 1)
-    all_pair = np.empty(run_total, np.int64)
-    all_mid = np.empty((run_total, 2))
-    all_normal = np.empty((run_total, 2))
-    all_depth = np.empty(run_total)
-    all_element = np.empty(run_total, np.int64)
-    all_start = np.empty(run_total, np.int64)
-    n_out = 0
-    run_h = 0
-    for run_index in range(run_bounds.shape[0] - 1):
-        run_first, run_last = run_bounds[run_index], run_bounds[run_index + 1]
-        run_shape, run_program = mesh_of[run_first], program[run_first]
-        run_t0, run_t1 = triangle_start[run_shape], triangle_start[run_shape + 1]
-        run_m = vertex_at[run_first + 1] - vertex_at[run_first]
-        vertices = placed[vertex_at[run_first]:vertex_at[run_last]].reshape(
-            (run_last - run_first, run_m, 2))
-        run_h0 = run_h
-        while run_h < kept_pair.shape[0] and kept_pair[run_h] < run_last:
-            run_h += 1
-        kept = np.empty(run_h - run_h0, np.int64)
-        for run_j in range(run_h - run_h0):
-            kept[run_j] = (kept_pair[run_h0 + run_j] - run_first) * (run_t1 - run_t0) \
-                + kept_element[run_h0 + run_j]
-        n_out = _finish_run_shared(
-            all_triangles[run_t0:run_t1], all_outline_edges[run_t0:run_t1], vertices, kept,
-            all_point[run_h0:run_h], all_value[run_h0:run_h], all_distinct[run_h0:run_h],
-            start_ids, all_code[program_start[run_program]:program_start[run_program + 1]],
-            consts, depth_p, nesting, all_margin[run_first], polygon_pair, slop,
-            all_co[run_first:run_last], all_so[run_first:run_last],
-            all_pose_other[run_first:run_last], run_first, all_pair, all_mid, all_normal,
-            all_depth, all_element, all_start, n_out)
-    return (all_pair[:n_out], all_mid[:n_out], all_normal[:n_out], all_depth[:n_out],
-            all_element[:n_out], all_start[:n_out])
+        world_mid[j, 0] = (co[k] * mx - so[k] * my) + pose_other[k, 0]
+        world_mid[j, 1] = (so[k] * mx + co[k] * my) + pose_other[k, 1]
+        world_normal[j, 0] = co[k] * nx - so[k] * ny
+        world_normal[j, 1] = so[k] * nx + co[k] * ny
+    return (o_pair[take], world_mid, world_normal, o_depth[take], o_element[take],
+            o_start[take])

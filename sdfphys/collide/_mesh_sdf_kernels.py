@@ -3,9 +3,9 @@
 ``mesh_sdf`` describes the method (the support search from the field-field points over
 the sdf body's boundary, then the incident face's far end); its numpy functions
 (``_deepest_on_sdf``, ``_far_ends``, ``_support_numpy``) are the reference these
-kernels are tested against, bit for bit. :func:`support_runs` runs both stages with
-the two fields' programs (``sdf.compiled``) evaluated inside it, the same batches as
-numpy's, for many shape pairs in one call, run by run (``_runs``).
+kernels are tested against, bit for bit. :func:`_support` runs both stages with the
+two fields' programs (``sdf.compiled``) evaluated inside it, the same batches as
+numpy's.
 """
 
 from __future__ import annotations
@@ -13,14 +13,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import types
 
 from .._jit import njit
-from .._shared_kernel import F1, F2, I1, I2, shared
 from ..sorting import stable_argsort
 from ..vec2 import unit_or
 from ._mesh_contacts_kernels import _evaluate
-from ._runs import run_starts
 
 #: Rounds of the support search (``_deepest_on_sdf``), one evaluation of each field
 #: per round for all contacts: 4 rungs x 4 growth per round span 4^8 in step size.
@@ -126,25 +123,20 @@ def _mesh_compiled(code: np.ndarray, consts: np.ndarray, depth: int, nesting: in
 
 
 @njit(cache=True, error_model="numpy")
-def _support_run(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting_s: int,
-                 code_m: np.ndarray, consts_m: np.ndarray, depth_m: int, nesting_m: int,
-                 vertices: np.ndarray, cos: np.ndarray, sin: np.ndarray, offset: np.ndarray,
-                 co: np.ndarray, so: np.ndarray, pose_sdf: np.ndarray, region: np.ndarray,
-                 margin: float, pair: np.ndarray, point: np.ndarray, depth: np.ndarray,
-                 start: np.ndarray, pair_base: int, o_all_pair: np.ndarray,
-                 o_all_mid: np.ndarray, o_all_normal: np.ndarray, o_all_depth: np.ndarray,
-                 o_all_edge: np.ndarray, o_all_start: np.ndarray, n_out: int) -> int:
-    """``_support_numpy`` of one run (n pairs of one mesh and one sdf field, the first of
-    them pair ``pair_base``) with the sdf's (``*_s``) and the mesh's (``*_m``) programs.
+def _support(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting_s: int,
+             code_m: np.ndarray, consts_m: np.ndarray, depth_m: int, nesting_m: int,
+             vertices: np.ndarray, cos: np.ndarray, sin: np.ndarray, offset: np.ndarray,
+             co: np.ndarray, so: np.ndarray, pose_sdf: np.ndarray, region: np.ndarray,
+             margin: float, pair: np.ndarray, point: np.ndarray, depth: np.ndarray,
+             start: np.ndarray):
+    """``_support_numpy`` with the sdf's (``*_s``) and the mesh's (``*_m``) programs.
 
     vertices (M, 2): the mesh's outline; cos, sin (n,): of the mesh's angle in the
     sdf's frame, offset (n, 2) its position there; co, so (n,): of the sdf's angle
     (numpy's cos and sin, from the caller); pose_sdf (n, 3), region (n, 4); the
-    field-field contacts pair (K,) into the run's pairs, point (K, 2), depth (K,),
-    start (K,). Writes ``sdf_in_mesh``'s six arrays' rows into the o_all_* arrays from
-    row n_out (pairs + pair_base) and returns the next free row. Each support-search round
-    and the far ends' probes and ladder evaluate the rows of all contacts in one batch,
-    as numpy does.
+    field-field contacts pair (K,), point (K, 2), depth (K,), start (K,). Returns
+    ``sdf_in_mesh``'s six arrays. Each support-search round and the far ends'
+    probes and ladder evaluate the rows of all contacts in one batch, as numpy does.
     """
     n_c = pair.shape[0]
     m = vertices.shape[0]
@@ -400,6 +392,12 @@ def _support_run(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting
             j += 1
     order = stable_argsort(of_pair)
     total = n_k + n_far
+    out_pair = np.empty(total, dtype=np.int64)
+    out_mid = np.empty((total, 2))
+    out_normal = np.empty((total, 2))
+    out_depth = np.empty(total)
+    out_edge = np.empty(total, dtype=np.int64)
+    out_start = np.empty(total, dtype=np.int64)
     for o in range(total):
         row = rows_of[order[o]]
         h = row % n_k
@@ -412,82 +410,8 @@ def _support_run(code_s: np.ndarray, consts_s: np.ndarray, depth_s: int, nesting
             px, py, d, s_id = end[h, 0], end[h, 1], end_depth[h], start[i] + FAR_END
         half = 0.5 * d
         mx, my = px + half * nx, py + half * ny
-        slot = n_out + o
-        o_all_pair[slot], o_all_depth[slot] = pair_base + k, d
-        o_all_edge[slot], o_all_start[slot] = edge[h], s_id
-        o_all_mid[slot, 0] = (co[k] * mx - so[k] * my) + pose_sdf[k, 0]
-        o_all_mid[slot, 1] = (so[k] * mx + co[k] * my) + pose_sdf[k, 1]
-        o_all_normal[slot, 0] = co[k] * nx - so[k] * ny
-        o_all_normal[slot, 1] = so[k] * nx + co[k] * ny
-    return n_out + total
-
-
-_INT = types.int64
-# ``_support_run`` for ``support_runs``: one machine code per process
-# (``sdfphys._shared_kernel``), not optimised again inside its loop.
-_support_run_shared = shared(
-    _support_run, (I2, F1, _INT, _INT, I2, F1, _INT, _INT, F2, F1, F1, F2, F1, F1, F2, F2,
-                   types.float64, I1, F2, F1, I1, _INT, I1, F2, F2, F1, I1, I1, _INT),
-    "sdfphys_collide_mesh_sdf_support_run", _INT)
-
-
-@njit(cache=True, error_model="numpy")
-def support_runs(all_code: np.ndarray, consts: np.ndarray, program_start: np.ndarray,
-                 table_depth: int, table_nesting: int, program_s: np.ndarray,
-                 program_m: np.ndarray, all_vertices: np.ndarray, vertex_start: np.ndarray,
-                 mesh_of: np.ndarray, run: np.ndarray, all_cos: np.ndarray,
-                 all_sin: np.ndarray, all_offset: np.ndarray, all_co: np.ndarray,
-                 all_so: np.ndarray, all_pose_sdf: np.ndarray, all_region: np.ndarray,
-                 all_margin: np.ndarray, all_pair: np.ndarray, all_point: np.ndarray,
-                 all_depth: np.ndarray, all_start: np.ndarray):
-    """``_support_numpy`` of n pairs of any meshes and sdf fields, run by run (consecutive
-    pairs of one run id: one mesh, one sdf field, one margin; ``_runs``), the sdf's
-    (``*_s``) and the mesh's (``*_m``) programs those of program_s, program_m (n,) in
-    the fields' ``ProgramTable`` (all_code, consts, program_start, table_depth,
-    table_nesting).
-
-    all_vertices (V, 2), vertex_start (S + 1,): the meshes' outlines and mesh_of (n,)
-    each pair's (``shape_fields.ShapeFields``); all_cos, all_sin (n,): of the mesh's
-    angle in the sdf's frame, all_offset (n, 2) its position there; all_co, all_so (n,):
-    of the sdf's angle (numpy's cos and sin, from the caller); all_pose_sdf (n, 3),
-    all_region (n, 4), all_margin (n,) m; the field-field contacts all_pair (K,) in pair
-    order, all_point (K, 2), all_depth (K,), all_start (K,). Returns ``sdf_in_mesh``'s
-    six arrays, pairs into the n, run after run. Each support-search round and the far
-    ends' probes and ladder evaluate the rows of all of a run's contacts in one batch,
-    as numpy does.
-    """
-    run_total = 2 * all_pair.shape[0]          # a contact and its far end at most
-    o_all_pair = np.empty(run_total, np.int64)
-    o_all_mid = np.empty((run_total, 2))
-    o_all_normal = np.empty((run_total, 2))
-    o_all_depth = np.empty(run_total)
-    o_all_edge = np.empty(run_total, np.int64)
-    o_all_start = np.empty(run_total, np.int64)
-    n_out = 0
-    run_bounds = run_starts(run)
-    run_c = 0
-    for run_index in range(run_bounds.shape[0] - 1):
-        run_first, run_last = run_bounds[run_index], run_bounds[run_index + 1]
-        run_c0 = run_c
-        while run_c < all_pair.shape[0] and all_pair[run_c] < run_last:
-            run_c += 1
-        if run_c == run_c0:
-            continue
-        pair = np.empty(run_c - run_c0, np.int64)
-        for run_j in range(run_c - run_c0):
-            pair[run_j] = all_pair[run_c0 + run_j] - run_first
-        run_shape, run_s, run_m = mesh_of[run_first], program_s[run_first], program_m[run_first]
-        n_out = _support_run_shared(
-            all_code[program_start[run_s]:program_start[run_s + 1]], consts, table_depth,
-            table_nesting, all_code[program_start[run_m]:program_start[run_m + 1]], consts,
-            table_depth, table_nesting,
-            all_vertices[vertex_start[run_shape]:vertex_start[run_shape + 1]],
-            all_cos[run_first:run_last], all_sin[run_first:run_last],
-            all_offset[run_first:run_last], all_co[run_first:run_last],
-            all_so[run_first:run_last], all_pose_sdf[run_first:run_last],
-            all_region[run_first:run_last], all_margin[run_first], pair,
-            all_point[run_c0:run_c], all_depth[run_c0:run_c], all_start[run_c0:run_c],
-            run_first, o_all_pair, o_all_mid, o_all_normal, o_all_depth, o_all_edge,
-            o_all_start, n_out)
-    return (o_all_pair[:n_out], o_all_mid[:n_out], o_all_normal[:n_out], o_all_depth[:n_out],
-            o_all_edge[:n_out], o_all_start[:n_out])
+        out_pair[o], out_depth[o], out_edge[o], out_start[o] = k, d, edge[h], s_id
+        out_mid[o, 0] = (co[k] * mx - so[k] * my) + pose_sdf[k, 0]
+        out_mid[o, 1] = (so[k] * mx + co[k] * my) + pose_sdf[k, 1]
+        out_normal[o, 0], out_normal[o, 1] = co[k] * nx - so[k] * ny, so[k] * nx + co[k] * ny
+    return out_pair, out_mid, out_normal, out_depth, out_edge, out_start

@@ -1,11 +1,9 @@
 """Runs of pairs in the batched kernels: where each starts.
 
 A batched pair function (``narrowphase.BATCH_FUNCTIONS``) gives each pair a run id, the
-same for the pairs of one shape pair, which are consecutive. Kernels that turn one
-shape pair's pairs into contacts with work arrays sized by its mesh
-(``_mesh_contacts_kernels.place_runs``, ``finish_runs``,
-``_mesh_sdf_kernels.support_runs``) run that work run by run, on the run's slices, as
-a call of that shape pair alone did.
+same for the pairs of one shape pair, which are consecutive. The compiled descent keeps
+each run's starts together (its blocks and tolerances, ``_compiled_descent._rounds``),
+as a call of that shape pair alone did.
 """
 
 from __future__ import annotations

@@ -28,11 +28,12 @@ Stages (derivations in each function's docstring):
 
 When the other field compiles (``sdf.compiled``), the stages run in two compiled
 kernels around the descent, with the field's program evaluated inside them:
-``place_runs`` (the mesh in other's frame and ``descent.triangle_cull``) and
-``finish_runs`` (stages 1 after the descent to 4, the first row per key and the world
+``_place`` (the mesh in other's frame and ``descent.triangle_cull``) and
+``_finish`` (stages 1 after the descent to 4, the first row per key and the world
 frame), each stage's points still evaluated in one batch; a call then costs a
-fixed handful of Python calls, nothing per pair or candidate, and takes the pairs of
-many meshes and fields (``mesh_in_fields``: a batched pair function's). Otherwise the
+fixed handful of Python calls, nothing per pair or candidate. ``mesh_in_fields`` (a
+batched pair function's) takes the pairs of many meshes and fields: the two kernels
+per shape pair, the descent of all their triangles in one call. Otherwise the
 numpy stages run (``_mesh_in_field_numpy``: the functions above, the reference
 the compiled kernels are tested against, bit for bit, with the field wrapped so
 that it does not compile: tests/oracles.py).
@@ -65,8 +66,8 @@ from ._mesh_contacts_kernels import (
     _RUNS_ALONG,
     EDGE_START,
     VERTEX_START,
-    finish_runs,
-    place_runs,
+    _finish,
+    _place,
 )
 from .shape_fields import ShapeFields, pair_fields
 
@@ -354,8 +355,8 @@ _STARTS = {k: np.ascontiguousarray(descent.START_BARYCENTRIC[_START_PRIORITY[:k]
 
 
 def compile_finish(mesh: Shape, other: Shape, settings: Settings) -> None:
-    """``finish_runs`` compiled (or loaded) with the argument types of ``mesh_in_fields``'
-    call, on no pairs (one compilation serves every mesh and field: the types do not
+    """``_finish`` compiled (or loaded) with the argument types of ``mesh_in_fields``'
+    calls, on no pairs (one compilation serves every mesh and field: the types do not
     depend on them): a cold start's parent compiles the end of the path while it waits
     for the compiling child, which compiles its start (``collide.compile_behind``).
     Nothing where the path does not call it (a field that does not compile)."""
@@ -364,13 +365,15 @@ def compile_finish(mesh: Shape, other: Shape, settings: Settings) -> None:
         return
     start_ids = _START_PRIORITY[:max(1, min(settings.descent_starts, len(_START_PRIORITY)))]
     starts = len(start_ids)
-    table, none, no_pose = fields.table, np.zeros(0, np.int64), np.zeros((0, 3))
-    finish_runs(fields.triangles, fields.outline_edges, fields.triangle_start, none,
-                np.zeros((0, 2)), np.zeros(1, np.int64), none, none, np.zeros((0, starts, 2)),
-                np.zeros((0, starts)), np.zeros((0, starts), np.bool_), start_ids, table.code,
-                table.consts, table.start, table.depth, table.nesting, none, none,
-                np.zeros(0), True, float(settings.linear_slop), np.zeros(0), np.zeros(0),
-                no_pose)
+    table, p = fields.table, fields.program[1]
+    t0, t1 = fields.triangle_start[0], fields.triangle_start[1]
+    _finish(fields.triangles[t0:t1], fields.outline_edges[t0:t1],
+            np.zeros((0, len(mesh.vertices), 2)),
+            np.zeros(0, np.int64), np.zeros((0, starts, 2)), np.zeros((0, starts)),
+            np.zeros((0, starts), np.bool_), start_ids,
+            table.code[table.start[p]:table.start[p + 1]], table.consts, table.depth,
+            table.nesting, 0.0, True, float(settings.linear_slop), np.zeros(0), np.zeros(0),
+            np.zeros((0, 3)))
 
 
 def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: np.ndarray,
@@ -387,7 +390,7 @@ def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: 
     toward the mesh), depth (C,), key element (C,) and key start (C,).
 
     When other's field compiles (``sdf.compiled``) the stages run in two compiled
-    kernels around the descent (``place_runs``, ``finish_runs``); otherwise in numpy
+    kernels around the descent (``_place``, ``_finish``); otherwise in numpy
     (``_mesh_in_field_numpy``). Same results.
     """
     fields = pair_fields(mesh, other)
@@ -408,44 +411,69 @@ def mesh_in_fields(fields: ShapeFields, mesh_of: np.ndarray, other_of: np.ndarra
     """``mesh_in_field`` of n pairs of any meshes and other shapes whose fields compile:
     pair k's mesh is shape mesh_of[k], its other shape other_of[k] (n,) of ``fields``,
     its margin margin[k] (n,) m, its run run[k] (n,) (the pairs of one shape pair:
-    consecutive, one run id, one margin). The compiled stages run run by run
-    (``place_runs``, ``finish_runs``) and the descent over all kept triangles at once
+    consecutive, one run id, one margin). ``_place`` and ``_finish`` run run by run (a
+    call each per shape pair: kernels looping over the runs themselves compiled 1 to
+    1.5 s longer each at a cold start), the descent over all kept triangles at once
     (``descent.triangle_deepest_programs``; with sampled starts, a call per run): the
     same contacts, to the bit, as a ``mesh_in_field`` call per shape pair. Returns its
     six arrays, pairs into the n."""
+    if len(run) == 0:
+        none = np.zeros(0, np.int64)
+        return none, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), none, none
     angle = pose_mesh[:, 2] - pose_other[:, 2]
     cos, sin = np.cos(angle), np.sin(angle)
     co, so = np.cos(pose_other[:, 2]), np.sin(pose_other[:, 2])
     pose_mesh = np.ascontiguousarray(pose_mesh, dtype=np.float64)
     pose_other = np.ascontiguousarray(pose_other, dtype=np.float64)
     table, program = fields.table, fields.program[other_of]
-    placed, vertex_at, kept_pair, kept_element, tri = place_runs(
-        fields.vertices, fields.vertex_start, fields.triangles, fields.triangle_start, mesh_of,
-        cos, sin, co, so, pose_mesh, pose_other, table.code, table.consts, table.start,
-        table.depth, table.nesting, program, run, margin)
+    bounds = np.flatnonzero(np.r_[True, run[1:] != run[:-1], True]).tolist()
+    runs = list(zip(bounds[:-1], bounds[1:], strict=True))
+    placed, kept_of, tris = [], [], []
+    for lo, hi in runs:
+        s, p = mesh_of[lo], program[lo]
+        vertices, _, kept, tri = _place(
+            fields.vertices[fields.vertex_start[s]:fields.vertex_start[s + 1]],
+            fields.triangles[fields.triangle_start[s]:fields.triangle_start[s + 1]],
+            cos[lo:hi], sin[lo:hi], co[lo:hi], so[lo:hi], pose_mesh[lo:hi], pose_other[lo:hi],
+            table.code[table.start[p]:table.start[p + 1]], table.consts, table.depth,
+            table.nesting, float(margin[lo]))
+        placed.append(vertices)
+        kept_of.append(kept)
+        tris.append(tri)
+    count = np.array([len(k) for k in kept_of], np.int64)
+    tri = np.concatenate(tris)
+    tri_run = np.repeat(np.array([lo for lo, _ in runs], np.int64), count)   # a pair of it
     n_starts = max(1, min(settings.descent_starts, len(_START_PRIORITY)))
     if settings.descent_lattice > 0:
-        point, value, start_ids = _sampled_runs(fields, other_of, run, kept_pair, tri, settings)
+        point, value, start_ids = _sampled_runs(fields, other_of, run, tri_run, tri, settings)
     else:
         point, value = descent.triangle_deepest_programs(
-            table, program[kept_pair], run[kept_pair], fields.convex[other_of[kept_pair]], tri,
+            table, program[tri_run], run[tri_run], fields.convex[other_of[tri_run]], tri,
             settings.descent_iterations, _STARTS[n_starts])
         start_ids = _START_PRIORITY[:n_starts]
     distinct = descent.merge_minima(point, _MERGE_RADIUS)
-    return finish_runs(fields.triangles, fields.outline_edges, fields.triangle_start, mesh_of,
-                       placed, vertex_at, kept_pair, kept_element, np.ascontiguousarray(point),
-                       np.ascontiguousarray(value), distinct, start_ids, table.code,
-                       table.consts, table.start, table.depth, table.nesting, program, run,
-                       margin, bool(polygon_pair), float(settings.linear_slop), co, so,
-                       pose_other)
+    point, value = np.ascontiguousarray(point), np.ascontiguousarray(value)
+    parts, at = [], 0
+    for (lo, hi), vertices, kept, k in zip(runs, placed, kept_of, count, strict=True):
+        s, p = mesh_of[lo], program[lo]
+        t0, t1 = fields.triangle_start[s], fields.triangle_start[s + 1]
+        pair, *rest = _finish(
+            fields.triangles[t0:t1], fields.outline_edges[t0:t1], vertices, kept,
+            point[at:at + k], value[at:at + k], distinct[at:at + k], start_ids,
+            table.code[table.start[p]:table.start[p + 1]], table.consts, table.depth,
+            table.nesting, float(margin[lo]), bool(polygon_pair), float(settings.linear_slop),
+            co[lo:hi], so[lo:hi], pose_other[lo:hi])
+        parts.append((pair + lo, *rest))
+        at += k
+    return tuple(np.concatenate(column) for column in zip(*parts, strict=True))
 
 
 def _sampled_runs(fields: ShapeFields, other_of: np.ndarray, run: np.ndarray,
                   kept_pair: np.ndarray, tri: np.ndarray, settings: Settings
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``_sampled_minima`` of the kept triangles (K, 3, 2), run by run (each run's field
-    is one shape's, ``settings.descent_lattice`` > 0): point (K, k, 2), value (K, k),
-    the start ids (k,)."""
+    """``_sampled_minima`` of the kept triangles (K, 3, 2), each of pair kept_pair (K,),
+    run by run (each run's field is one shape's, ``settings.descent_lattice`` > 0): point
+    (K, k, 2), value (K, k), the start ids (k,)."""
     k = settings.descent_starts
     point, value = np.empty((len(tri), k, 2)), np.empty((len(tri), k))
     start_ids = SAMPLED_START + np.arange(k, dtype=np.int64)

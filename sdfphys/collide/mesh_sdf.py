@@ -56,8 +56,9 @@ Cost: one ``field_field_contacts`` call (each of its rounds one evaluation of ea
 field for all pairs), then ``1 + REFINE_ROUNDS`` evaluations of the mesh field and
 ``SDF_CALLS`` of the sdf field for all contacts of all pairs; nothing is per pair or
 per contact in Python. When both fields compile (``sdf.compiled``), stages 2 and 3
-run in one compiled kernel (``_mesh_sdf_kernels.support_runs``: the same batches, the
-programs evaluated inside it, many shape pairs run by run); otherwise in numpy
+run in one compiled kernel (``_mesh_sdf_kernels._support``: the same batches, the
+programs evaluated inside it; one call per shape pair of the batched ``sdf_in_meshes``);
+otherwise in numpy
 (``_support_numpy``, with ``_deepest_on_sdf``, ``_far_ends`` and ``_nearest_edges``:
 the reference the kernel is tested against,
 bit for bit, with a field that does not compile: tests/oracles.py).
@@ -90,7 +91,7 @@ from ._mesh_sdf_kernels import (
     _SMOOTH,
     FAR_END,
     REFINE_ROUNDS,
-    support_runs,
+    _support,
 )
 from .shape_fields import ShapeFields, pair_fields
 
@@ -383,11 +384,27 @@ def sdf_in_meshes(fields: ShapeFields, mesh_of: np.ndarray, sdf_of: np.ndarray,
     if len(pair) == 0:
         return _no_contacts()
     t = fields.table
-    return support_runs(t.code, t.consts, t.start, t.depth, t.nesting, programs.prog_a,
-                        programs.prog_b, fields.vertices, fields.vertex_start, mesh_of, run,
-                        np.cos(angle), np.sin(angle), np.ascontiguousarray(offset), co, so,
-                        np.ascontiguousarray(pose_sdf, dtype=np.float64), region, margin,
-                        pair, point, depth, start)
+    cos, sin = np.cos(angle), np.sin(angle)
+    offset = np.ascontiguousarray(offset)
+    pose_sdf = np.ascontiguousarray(pose_sdf, dtype=np.float64)
+    bounds = np.flatnonzero(np.r_[True, run[1:] != run[:-1], True])
+    at = np.searchsorted(pair, bounds).tolist()       # each run's contacts (in pair order)
+    parts = []
+    for r, (lo, hi) in enumerate(zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True)):
+        c0, c1 = at[r], at[r + 1]
+        if c0 == c1:
+            continue
+        s, a, b = mesh_of[lo], programs.prog_a[lo], programs.prog_b[lo]
+        got = _support(t.code[t.start[a]:t.start[a + 1]], t.consts, t.depth, t.nesting,
+                       t.code[t.start[b]:t.start[b + 1]], t.consts, t.depth, t.nesting,
+                       fields.vertices[fields.vertex_start[s]:fields.vertex_start[s + 1]],
+                       cos[lo:hi], sin[lo:hi], offset[lo:hi], co[lo:hi], so[lo:hi],
+                       pose_sdf[lo:hi], region[lo:hi], float(margin[lo]), pair[c0:c1] - lo,
+                       point[c0:c1], depth[c0:c1], start[c0:c1])
+        parts.append((got[0] + lo, *got[1:]))
+    if not parts:
+        return _no_contacts()
+    return tuple(np.concatenate(column) for column in zip(*parts, strict=True))
 
 
 def _no_contacts() -> tuple[np.ndarray, ...]:
@@ -404,7 +421,7 @@ def _support_numpy(mesh: Shape, sdf: Shape, pose_sdf: np.ndarray, angle: np.ndar
                               np.ndarray]:
     """Stages 2 and 3 of ``sdf_in_mesh`` in numpy from the field-field contacts (pair,
     point, depth, start), for fields that do not compile; the reference of the
-    compiled ``support_runs`` (same results, bit for bit). angle (n,): the mesh's angle
+    compiled ``_support`` (same results, bit for bit). angle (n,): the mesh's angle
     in the sdf's frame, offset (n, 2) its position there; co, so (n,): cos and sin
     of the sdf's angle."""
     in_sdf = _MeshInSdfFrame(mesh.field, angle, offset)
