@@ -218,8 +218,11 @@ def _groups(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray
     group = body_shape[first] * len(shapes) + body_shape[second]
     order = np.argsort(group, kind="stable")
     first, second, group = first[order], second[order], group[order]
-    lo = np.flatnonzero(np.r_[True, np.diff(group) != 0]) if len(group) else np.zeros(0, int)
-    return first, second, lo, np.r_[lo[1:], len(group)].astype(lo.dtype)
+    if len(group) == 0:
+        none = np.zeros(0, np.int64)
+        return first, second, none, none
+    lo = np.flatnonzero(np.r_[True, np.diff(group) != 0])
+    return first, second, lo, np.r_[lo[1:], len(group)]
 
 
 #: The kind pairs with a batched pair function, as kind_rank[a] * 3 + kind_rank[b].

@@ -128,6 +128,17 @@ def feature_key(source: int, element: np.ndarray | int, start: np.ndarray | int)
 _ANALYTIC_KEY = int(feature_key(SOURCE_ANALYTIC, 0, 0))
 
 
+def _one_run(batch: BatchFunction, fields: ShapeFields, body_a: np.ndarray,
+             body_b: np.ndarray, pose_a: np.ndarray, pose_b: np.ndarray, margin: float,
+             settings: Settings) -> Contacts:
+    """A batched pair function on n pairs of one shape pair (rows 0 and 1 of ``fields``),
+    one run: what a ``PairFunction`` call of those shapes computes."""
+    n = len(body_a)
+    zero = np.zeros(n, np.int64)
+    return batch(fields, zero, zero + 1, body_a, body_b, pose_a, pose_b,
+                 np.full(n, float(margin)), zero, settings)
+
+
 def _to_local(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
     """World points (n, 2) into the body frames of poses (n, 3): R^T (p - x)."""
     return rotate(points - pose[:, :2], -pose[:, 2])
@@ -176,11 +187,8 @@ def collide_circle_and_field(circle_a: Shape, shape_b: Shape, body_a: np.ndarray
     r = circle_a.radius
     concave = shape_b.kind == "mesh" and not shape_b.convex
     if not concave and compiled.compile_field(shape_b.field) is not None:
-        n = len(body_a)
-        zero = np.zeros(n, np.int64)
-        return collide_circle_field_pairs(pair_fields(circle_a, shape_b), zero, zero + 1,
-                                          body_a, body_b, pose_a, pose_b,
-                                          np.full(n, float(margin)), zero, settings)
+        return _one_run(collide_circle_field_pairs, pair_fields(circle_a, shape_b), body_a,
+                        body_b, pose_a, pose_b, margin, settings)
     centre = _to_local(pose_a[:, :2], pose_b)
     d, g = compiled.evaluate(shape_b.field, centre)
     keep = r - d > -margin
@@ -295,10 +303,8 @@ def collide_meshes(mesh_a: Shape, mesh_b: Shape, body_a: np.ndarray, body_b: np.
             np.ascontiguousarray(pose_a, np.float64), np.ascontiguousarray(pose_b, np.float64),
             float(margin), float(settings.linear_slop))
         return Contacts(body_a[pair], body_b[pair], point, normal, depth, feature)
-    n = len(body_a)
-    zero = np.zeros(n, np.int64)
-    return collide_mesh_pairs(pair_fields(mesh_a, mesh_b), zero, zero + 1, body_a, body_b,
-                              pose_a, pose_b, np.full(n, float(margin)), zero, settings)
+    return _one_run(collide_mesh_pairs, pair_fields(mesh_a, mesh_b), body_a, body_b, pose_a,
+                    pose_b, margin, settings)
 
 
 def collide_mesh_pairs(fields: ShapeFields, shape_a: np.ndarray, shape_b: np.ndarray,
@@ -371,10 +377,8 @@ def collide_mesh_and_sdf(mesh_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b
 
     fields = pair_fields(mesh_a, sdf_b)
     if fields.program[0] >= 0 and fields.program[1] >= 0:
-        n = len(body_a)
-        zero = np.zeros(n, np.int64)
-        return collide_mesh_sdf_pairs(fields, zero, zero + 1, body_a, body_b, pose_a, pose_b,
-                                      np.full(n, float(margin)), zero, settings)
+        return _one_run(collide_mesh_sdf_pairs, fields, body_a, body_b, pose_a, pose_b, margin,
+                        settings)
     pair, point, out_b, depth, tri, start = mesh_in_field(mesh_a, sdf_b, pose_a, pose_b,
                                                           margin, settings, False)
     forward = Contacts(body_a[pair], body_b[pair], point, -out_b, depth,
@@ -441,10 +445,8 @@ def collide_sdfs(sdf_a: Shape, sdf_b: Shape, body_a: np.ndarray, body_b: np.ndar
 
     fields = pair_fields(sdf_a, sdf_b)
     if fields.program[0] >= 0 and fields.program[1] >= 0:
-        n = len(body_a)
-        zero = np.zeros(n, np.int64)
-        return collide_sdf_pairs(fields, zero, zero + 1, body_a, body_b, pose_a, pose_b,
-                                 np.full(n, float(margin)), zero, settings)
+        return _one_run(collide_sdf_pairs, fields, body_a, body_b, pose_a, pose_b, margin,
+                        settings)
     if not math.isfinite(sdf_b.radius) and math.isfinite(sdf_a.radius):   # bounded: finite
         c = collide_sdfs(sdf_b, sdf_a, body_b, body_a, pose_b, pose_a, margin, settings)
         return Contacts(c.body_b, c.body_a, c.point, -c.normal, c.depth, c.feature)
