@@ -28,8 +28,9 @@ import numpy as np
 from .collide.broadphase import world_bounds
 from .errors import SpecError, check_int, check_number
 from .limits import MAX_BITS
-from .sdf.compiled import compile_field
+from .sdf.compiled import Program, compile_field
 from .sdf.opcodes import POP_T, PUSH_T
+from .sdf.program_table import ProgramTable, program_table
 
 __all__ = ["OVERLAP_LEVELS", "PointHits", "RayHits", "nearest", "overlapping"]
 
@@ -163,11 +164,11 @@ class _Packed:
 
 
 def _pack(shapes: list) -> _Packed:
-    """The kernel's tables for ``shapes`` (each field compiled once, cached on it)."""
+    """The kernel's tables for ``shapes`` (each field compiled once, cached on it; the
+    programs, their outer shift taken out, one ``sdf.program_table`` table)."""
     kinds, radius, bounds, vstart, vcount, verts = [], [], [], [], [], []
-    cstart, ccount, codes, consts, shift = [], [], [], [], []
-    nv = nc = nk = 0
-    depth = nesting = 1
+    programs, shift = [], []
+    nv = 0
     for shape in shapes:
         kinds.append({"circle": _CIRCLE, "mesh": _MESH}.get(shape.kind, _SDF))
         radius.append(shape.radius)
@@ -182,26 +183,20 @@ def _pack(shapes: list) -> _Packed:
         if program is None:
             raise SpecError("shape", f"{shape!r}: its field does not compile "
                                      "(sdf.compiled), which queries need")
-        code = program.code.copy()
-        shift.append(_outer_shift(code, program.consts))
+        shift.append(_outer_shift(program.code, program.consts))
         if shift[-1] is not None:
-            code = code[1:-1]
-        code[:, 1] += nk
-        cstart.append(nc)
-        ccount.append(len(code))
-        codes.append(code)
-        consts.append(program.consts)
-        nc += len(code)
-        nk += len(program.consts)
-        depth, nesting = max(depth, program.depth), max(nesting, program.nesting)
+            program = Program(program.code[1:-1], program.consts, program.depth,
+                              program.nesting)
+        programs.append(program)
+    table = (program_table(programs) if programs
+             else ProgramTable(np.zeros((0, 4), np.int64), np.zeros(1), np.zeros(1, np.int64),
+                               1, 1))
     return _Packed(np.array(kinds, np.int64), np.array(radius, np.float64),
                    np.array(bounds, np.float64).reshape(-1, 4), np.array(vstart, np.int64),
                    np.array(vcount, np.int64), np.concatenate(verts + [np.zeros((0, 2))]),
-                   np.array(cstart, np.int64), np.array(ccount, np.int64),
-                   np.concatenate(codes + [np.zeros((0, 4), np.int64)]),
-                   np.concatenate(consts + [np.zeros(1)]),
+                   table.start[:-1].copy(), np.diff(table.start), table.code, table.consts,
                    np.array([(0.0, 0.0) if o is None else o for o in shift],
-                            np.float64).reshape(-1, 2), depth, nesting)
+                            np.float64).reshape(-1, 2), table.depth, table.nesting)
 
 
 def _outer_shift(code: np.ndarray, consts: np.ndarray) -> tuple[float, float] | None:

@@ -3,7 +3,7 @@
 Inside njit code ``np.argsort`` makes numba compile its generic sort machinery for each
 key type on every cold start (the merge sort's templates for ``kind="mergesort"``, the
 quicksort's otherwise, and the shape checks that come with them): about 5 s of the
-showcase's first run went to compiling the mesh contacts' last kernel's two
+showcase's first run went to compiling ``_mesh_contacts_kernels._finish``'s two
 argsorts (cProfile of its compilation). ``stable_argsort`` is a plain bottom-up merge
 sort over runs sorted by insertion. A stable sort's permutation is unique, so it gives
 numpy's ``argsort(kind="stable")`` exactly, NaN keys last as numpy puts them.

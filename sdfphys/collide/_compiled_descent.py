@@ -115,11 +115,11 @@ class DescentProblem(structref.StructRefProxy):
     prog_b (L,) int64: pair k's fields a and b, run (L,) int64 its batch (the points of
     consecutive pairs of one run are evaluated together, ``program_table``; TRIANGLE:
     per triangle, its field prog_a[t], with pair_of its owner; one entry: every point's
-    field, one batch). rotation (L, 2, 2), offset (L, 2) m: pair k places b in
-    a's frame by p_a = R_k p_b + o_k; pair_of (P,) int64: each start's pair (PAIR) or
-    triangle (TRIANGLE: its owner). tri (T, 3, 2) m, owner (P,) int64, at_vertex (T, 3) int64, n_start
-    (int, starts per triangle), spanning, convex (bool): as ``descent._TriangleProblem``
-    (PAIR: one dummy triangle, owner empty).
+    field, one batch). rotation (L, 2, 2), offset (L, 2) m: pair k places b in a's frame
+    by p_a = R_k p_b + o_k; pair_of (P,) int64: each start's pair (PAIR) or triangle
+    (TRIANGLE: its owner). tri (T, 3, 2) m, owner (P,) int64, at_vertex (T, 3) int64,
+    n_start (int, starts per triangle), spanning, convex (bool): as
+    ``descent._TriangleProblem`` (PAIR: one dummy triangle, owner empty).
     """
 
 

@@ -3,7 +3,8 @@
 A batched pair function (``narrowphase.BATCH_FUNCTIONS``) gives each pair a run id, the
 same for the pairs of one shape pair, which are consecutive. The compiled descent keeps
 each run's starts together (its blocks and tolerances, ``_compiled_descent._rounds``),
-as a call of that shape pair alone did.
+as a call of that shape pair alone did; the mesh stages take them one at a time
+(``mesh_contacts.mesh_in_fields``, ``mesh_sdf.sdf_in_meshes``).
 """
 
 from __future__ import annotations

@@ -639,13 +639,13 @@ def one_sided_depths(field_a: Field, field_b: Field, offset: np.ndarray, angle: 
     agree, keep their bits. When both fields compile, ``_compiled_samples.one_sided``
     does the same operations (same bits).
     """
-    rows = np.flatnonzero(depth > 0.0)
-    if len(rows) == 0:
-        return point, depth, normal
     a, b = compile_field(field_a), compile_field(field_b)
     if a is not None and b is not None:
         return one_sided_programs(PairPrograms.of(a, b, len(angle)), offset, angle, pair,
                                   point, depth, normal)
+    rows = np.flatnonzero(depth > 0.0)
+    if len(rows) == 0:
+        return point, depth, normal
     m = len(_RING) + 1
     ring = np.concatenate([[0.0], _RING])
     owner = np.repeat(rows, m)

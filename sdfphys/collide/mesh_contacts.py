@@ -69,6 +69,7 @@ from ._mesh_contacts_kernels import (
     _finish,
     _place,
 )
+from ._runs import run_starts
 from .shape_fields import ShapeFields, pair_fields
 
 __all__ = ["EDGE_START", "SAMPLED_START", "VERTEX_START", "mesh_in_field", "mesh_in_fields"]
@@ -426,7 +427,7 @@ def mesh_in_fields(fields: ShapeFields, mesh_of: np.ndarray, other_of: np.ndarra
     pose_mesh = np.ascontiguousarray(pose_mesh, dtype=np.float64)
     pose_other = np.ascontiguousarray(pose_other, dtype=np.float64)
     table, program = fields.table, fields.program[other_of]
-    bounds = np.flatnonzero(np.r_[True, run[1:] != run[:-1], True]).tolist()
+    bounds = run_starts(run).tolist()
     runs = list(zip(bounds[:-1], bounds[1:], strict=True))
     placed, kept_of, tris = [], [], []
     for lo, hi in runs:
@@ -478,7 +479,7 @@ def _sampled_runs(fields: ShapeFields, other_of: np.ndarray, run: np.ndarray,
     point, value = np.empty((len(tri), k, 2)), np.empty((len(tri), k))
     start_ids = SAMPLED_START + np.arange(k, dtype=np.int64)
     of_run = run[kept_pair]
-    bounds = np.flatnonzero(np.r_[True, of_run[1:] != of_run[:-1], True])
+    bounds = run_starts(of_run)
     for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
         field = fields.shape_of[other_of[kept_pair[lo]]].field
         p, v, start_ids = _sampled_minima(field, tri[lo:hi], settings)

@@ -93,6 +93,7 @@ from ._mesh_sdf_kernels import (
     REFINE_ROUNDS,
     _support,
 )
+from ._runs import run_starts
 from .shape_fields import ShapeFields, pair_fields
 
 __all__ = ["FAR_END", "REFINE_ROUNDS", "SDF_CALLS", "sdf_in_mesh", "sdf_in_meshes"]
@@ -387,7 +388,7 @@ def sdf_in_meshes(fields: ShapeFields, mesh_of: np.ndarray, sdf_of: np.ndarray,
     cos, sin = np.cos(angle), np.sin(angle)
     offset = np.ascontiguousarray(offset)
     pose_sdf = np.ascontiguousarray(pose_sdf, dtype=np.float64)
-    bounds = np.flatnonzero(np.r_[True, run[1:] != run[:-1], True])
+    bounds = run_starts(run)
     at = np.searchsorted(pair, bounds).tolist()       # each run's contacts (in pair order)
     parts = []
     for r, (lo, hi) in enumerate(zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True)):

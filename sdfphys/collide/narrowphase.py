@@ -69,6 +69,7 @@ from ..sdf.program_table import evaluate_runs
 from ..settings import Settings
 from ..shapes import Shape
 from ..vec2 import rotate
+from ._runs import run_starts
 from .contacts import Contacts
 from .mesh_contacts import EDGE_START, VERTEX_START, mesh_in_field
 from .polygons import polygon_contacts, polygon_table
@@ -321,7 +322,7 @@ def collide_mesh_pairs(fields: ShapeFields, shape_a: np.ndarray, shape_b: np.nda
 
     convex = fields.convex_mesh[shape_a] & fields.convex_mesh[shape_b]
     parts = []
-    bounds = np.flatnonzero(np.r_[True, run[1:] != run[:-1], True])
+    bounds = run_starts(run)
     shapes = fields.shape_of
     for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
         if convex[lo]:
