@@ -49,14 +49,21 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ._toi_kernels import trace
 from .collide.broadphase import candidate_pairs
 from .sdf import Field, compiled
+from .sdf.program_table import ProgramTable
 
 __all__ = ["fast_bodies", "step_fractions", "time_of_impact", "vertex_time_of_impact"]
 
 #: Conservative-advancement iterations per pair; a trace still running after them stops
 #: where it is, which is safe (never past a contact) and only stops the body early.
 MAX_ITERATIONS = 32
+
+#: The shapes' fields as programs: a ``ProgramTable`` and, per shape, its program in it
+#: (-1: the field does not compile). With every traced target's field compiled, the
+#: traces run in one compiled call (``_toi_kernels.trace``, the same stop times).
+Programs = tuple[ProgramTable | None, np.ndarray]
 
 
 def fast_bodies(start: np.ndarray, end: np.ndarray, core_radius: np.ndarray,
@@ -166,11 +173,36 @@ def _advance(gap: np.ndarray, speed: np.ndarray, slop: float,
     return stop
 
 
+def _compiled_targets(programs: Programs | None, shape_id: np.ndarray,
+                      target: np.ndarray) -> np.ndarray | None:
+    """Each target body's (T,) program (``Programs``), or None unless all compile."""
+    if programs is None or programs[0] is None:
+        return None
+    program = programs[1][shape_id[target]]
+    return program if np.all(program >= 0) else None
+
+
+def _traced(programs: Programs, program: np.ndarray, end: np.ndarray, end_angle: np.ndarray,
+            target: np.ndarray, rotating: bool, c0: np.ndarray, path: np.ndarray,
+            a0: np.ndarray, turn: np.ndarray, vertex: np.ndarray, radius: np.ndarray,
+            core: np.ndarray, speed: np.ndarray, slop: float) -> np.ndarray:
+    """``_toi_kernels.trace`` of traces against ``target`` (T,) bodies at their end
+    poses, each target's field its ``program`` in the table of ``programs``."""
+    table = programs[0]
+    angle = end_angle[target]
+    return trace(table.code, table.consts, table.start, table.depth, table.nesting,
+                 program, np.ascontiguousarray(end[target]), np.cos(angle), np.sin(angle),
+                 rotating, c0, path, a0, turn, vertex, radius, core, speed, float(slop),
+                 MAX_ITERATIONS)
+
+
 def _disc_fractions(fields: list[Field], shape_id: np.ndarray, start: np.ndarray,
                     end: np.ndarray, end_angle: np.ndarray, radius: np.ndarray,
                     core_radius: np.ndarray, fast: np.ndarray, slop: float,
-                    pairs: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
-    """``time_of_impact`` over given candidate ``pairs`` (indices into fast, other bodies)."""
+                    pairs: tuple[np.ndarray, np.ndarray],
+                    programs: Programs | None = None) -> np.ndarray:
+    """``time_of_impact`` over given candidate ``pairs`` (indices into fast, other
+    bodies); in one compiled call where ``programs`` has every target's field."""
     fraction = np.ones(len(fast))
     pair_fast, pair_other = pairs
     if len(pair_fast) == 0:
@@ -178,6 +210,14 @@ def _disc_fractions(fields: list[Field], shape_id: np.ndarray, start: np.ndarray
     body = fast[pair_fast]
     c0 = start[body]
     path = end[body] - c0
+    program = _compiled_targets(programs, shape_id, pair_other)
+    if program is not None:
+        unused = np.zeros(len(body))                 # a disc trace has no vertex
+        stop = _traced(programs, program, end, end_angle, pair_other, False, c0, path, unused,
+                       unused, np.zeros((len(body), 2)), radius[body], core_radius[body],
+                       np.hypot(path[:, 0], path[:, 1]), slop)
+        np.minimum.at(fraction, pair_fast, stop)
+        return fraction
     d0 = _distance(fields, shape_id, end, end_angle, pair_other, c0)
     # The disc traced for each pair: bounding if clear at t = 0, else core, else none.
     disc = np.where(d0 - radius[body] > 2.0 * slop, radius[body], core_radius[body])
@@ -194,11 +234,13 @@ def _disc_fractions(fields: list[Field], shape_id: np.ndarray, start: np.ndarray
 def _vertex_fractions(fields: list[Field], vertices: list[np.ndarray | None],
                       shape_id: np.ndarray, start: np.ndarray, end: np.ndarray,
                       start_angle: np.ndarray, end_angle: np.ndarray, fast: np.ndarray,
-                      slop: float, pairs: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+                      slop: float, pairs: tuple[np.ndarray, np.ndarray],
+                      programs: Programs | None = None) -> np.ndarray:
     """``vertex_time_of_impact`` over given candidate ``pairs``.
 
     One row per (pair, vertex of the fast body's polygon), gathered from one table of
-    every shape's vertices (a loop over the shapes, never over bodies or pairs).
+    every shape's vertices (a loop over the shapes, never over bodies or pairs); the
+    traces in one compiled call where ``programs`` has every target's field.
     """
     fraction = np.ones(len(fast))
     count = np.array([0 if v is None else len(v) for v in vertices], np.int64)
@@ -217,6 +259,13 @@ def _vertex_fractions(fields: list[Field], vertices: list[np.ndarray | None],
     c0, path = start[body], end[body] - start[body]
     a0, turn = start_angle[body], end_angle[body] - start_angle[body]
     speed = np.hypot(path[:, 0], path[:, 1]) + np.abs(turn) * np.hypot(local[:, 0], local[:, 1])
+    program = _compiled_targets(programs, shape_id, other)
+    if program is not None:
+        unused = np.zeros(len(speed))                # a vertex trace has no disc
+        stop = _traced(programs, program, end, end_angle, other, True, c0, path, a0, turn,
+                       np.ascontiguousarray(local), unused, unused, speed, slop)
+        np.minimum.at(fraction, pair_fast[row_pair], stop)
+        return fraction
 
     def gap_at(rows: np.ndarray, t: np.ndarray) -> np.ndarray:
         a = a0[rows] + t * turn[rows]
@@ -268,7 +317,8 @@ def step_fractions(fields: list[Field], vertices: list[np.ndarray | None],
                    start_angle: np.ndarray, end_angle: np.ndarray, radius: np.ndarray,
                    core_radius: np.ndarray, fast: np.ndarray, slop: float,
                    group: np.ndarray | None = None, pair_filter=None,
-                   contact_pairs: np.ndarray | None = None) -> np.ndarray:
+                   contact_pairs: np.ndarray | None = None,
+                   programs: Programs | None = None) -> np.ndarray:
     """The world's stage: min of ``time_of_impact`` and ``vertex_time_of_impact`` (F,),
     the candidate pairs found once for both (arguments as theirs). pair_filter: the
     bodies' ``collide.filter.PairFilter`` or None: pairs it filters out, and pairs with a
@@ -299,7 +349,8 @@ def step_fractions(fields: list[Field], vertices: list[np.ndarray | None],
     a circle landing on the pile at 7.8 m/s was put back 12.6 mm up its path, into the
     circle falling on top of it, 16.5 mm deep the next step (t = 1.2 s). So such pairs
     are left to the rows; polygons (the bounding disc is not the body, the vertices
-    turn) keep the trace."""
+    turn) keep the trace. programs: the shapes' fields as programs (``Programs``), or None:
+    the traces run in numpy rounds (the same stop times)."""
     if len(fast) == 0:
         return np.ones(0)
     pairs = _candidate_pairs(fast, start, end, radius)
@@ -326,6 +377,6 @@ def step_fractions(fields: list[Field], vertices: list[np.ndarray | None],
         pairs = (pairs[0][keep], pairs[1][keep])
     return np.minimum(
         _disc_fractions(fields, shape_id, start, end, end_angle, radius, core_radius, fast,
-                        slop, pairs),
+                        slop, pairs, programs),
         _vertex_fractions(fields, vertices, shape_id, start, end, start_angle, end_angle,
-                          fast, slop, pairs))
+                          fast, slop, pairs, programs))

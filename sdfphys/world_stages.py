@@ -37,7 +37,7 @@ from .solver import (
 from .solver import store_impulses as impulse_cache
 from .solver.bundles import substep_rows
 from .solver.softness import loaded_rows, row_softness_params
-from .toi import fast_bodies, step_fractions
+from .toi import Programs, fast_bodies, step_fractions
 from .world_bodies import DYNAMIC, STATIC
 
 if TYPE_CHECKING:
@@ -192,7 +192,11 @@ def substeps(world: World, constraints: ContactConstraints, bodies: BodyState,
 
 
 def restitution(world: World, constraints: ContactConstraints, bodies: BodyState) -> None:
-    """Stage 4: restitution passes, if some contact has restitution and approached fast."""
+    """Stage 4: restitution passes, if some contact has restitution and approached fast.
+    A row's restitution is the larger of its bodies' (``solver.rows``): with none among
+    the bodies, no row is read."""
+    if not np.any(world._view("restitution") > 0.0):
+        return
     needed = (constraints.restitution > 0.0) & (
         constraints.relative_velocity < -world.settings.restitution_threshold)
     if needed.any():
@@ -219,13 +223,21 @@ def time_of_impact(world: World, bodies: BodyState, start_com: np.ndarray,
                               world._view("shape_id"), start_com, bodies.com, start_angle,
                               bodies.angle, radius, core, fast, s.linear_slop, group,
                               pair_filter(world),
-                              np.column_stack([contacts.body_a, contacts.body_b]))
+                              np.column_stack([contacts.body_a, contacts.body_b]),
+                              _programs(world))
     fast, fraction = world._joints.spread_fractions(group, fast, fraction)
     t = fraction[:, None]
     bodies.com[fast] = start_com[fast] + t * (bodies.com[fast] - start_com[fast])
     bodies.angle[fast] = start_angle[fast] + fraction * (bodies.angle[fast]
                                                          - start_angle[fast])
     world.stage_counts["time_of_impact"] += 1
+
+
+def _programs(world: World) -> Programs:
+    """The world's shapes' fields as programs for the traces (``toi.Programs``: the
+    collisions' cached ``ShapeFields`` of the same shapes)."""
+    fields, canonical = shape_fields(world._shapes)
+    return fields.table, fields.program[canonical]
 
 
 def store_impulses(world: World, constraints: ContactConstraints) -> None:

@@ -75,7 +75,7 @@ def test_pairs_of_a_kind_in_one_call_equal_a_call_per_shape_pair(seed, monkeypat
     together = _narrowphase(distinct, canonical[body_shape], pairs, pose, 0.02, reach, settings)
     for kinds, made in calls.items():               # all of a kind's pairs in one call
         assert len(made) == 1 and made[0] >= 2, kinds
-    monkeypatch.setattr(collide, "_BATCHED", {})
+    monkeypatch.setattr(collide, "_HAS_BATCH", np.zeros_like(collide._HAS_BATCH))
     apart = _narrowphase(distinct, canonical[body_shape], pairs, pose, 0.02, reach, settings)
     assert len(together) > 40 and len(np.unique(together.body_a * 100 + together.body_b)) > 20
     for mine, theirs in zip(_sorted(together), _sorted(apart), strict=True):

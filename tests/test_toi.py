@@ -279,3 +279,67 @@ def test_a_circle_with_a_row_against_the_obstacle_is_left_to_the_rows():
                                end, angle, angle, radius, core, np.array([1, 2]), SLOP,
                                contact_pairs=rows)
         assert list(t < 1.0) == stopped
+
+
+def scattered_traces(seed: int, n_bodies: int = 60):
+    """A crowd of shapes of every kind (boxes, polygons concave and convex, circles,
+    exact, CSG and smooth sdf fields, an unbounded ground), half of them fast, moving
+    and turning: step_fractions' arguments (programs left out)."""
+    specs = [GROUND, {"type": "box", "size": [0.6, 0.3]}, BALL, PLANK,
+             {"type": "polygon", "points": [[-0.4, -0.4], [0.4, -0.4], [0.4, -0.1],
+                                            [-0.1, -0.1], [-0.1, 0.4], [-0.4, 0.4]]},
+             {"type": "sdf", "field": {"type": "star", "radius": 0.5, "points": 5, "m": 3.0}},
+             {"type": "sdf", "field": {"op": "smooth_union", "k": 0.4, "of": [
+                 {"type": "box", "size": [3.0, 0.4]},
+                 {"type": "ellipse", "size": [0.8, 0.5], "offset": [1.0, 0.2]}]}},
+             {"type": "sdf", "field": {"type": "moon", "radius": 0.4, "bite_radius": 0.35,
+                                       "distance": 0.25}}]
+    shapes = [shape_from_spec(s) for s in specs]
+    rng = np.random.default_rng(seed)
+    shape_id = np.r_[0, rng.integers(1, len(shapes), n_bodies - 1)]
+    start = np.r_[[[0.0, -0.5]], rng.uniform(-4.0, 4.0, (n_bodies - 1, 2))]
+    end = start + np.r_[[[0.0, 0.0]], rng.normal(scale=1.0, size=(n_bodies - 1, 2))]
+    start_angle = rng.uniform(-3.0, 3.0, n_bodies)
+    end_angle = start_angle + rng.normal(scale=1.0, size=n_bodies)
+    end_angle[0] = start_angle[0] = 0.0
+    radius = np.array([shapes[s].radius for s in shape_id])
+    core = np.maximum(np.array([max(-float(shapes[s].field.distance(np.zeros((1, 2)))[0]),
+                                    0.0) for s in shape_id]), 0.02)
+    fast = np.flatnonzero(rng.random(n_bodies) < 0.5)
+    fast = fast[fast > 0]
+    args = ([s.field for s in shapes], [getattr(s, "vertices", None) for s in shapes],
+            shape_id, start, end, start_angle, end_angle, radius, core, fast, SLOP)
+    return shapes, args
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_compiled_traces_stop_where_the_numpy_rounds_do(seed, monkeypatch):
+    """With the shapes' programs (``collide.shape_fields``, as the world's stage passes
+    them) the disc and vertex traces run in one compiled call each
+    (``_toi_kernels.trace``) and stop at the numpy rounds' times, bit for bit; with a
+    field that does not compile among the targets, the numpy rounds run."""
+    from sdfphys.collide import shape_fields
+    from sdfphys.sdf.gradient import NumericGradientField
+
+    shapes, args = scattered_traces(seed)
+    fields, canonical = shape_fields(shapes)
+    programs = (fields.table, fields.program[canonical])
+    calls = []
+    original = toi.trace
+    monkeypatch.setattr(toi, "trace", lambda *a: calls.append(a[9]) or original(*a))
+    expected = toi.step_fractions(*args)
+    assert calls == []
+    got = toi.step_fractions(*args, programs=programs)
+    assert sorted(calls) == [False, True]                    # disc and vertex traces
+    np.testing.assert_array_equal(got, expected)
+    assert np.any(expected < 1.0) and np.any(expected == 1.0)
+    # A target's field that does not compile (the ground's, every trace's target): the
+    # numpy rounds, the same fractions.
+    calls.clear()
+    user = list(args[0])
+    user[0] = NumericGradientField(user[0])
+    no_program = (fields.table, np.where(np.arange(len(shapes)) == 0, -1,
+                                         fields.program[canonical]))
+    with_user = toi.step_fractions(user, *args[1:], programs=no_program)
+    assert calls == []
+    np.testing.assert_array_equal(with_user, toi.step_fractions(user, *args[1:]))

@@ -225,8 +225,10 @@ def _groups(shapes: list[Shape], body_shape: np.ndarray, pairs: np.ndarray
     return first, second, lo, np.r_[lo[1:], len(group)]
 
 
-#: The kind pairs with a batched pair function, as kind_rank[a] * 3 + kind_rank[b].
+#: The kind pairs with a batched pair function, as kind_rank[a] * 3 + kind_rank[b] ...
 _BATCHED = {KIND_ORDER.index(a) * 3 + KIND_ORDER.index(b): (a, b) for a, b in BATCH_FUNCTIONS}
+#: ... and whether each such code (9,) has one (a lookup, not ``np.isin``, per query).
+_HAS_BATCH = np.isin(np.arange(len(KIND_ORDER) ** 2), list(_BATCHED))
 
 
 def _batched_groups(tables: _ShapeTables, sa: np.ndarray, sb: np.ndarray
@@ -235,7 +237,7 @@ def _batched_groups(tables: _ShapeTables, sa: np.ndarray, sb: np.ndarray
     and whether a batched pair function takes it (its kind pair has one and both fields
     compile)."""
     kind = tables.kind_rank[sa] * 3 + tables.kind_rank[sb]
-    batched = np.isin(kind, list(_BATCHED))
+    batched = _HAS_BATCH[kind]
     if batched.any():
         fields = tables.fields
         batched &= (fields.program[sa] >= 0) & (fields.program[sb] >= 0)
