@@ -34,54 +34,6 @@ __all__ = ["trace"]
 
 
 @njit(cache=True, error_model="numpy")
-def _clearances(code, consts, start, depth, nesting, program, com, cos_t, sin_t, rows, n,
-                points, out):
-    """f of trace rows[r]'s target at points[r] (world, m) into out[rows[r]], r < n:
-    the points of one program one batch, in the order of ``rows``."""
-    stack, frames, cur = scratch(depth, nesting, n)
-    local = np.empty((n, 2))
-    value, grad = np.empty(n), np.empty((n, 2))
-    group = np.empty(n, np.int64)
-    done = np.zeros(n, np.bool_)
-    for first in range(n):
-        if done[first]:
-            continue
-        p = program[rows[first]]
-        m = 0
-        for j in range(first, n):
-            r = rows[j]
-            if done[j] or program[r] != p:
-                continue
-            done[j] = True
-            group[m] = j
-            # toi._distance: rel = p - com, local = (c rel_x + s rel_y, -s rel_x + c rel_y)
-            rx, ry = points[j, 0] - com[r, 0], points[j, 1] - com[r, 1]
-            c, s = cos_t[r], sin_t[r]
-            local[m, 0] = c * rx + s * ry
-            local[m, 1] = (-s) * rx + c * ry
-            m += 1
-        run_shared(code[start[p]:start[p + 1]], consts, local, m, stack, frames, cur, value,
-                   grad, 0, 0, 0)
-        for k in range(m):
-            out[rows[group[k]]] = value[k]
-
-
-@njit(cache=True, error_model="numpy")
-def _points(rotating, c0, path, a0, turn, vertex, rows, n, t, points):
-    """The traces' points at times t (indexed by trace) for rows[:n] into points[:n]."""
-    for j in range(n):
-        r = rows[j]
-        x = c0[r, 0] + t[r] * path[r, 0]
-        y = c0[r, 1] + t[r] * path[r, 1]
-        if rotating:
-            a = a0[r] + t[r] * turn[r]
-            c, s = math.cos(a), math.sin(a)
-            x = x + (c * vertex[r, 0] - s * vertex[r, 1])
-            y = y + (s * vertex[r, 0] + c * vertex[r, 1])
-        points[j, 0], points[j, 1] = x, y
-
-
-@njit(cache=True, error_model="numpy")
 def trace(code, consts, start, depth, nesting, program, com, cos_t, sin_t, rotating, c0,
           path, a0, turn, vertex, radius, core, speed, slop, iterations):
     """The stop time (R,) of each of R traces (module docstring), inf for one that
@@ -96,45 +48,79 @@ def trace(code, consts, start, depth, nesting, program, com, cos_t, sin_t, rotat
     trace's bounding and core radius (read only when not); speed (R,) m per unit of t,
     the bound on how fast the clearance shrinks; slop m; iterations: the rounds at most
     (``toi.MAX_ITERATIONS``).
+
+    One function (no compiled helpers: each would be compiled on its own at a cold
+    start). Pass 0 measures every trace at t = 0 (a disc trace at c0 itself); each
+    later pass advances the running traces and measures those still short of t = 1.
     """
     n_rows = c0.shape[0]
     t = np.zeros(n_rows)
     stop = np.full(n_rows, np.inf)
     gap = np.empty(n_rows)
     disc = np.zeros(n_rows)
+    active = np.zeros(n_rows, np.bool_)
     rows = np.arange(n_rows)
-    points = np.empty((n_rows, 2))
-    # t = 0: a disc trace at its centre c0 itself, a vertex trace as at any t.
-    if rotating:
-        _points(rotating, c0, path, a0, turn, vertex, rows, n_rows, t, points)
-    else:
-        for r in range(n_rows):
-            points[r, 0], points[r, 1] = c0[r, 0], c0[r, 1]
-    _clearances(code, consts, start, depth, nesting, program, com, cos_t, sin_t, rows,
-                n_rows, points, gap)
-    active = np.empty(n_rows, np.bool_)
-    for r in range(n_rows):
-        if not rotating:
-            disc[r] = radius[r] if gap[r] - radius[r] > 2.0 * slop else core[r]
-            gap[r] = gap[r] - disc[r]
-        active[r] = gap[r] > 2.0 * slop and speed[r] > 0.0
-    for _ in range(iterations):
-        n = 0
-        for r in range(n_rows):
-            if active[r]:
-                t[r] += (gap[r] - slop) / speed[r]
-                if t[r] >= 1.0:
-                    active[r] = False
+    stack, frames, cur = scratch(depth, nesting, n_rows)
+    local = np.empty((n_rows, 2))
+    value, grad = np.empty(n_rows), np.empty((n_rows, 2))
+    group = np.empty(n_rows, np.int64)
+    done = np.empty(n_rows, np.bool_)
+    for step in range(iterations + 1):
+        n = n_rows
+        if step > 0:
+            n = 0
+            for r in range(n_rows):
+                if active[r]:
+                    t[r] += (gap[r] - slop) / speed[r]
+                    if t[r] >= 1.0:
+                        active[r] = False
+                    else:
+                        rows[n] = r
+                        n += 1
+            if n == 0:
+                break
+        # The clearances of rows[:n] at their t: the points of one target program one
+        # batch, in the order of ``rows`` (``toi._distance``).
+        done[:n] = False
+        for first in range(n):
+            if done[first]:
+                continue
+            p = program[rows[first]]
+            m = 0
+            for j in range(first, n):
+                r = rows[j]
+                if done[j] or program[r] != p:
+                    continue
+                done[j] = True
+                group[m] = r
+                if step == 0 and not rotating:
+                    x, y = c0[r, 0], c0[r, 1]
                 else:
-                    rows[n] = r
-                    n += 1
-        if n == 0:
-            break
-        _points(rotating, c0, path, a0, turn, vertex, rows, n, t, points)
-        _clearances(code, consts, start, depth, nesting, program, com, cos_t, sin_t, rows, n,
-                    points, gap)
+                    x = c0[r, 0] + t[r] * path[r, 0]
+                    y = c0[r, 1] + t[r] * path[r, 1]
+                    if rotating:
+                        a = a0[r] + t[r] * turn[r]
+                        c, s = math.cos(a), math.sin(a)
+                        x = x + (c * vertex[r, 0] - s * vertex[r, 1])
+                        y = y + (s * vertex[r, 0] + c * vertex[r, 1])
+                # toi._distance: rel = p - com, local = (c rel_x + s rel_y, -s rel_x + c rel_y)
+                rx, ry = x - com[r, 0], y - com[r, 1]
+                c, s = cos_t[r], sin_t[r]
+                local[m, 0] = c * rx + s * ry
+                local[m, 1] = (-s) * rx + c * ry
+                m += 1
+            run_shared(code[start[p]:start[p + 1]], consts, local, m, stack, frames, cur,
+                       value, grad, 0, 0, 0)
+            for k in range(m):
+                gap[group[k]] = value[k]
         for j in range(n):
             r = rows[j]
+            if step == 0:
+                if not rotating:
+                    disc[r] = radius[r] if gap[r] - radius[r] > 2.0 * slop else core[r]
+                    gap[r] = gap[r] - disc[r]
+                active[r] = gap[r] > 2.0 * slop and speed[r] > 0.0
+                continue
             if not rotating:
                 gap[r] = gap[r] - disc[r]
             if gap[r] <= 2.0 * slop:

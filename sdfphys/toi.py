@@ -54,7 +54,8 @@ from .collide.broadphase import candidate_pairs
 from .sdf import Field, compiled
 from .sdf.program_table import ProgramTable
 
-__all__ = ["fast_bodies", "step_fractions", "time_of_impact", "vertex_time_of_impact"]
+__all__ = ["fast_bodies", "step_fractions", "time_of_impact", "trace_ahead",
+           "vertex_time_of_impact"]
 
 #: Conservative-advancement iterations per pair; a trace still running after them stops
 #: where it is, which is safe (never past a contact) and only stops the body early.
@@ -194,6 +195,18 @@ def _traced(programs: Programs, program: np.ndarray, end: np.ndarray, end_angle:
                  program, np.ascontiguousarray(end[target]), np.cos(angle), np.sin(angle),
                  rotating, c0, path, a0, turn, vertex, radius, core, speed, float(slop),
                  MAX_ITERATIONS)
+
+
+def trace_ahead(programs: Programs) -> None:
+    """Compile the traces' kernel (a cold start's, ``world_stages.compile_later``): one
+    made-up disc trace against the first program of ``programs``' table, if any."""
+    table = programs[0]
+    if table is None:
+        return
+    one = np.ones(1)
+    trace(table.code, table.consts, table.start, table.depth, table.nesting,
+          np.zeros(1, np.int64), np.zeros((1, 2)), one, 0.0 * one, False, np.zeros((1, 2)),
+          np.ones((1, 2)), 0.0 * one, 0.0 * one, np.zeros((1, 2)), one, one, one, 0.005, 1)
 
 
 def _disc_fractions(fields: list[Field], shape_id: np.ndarray, start: np.ndarray,

@@ -37,7 +37,7 @@ from .solver import (
 from .solver import store_impulses as impulse_cache
 from .solver.bundles import substep_rows
 from .solver.softness import loaded_rows, row_softness_params
-from .toi import Programs, fast_bodies, step_fractions
+from .toi import Programs, fast_bodies, step_fractions, trace_ahead
 from .world_bodies import DYNAMIC, STATIC
 
 if TYPE_CHECKING:
@@ -332,8 +332,9 @@ def compile_later(world: World, bodies: BodyState) -> None:
     are done: the kernels a first step does not call and the next steps do, on one
     made-up row with the argument types of a step's calls. The warm start's match
     against the impulses a step left (``ImpulseCache.match``: by key, then by place;
-    with ``warm_starting``) and, with ``sleeping``, the islands falling asleep once a
-    body has rested ``time_to_sleep`` (``world_sleep.islands_falling``). Changes
+    with ``warm_starting``), with ``sleeping``, the islands falling asleep once a body
+    has rested ``time_to_sleep`` (``world_sleep.islands_falling``), and with
+    ``time_of_impact``, the traces of a fast body (``toi.trace_ahead``). Changes
     nothing: the child compiles them while the parent ends its first step
     (``compile_ahead``), the parent while it waits for the child (``compile_behind``)."""
     s = world.settings
@@ -344,3 +345,5 @@ def compile_later(world: World, bodies: BodyState) -> None:
     if s.sleeping:
         world_sleep.islands_falling(world, bodies, ContactConstraints.empty(),
                                     world_sleep.awake(world))
+    if s.time_of_impact:
+        trace_ahead(_programs(world))
