@@ -203,10 +203,10 @@ def trace_ahead(programs: Programs) -> None:
     table = programs[0]
     if table is None:
         return
-    one = np.ones(1)
+    one, zero, point = np.ones(1), np.zeros(1), np.zeros((1, 2))
     trace(table.code, table.consts, table.start, table.depth, table.nesting,
-          np.zeros(1, np.int64), np.zeros((1, 2)), one, 0.0 * one, False, np.zeros((1, 2)),
-          np.ones((1, 2)), 0.0 * one, 0.0 * one, np.zeros((1, 2)), one, one, one, 0.005, 1)
+          np.zeros(1, np.int64), point, one, zero, False, point, np.ones((1, 2)), zero, zero,
+          point, one, one, one, 0.005, 1)
 
 
 def _disc_fractions(fields: list[Field], shape_id: np.ndarray, start: np.ndarray,
