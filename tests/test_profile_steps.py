@@ -129,3 +129,13 @@ def test_glue_splits_a_step_into_kernels_and_python():
     assert abs(kernels + python - total) <= 0.002
     assert "world_stages.collide" in out
     assert "sdfphys.solver.substeps._substeps_kernel" in out
+
+
+def test_the_timed_world_starts_after_the_skipped_steps():
+    """``--skip N`` times a phase: the timed world is fresh (not the warming one) and has
+    run N steps; without it, none."""
+    tool = load_tool("profile_steps")
+    scene = str(ROOT / "scenes" / "ball_drop.toml")
+    skipped = tool.timed_world(scene, [], 3, 7)
+    assert skipped.time == pytest.approx(7 * skipped.settings.dt)
+    assert tool.timed_world(scene, [], 3, 0).time == 0.0

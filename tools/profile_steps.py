@@ -43,7 +43,11 @@ ms, half of it Python over ~16 pair-function calls a step (docs/performance.md,
 "2026-11-28, session 28"). Timers cost about a microsecond a call; the kernels come from
 the usual cache.
 
-Usage: python tools/profile_steps.py SCENE [--steps 300] [--warm 300] [--top 30]
+A phase of a run (``--skip N``): the timed world first runs N steps untimed, so that
+``--steps`` times steps N to N + steps (the showcase's tumbling steps 60-150 against
+its resting 240-300: docs/performance.md, "2026-11-29, session 33").
+
+Usage: python tools/profile_steps.py SCENE [--steps 300] [--warm 300] [--skip 0] [--top 30]
     [--set KNOB=VALUE ...] [--frequency 4000] [--refcounts | --glue]
 SCENE: a ``tools/bench_vs_peers.py`` scene (pile2000, pyramid20, showcase, ...) or a
 scene file (``--set`` then sets its [sim] keys). Needs ``perf`` on the PATH and
@@ -323,13 +327,15 @@ def glue_report(world, steps: int, top: int, scene: str) -> int:
     """``--glue``: ``steps`` steps of ``world`` split into kernels and Python, by stage."""
     timers = install_glue_timers()
     start = time.perf_counter()
+    first = round(world.time / world.settings.dt)         # the steps ``--skip`` ran
     for _ in range(steps):
         world.step()
     seconds = time.perf_counter() - start
     n = max(steps, 1)
     ms = 1e3 / n
     print(f"{scene}: {ms * seconds:.3f} ms a step: kernels {ms * timers.kernel_total:.3f}, "
-          f"Python {ms * (seconds - timers.kernel_total):.3f} ({steps} steps)")
+          f"Python {ms * (seconds - timers.kernel_total):.3f} ({steps} steps"
+          + (f", from step {first})" if first else ")"))
     print(f"{'stage (exclusive of the stages it runs)':44s} {'calls':>7s} {'ms':>7s} "
           f"{'kernels':>8s} {'Python':>7s}")
     staged = sum(entry[1] for entry in timers.stages.values())
@@ -345,13 +351,22 @@ def glue_report(world, steps: int, top: int, scene: str) -> int:
     return 0
 
 
+def timed_world(scene: str, knobs: list[str], warm: int, skip: int):
+    """A fresh world of ``scene`` after ``warm`` steps of another (the kernels compiled or
+    loaded) and ``skip`` steps of its own (the phase to time starts there)."""
+    world = make_world(scene, knobs)
+    for _ in range(warm):
+        world.step()
+    world = make_world(scene, knobs)
+    for _ in range(skip):
+        world.step()
+    return world
+
+
 def child(args: argparse.Namespace) -> int:
     """In the process with a fresh cache (the user's with ``--glue``): warm up, then
     map, record and report, or time by stage."""
-    world = make_world(args.scene, args.set)
-    for _ in range(args.warm):
-        world.step()
-    world = make_world(args.scene, args.set)
+    world = timed_world(args.scene, args.set, args.warm, args.skip)
     if args.glue:
         return glue_report(world, args.steps, args.top, args.scene)
     entries = map_entries()
@@ -395,6 +410,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--steps", type=int, default=None,
                         help="timed steps (default 300; 3 with --refcounts)")
     parser.add_argument("--warm", type=int, default=300)
+    parser.add_argument("--skip", type=int, default=0,
+                        help="untimed steps of the timed world before its timed steps")
     parser.add_argument("--top", type=int, default=30)
     parser.add_argument("--frequency", type=int, default=4000)
     parser.add_argument("--set", nargs="*", default=[], metavar="KNOB=VALUE")
