@@ -324,13 +324,16 @@ def test_the_compiled_traces_stop_where_the_numpy_rounds_do(seed, monkeypatch):
     shapes, args = scattered_traces(seed)
     fields, canonical = shape_fields(shapes)
     programs = (fields.table, fields.program[canonical])
-    calls = []
-    original = toi.trace
+    calls, rounds = [], []
+    original, distance = toi.trace, toi._distance
     monkeypatch.setattr(toi, "trace", lambda *a: calls.append(a[9]) or original(*a))
+    monkeypatch.setattr(toi, "_distance", lambda *a: rounds.append(1) or distance(*a))
     expected = toi.step_fractions(*args)
-    assert calls == []
+    assert calls == [] and len(rounds) > 2
+    rounds.clear()
     got = toi.step_fractions(*args, programs=programs)
     assert sorted(calls) == [False, True]                    # disc and vertex traces
+    assert rounds == []                                      # no numpy round
     np.testing.assert_array_equal(got, expected)
     assert np.any(expected < 1.0) and np.any(expected == 1.0)
     # A target's field that does not compile (the ground's, every trace's target): the
