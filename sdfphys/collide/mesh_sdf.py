@@ -371,8 +371,9 @@ def sdf_in_meshes(fields: ShapeFields, mesh_of: np.ndarray, sdf_of: np.ndarray,
     k's mesh is shape mesh_of[k], its sdf shape sdf_of[k] (n,) of ``fields``, its margin
     margin[k] (n,) m, its run run[k] (n,) (the pairs of one shape pair: consecutive, one
     run id, one margin). The field-field contacts of all pairs in one pass
-    (``field_pairs.placed_contacts``), then the support search and the far ends run by
-    run (``_mesh_sdf_kernels.support_runs``): the same contacts, to the bit, as an
+    (``field_pairs.placed_contacts``), then the support search and the far ends a
+    ``_mesh_sdf_kernels._support`` call per run (a kernel looping over the runs compiled
+    seconds longer at a cold start): the same contacts, to the bit, as an
     ``sdf_in_mesh`` call per shape pair. Returns its six arrays, pairs into the n."""
     angle = pose_mesh[:, 2] - pose_sdf[:, 2]
     co, so = np.cos(pose_sdf[:, 2]), np.sin(pose_sdf[:, 2])
