@@ -148,6 +148,25 @@ def test_mesh_in_field_kink_on_a_face_compiled_equals_numpy():
     assert deepest > 0.0179
 
 
+
+def test_mesh_in_field_vertex_across_a_plank_compiled_equals_numpy():
+    """A clamp's spike 0.02 into a plank, its other spike's tip across the plank within
+    the margin (tests/test_narrowphase.py, PLANK and CLAMP): that tip does not cut the
+    plank's top face (``mesh_contacts._reference_faces``), in both paths, bit for bit,
+    and the spike's 0.02 row is there."""
+    plank = shape_from_spec({"type": "box", "size": [2.0, 0.1]})
+    clamp = shape_from_spec({"type": "polygon", "points": [
+        [-0.2, 0.15], [-0.1, 0.15], [0.0, 0.03], [0.1, 0.15], [1.1, 0.15], [1.1, -0.15],
+        [0.4, -0.15], [0.3, -0.06], [0.2, -0.15], [0.2, -0.35], [1.3, -0.35], [1.3, 0.35],
+        [-0.2, 0.35]]})
+    pose_plank = np.array([[0.0, 0.0, 0.0]])
+    pose_clamp = np.array([[*-clamp.origin, 0.0]])      # the clamp's points where given
+    for margin in (0.02, 0.05):
+        reference, got = _both(mesh_contacts.mesh_in_field, clamp, plank, pose_clamp,
+                               pose_plank, margin, Settings(), True)
+        assert _same(reference, got)
+        assert np.isclose(np.max(reference[3]), 0.02, atol=1e-9)
+
 def test_placed_field_contacts_compiled_glue_equals_the_numpy_glue():
     """``field_pairs.placed_field_contacts`` through its compiled glue (``_placed_fields``)
     gives the contacts of the numpy glue (``field_field_contacts`` over the same

@@ -397,6 +397,39 @@ def test_box_in_the_notch_of_an_l():
                                atol=1e-9)
 
 
+#: A clamp round the right end of PLANK (a 2 x 0.1 box at the origin): its upper arm's
+#: spike, tip (0, 0.03), reaches 0.02 into the plank from above; its lower arm's spike,
+#: tip (0.3, -0.06), stops 0.01 under it.
+PLANK = {"type": "box", "size": [2.0, 0.1]}
+CLAMP = {"type": "polygon", "points": [
+    [-0.2, 0.15], [-0.1, 0.15], [0.0, 0.03], [0.1, 0.15], [1.1, 0.15], [1.1, -0.15],
+    [0.4, -0.15], [0.3, -0.06], [0.2, -0.15], [0.2, -0.35], [1.3, -0.35], [1.3, 0.35],
+    [-0.2, 0.35]]}
+
+
+@pytest.mark.parametrize("margin", [0.0, 0.02, 0.05])
+def test_a_spike_in_a_plank_is_seen_past_a_vertex_across_it(rng, margin):
+    """The clamp's upper spike tip is inside the plank, 0.02 under its top face (0.08
+    over its bottom one): one contact, depth 0.02, normal (0, 1) from the plank to the
+    clamp, midway at (0, 0.04). The lower spike's tip lies under the top face's plane
+    too, 0.11 deep, its foot on that face, but across the plank, outside it: it does
+    not cut the face (stage 4 of collide/mesh_contacts.py). It once did whenever it was
+    within the margin (the world's margin is 0.02 plus the bodies' reach): no contact
+    at all. The bottom face is a cut plane (the upper tip lies 0.08 behind it) and the
+    lower tip's row goes with it; a wider margin adds speculative rows only."""
+    for theta, shift in [(0.0, np.zeros(2))] + [(rng.uniform(-4, 4), rng.uniform(-5, 5, 2))
+                                                  for _ in range(3)]:
+        turn = rotation(theta)
+        pa, pb = moved((0.0, 0.0, 0.0), theta, shift), moved((0.0, 0.0, 0.0), theta, shift)
+        for first, second, sign in [((PLANK, pa), (CLAMP, pb), 1.0),
+                                    ((CLAMP, pb), (PLANK, pa), -1.0)]:
+            c = collide(first[0], first[1], second[0], second[1], margin=margin)
+            deep = c.depth > 0.0          # the margin's speculative rows aside
+            np.testing.assert_allclose(c.depth[deep], [0.02], atol=1e-9)
+            np.testing.assert_allclose(c.normal[deep], [sign * turn @ [0.0, 1.0]], atol=1e-9)
+            np.testing.assert_allclose(c.point[deep], [turn @ [0.0, 0.04] + shift], atol=1e-9)
+
+
 @pytest.mark.xfail(strict=True, reason=(
     "measured 0.1 m, two rows, normals (-1, 0) and (0, -1): no vertex of either L is inside "
     "the other, so no vertex row sees the crossing, and the descent minima that do (0.2 m "
@@ -442,7 +475,8 @@ def test_mesh_instancing_field_calls_do_not_grow_with_bodies(rng):
     ``field_field_contacts`` (the starts, one call per descent iteration, the patch
     search's two bracket ends and one call per iteration: 2 field_descent_iterations
     + 3, as for sdf-sdf groups), then the support search's projection, one call per
-    round and four for the far ends: probes, anchors, two ladders (SDF_CALLS). All independent of the number of bodies.
+    round and four for the far ends: probes, anchors, two ladders (SDF_CALLS). All
+    independent of the number of bodies.
     """
     from sdfphys.collide.mesh_sdf import SDF_CALLS
 

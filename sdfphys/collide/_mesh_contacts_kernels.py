@@ -291,7 +291,9 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
     accepted = np.ones(c, dtype=np.bool_)
     reach = margin + _ON_FACE
     for l in range(n_near):
-        supported[l] = abs(f[l]) <= _ON_FACE and f[n_near + l] <= reach
+        # Behind the plane (s < 0), only a vertex inside other (see _reference_faces).
+        supported[l] = abs(f[l]) <= _ON_FACE and f[n_near + l] <= (
+            reach if sep[l] >= 0.0 else _ON_FACE)
         if supported[l] and -sep[l] > deepest[pair[r_idx[l]]] + slop:
             accepted[r_idx[l]] = False
     use = np.empty(n_near, dtype=np.int64)

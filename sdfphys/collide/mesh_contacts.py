@@ -21,9 +21,9 @@ Stages (derivations in each function's docstring):
    step 4, carries what is dropped.
 4. ``_reference_faces`` (Box2D's reference face and clipping, in SDF form): every
    kept candidate proposes the face under it as a contact plane; a plane under
-   which some mesh vertex lies deeper than anything reaches into the other shape
-   (plus the slop) is cut by the mesh, not pressed by it, and is rejected (a side
-   face near the end of a thin overlap strip: SAT's non-minimal axis). Mesh
+   which some mesh vertex inside the other shape lies deeper than anything reaches
+   into it (plus the slop) is cut by the mesh, not pressed by it, and is rejected
+   (a side face near the end of a thin overlap strip: SAT's non-minimal axis). Mesh
    vertices are measured against the accepted planes.
 
 When the other field compiles (``sdf.compiled``), the stages run in two compiled
@@ -270,8 +270,17 @@ def _reference_faces(field: Field, c: _Candidates, vertices: np.ndarray, deepest
     For candidate r (point p, depth d, outward normal g), the face point is
     q = p + d g (on other's surface for an exact field). A mesh vertex v of the same
     pair is *supported* by the face when its foot v - s g, s = (v - q).g, lies on
-    other's surface (|f| <= ``_ON_FACE``: the face extends under v) and
-    f(v) <= margin (v is near other, not across it). The face is a contact plane
+    other's surface (|f| <= ``_ON_FACE``: the face extends under v) and v is near
+    other, not across it: f(v) <= margin in front of the plane (s >= 0), f(v) <= 0
+    (inside other, to ``_ON_FACE``) behind it. A vertex behind the face whose foot is
+    on it but which lies outside other has passed through other to its far side
+    (the inward ray from the foot leaves other before it reaches v): it cuts no
+    plane, and is no contact. With f(v) <= margin there too, the tip of a clamp's
+    spike 0.02 deep in a plank went unseen whenever the tip of its other spike lay
+    across the plank within the margin (the world's margin grows with the bodies'
+    reach; tests/test_narrowphase.py, the plank and the clamp), and a star's spike
+    crossed a U's arm 85 mm deep while the pair's rows read 0.3 mm (docs/stability.md,
+    "Discussion"). The face is a contact plane
     when no supported vertex lies deeper below it than the pair's deepest point
     (``deepest`` (n,): max of -f over the mesh, from the descent) plus ``slop``:
     otherwise the mesh cuts through the plane (a side face near the end of a thin
@@ -287,7 +296,8 @@ def _reference_faces(field: Field, c: _Candidates, vertices: np.ndarray, deepest
     vv = v[r_idx, v_idx]
     f = compiled.distance(field,
                           np.concatenate([vv - sep[:, None] * c.normal[r_idx], vv]))
-    supported = ((np.abs(f[:len(vv)]) <= _ON_FACE) & (f[len(vv):] <= margin + _ON_FACE))
+    near = np.where(sep >= 0.0, margin + _ON_FACE, _ON_FACE)
+    supported = (np.abs(f[:len(vv)]) <= _ON_FACE) & (f[len(vv):] <= near)
     cut = supported & (-sep > deepest[c.pair[r_idx]] + slop)
     accepted = np.ones(len(c.depth), bool)
     accepted[r_idx[cut]] = False
