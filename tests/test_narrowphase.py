@@ -401,6 +401,7 @@ def test_box_in_the_notch_of_an_l():
 #: spike, tip (0, 0.03), reaches 0.02 into the plank from above; its lower arm's spike,
 #: tip (0.3, -0.06), stops 0.01 under it.
 PLANK = {"type": "box", "size": [2.0, 0.1]}
+BOX_1 = {"type": "box", "size": [1.0, 1.0]}
 CLAMP = {"type": "polygon", "points": [
     [-0.2, 0.15], [-0.1, 0.15], [0.0, 0.03], [0.1, 0.15], [1.1, 0.15], [1.1, -0.15],
     [0.4, -0.15], [0.3, -0.06], [0.2, -0.15], [0.2, -0.35], [1.3, -0.35], [1.3, 0.35],
@@ -430,19 +431,47 @@ def test_a_spike_in_a_plank_is_seen_past_a_vertex_across_it(rng, margin):
             np.testing.assert_allclose(c.point[deep], [turn @ [0.0, 0.04] + shift], atol=1e-9)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "measured 0.1 m, two rows, normals (-1, 0) and (0, -1): no vertex of either L is inside "
-    "the other, so no vertex row sees the crossing, and the descent minima that do (0.2 m "
-    "deep, inside the arms) are off the outline, which the polygon filters drop "
-    "(collide/mesh_contacts.py, stage 3). In scenes/concave_polygons.toml under another "
-    "sweep order a star's arm cut through a U's corner this way: 120 mm of overlap over "
-    "20 steps while every row read under 6 mm (docs/stability.md)"))
+SPIKE = {"type": "polygon", "points": [[0.499, 0.35], [0.48, 0.6], [0.9, 0.9], [0.2, 0.9],
+                                       [0.249, 0.6]]}
+
+
+def test_a_spike_through_a_corner_is_seen_at_its_deepest_point(rng):
+    """A spike whose tip is 1 mm inside a unit box's right face (0.499, 0.35) and whose
+    left edge rises at 45 deg out through the box's top face: the tip's row reads 1 mm,
+    the overlap is a 0.15 m triangle. The spike's outline is deepest in the box where
+    that edge crosses the corner's bisector, (0.4245, 0.4245), 0.0755 from both faces
+    (0.001 + t = 0.15 - t along the edge): a kink of the box's field crossed by the
+    edge (``mesh_contacts._face_normals``). Its first face, the top (the spike's bulk
+    is above), is cut by the tip 0.15 under it; its second, the right face, holds:
+    depth 0.0755, normal (1, 0), midway (0.46225, 0.4245). No overlapping row pushes
+    the spike back into the corner. Before, the kink was dropped and the deepest row
+    was the tip's 1 mm (a star's spike through an L's corner, docs/stability.md)."""
+    for theta, shift in [(0.0, np.zeros(2))] + [(rng.uniform(-4, 4), rng.uniform(-5, 5, 2))
+                                                  for _ in range(3)]:
+        turn = rotation(theta)
+        pose = moved((0.0, 0.0, 0.0), theta, shift)
+        for first, second, sign in [((BOX_1, pose), (SPIKE, pose), 1.0),
+                                    ((SPIKE, pose), (BOX_1, pose), -1.0)]:
+            c = collide(first[0], first[1], second[0], second[1], margin=0.02)
+            k = np.argmax(c.depth)
+            assert abs(c.depth[k] - 0.0755) < 1e-12
+            np.testing.assert_allclose(c.normal[k], sign * turn @ [1.0, 0.0], atol=1e-12)
+            np.testing.assert_allclose(c.point[k], turn @ [0.46225, 0.4245] + shift,
+                                       atol=1e-12)
+            out = sign * (c.normal[c.depth > 0.0] @ turn)     # box to spike, box frame
+            assert np.all(out >= -1e-12)
+
+
 def test_crossing_arms_of_two_concave_polygons_are_seen_as_deep_as_they_overlap():
     """Two L's whose arms cross in a '+' (the overlap a 0.4 m square, no vertex of either
     inside the other): the deepest contact is at least the overlap's inscribed depth, 0.2
     m (the arms' half width: the point of the overlap farthest from both outlines; a
     point of one outline inside the other is at least that deep where it crosses the
-    other's arm)."""
+    other's arm). The rows that see it are kinks of one L's field crossed by the other's
+    edges (``mesh_contacts._face_normals``); before them the pair read 0.1 m, and in
+    scenes/concave_polygons.toml under another sweep order a star's arm cut through a
+    U's corner this way: 120 mm of overlap over 20 steps while every row read under 6
+    mm (docs/stability.md)."""
     for pose_a, pose_b in (((0.0, 0.0, 0.0), (0.5, -0.5, 0.0)),
                            ((0.5, -0.5, 0.0), (0.0, 0.0, 0.0))):
         c = collide(L_ARMS, pose_a, L_ARMS, pose_b)

@@ -122,12 +122,13 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
             kept: np.ndarray, point: np.ndarray, value: np.ndarray, distinct: np.ndarray,
             start_ids: np.ndarray, code: np.ndarray, consts: np.ndarray, depth_p: int,
             nesting: int, margin: float, polygon_pair: bool, slop: float, co: np.ndarray,
-            so: np.ndarray, pose_other: np.ndarray):
+            so: np.ndarray, pose_other: np.ndarray, pose_mesh: np.ndarray):
     """Stages 1 (after the descent) to 4 and the world frame, as ``_mesh_in_field_numpy``.
 
     vertices (n, V, 2), kept (K,): from ``_place``; point (K, S, 2), value (K, S),
     distinct (K, S): the descent's minima of the kept triangles and
-    ``descent.merge_minima``; start_ids (S,): their start ids. The rest as
+    ``descent.merge_minima``; start_ids (S,): their start ids; pose_mesh (n, 3): the
+    mesh's poses (its centre of mass in other's frame, for crossed kinks). The rest as
     ``mesh_in_field``. Returns its six arrays. Rows are written in the numpy
     stages' order; sorts are stable, as lexsort.
     """
@@ -211,6 +212,8 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
             deepest[pair[i]] = depth[i]
     # 3. Normals (``_face_normals`` for a polygon pair).
     normal = np.empty((c, 2))
+    # Per row: the row of the face it falls back from (a kink's second face), or -1.
+    alt_of = np.full(c, -1, dtype=np.int64)
     if polygon_pair:
         probes = np.empty((5 * c, 2))
         for i in range(c):
@@ -229,6 +232,14 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
             sides[c + i, 0], sides[c + i, 1] = fx - tx, fy - ty
         _, g_foot = _evaluate(code, consts, depth_p, nesting, sides, 2 * c)
         kink2 = _KINK ** 2
+        # Up to two rows per candidate (a kink crossed by the mesh's edge: both faces).
+        q_pair = np.empty(2 * c, dtype=np.int64)
+        q_element = np.empty(2 * c, dtype=np.int64)
+        q_start = np.empty(2 * c, dtype=np.int64)
+        q_p = np.empty((2 * c, 2))
+        q_depth = np.empty(2 * c)
+        normal = np.empty((2 * c, 2))
+        alt_of = np.full(2 * c, -1, dtype=np.int64)
         face = 0
         for i in range(c):
             gx, gy = g[i, 0], g[i, 1]
@@ -242,26 +253,62 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
                                      1.0, 0.0)
                 ok = ok and (hx - gx) * (hx - gx) + (hy - gy) * (hy - gy) <= kink2
             d = depth[i]
+            alt = -1
             if not ok and d > 0.0:
-                # A kink on a mesh edge running along one of its faces takes that face.
+                # A kink on a mesh edge running along one of its faces takes that face;
+                # one the edge crosses, first the face on the side of the mesh's centre
+                # of mass, then the face turned most from it (see _face_normals).
                 best, arg = np.inf, 0
                 for a in range(4):
                     j = c + 4 * i + a
                     facing = 0.0 + g[j, 0] * edge_normal[i, 0] + g[j, 1] * edge_normal[i, 1]
                     if facing < best:
                         best, arg = facing, a
-                if best <= -_RUNS_ALONG:
+                along = best <= -_RUNS_ALONG
+                crossed = not along and (edge_normal[i, 0] != 0.0 or edge_normal[i, 1] != 0.0)
+                if crossed:
+                    k = pair[i]
+                    dx, dy = pose_mesh[k, 0] - pose_other[k, 0], pose_mesh[k, 1] - pose_other[k, 1]
+                    tx = (co[k] * dx + so[k] * dy) - p[i, 0]
+                    ty = (-so[k] * dx + co[k] * dy) - p[i, 1]
+                    most = -np.inf
+                    for a in range(4):
+                        j = c + 4 * i + a
+                        toward = 0.0 + g[j, 0] * tx + g[j, 1] * ty
+                        if toward > most:
+                            most, arg = toward, a
+                if along or crossed:
                     j = c + 4 * i + arg
                     gx, gy = g[j, 0], g[j, 1]
                     d = -(f_probe[j] - (0.0 + _PROBE_OFFSETS[arg, 0] * gx
                                         + _PROBE_OFFSETS[arg, 1] * gy))
                     ok = True
+                if crossed:
+                    turn = -1.0
+                    for a in range(4):
+                        j = c + 4 * i + a
+                        t = (g[j, 0] - gx) * (g[j, 0] - gx) + (g[j, 1] - gy) * (g[j, 1] - gy)
+                        if t > turn:
+                            turn, alt = t, a
+                    if turn <= kink2:
+                        alt = -1
             if ok:
-                pair[face], element[face], start[face] = pair[i], element[i], start[i]
-                p[face, 0], p[face, 1], depth[face] = p[i, 0], p[i, 1], d
+                q_pair[face], q_element[face], q_start[face] = pair[i], element[i], start[i]
+                q_p[face, 0], q_p[face, 1], q_depth[face] = p[i, 0], p[i, 1], d
                 normal[face, 0], normal[face, 1] = gx, gy
                 face += 1
+                if alt >= 0:
+                    j = c + 4 * i + alt
+                    hx, hy = g[j, 0], g[j, 1]
+                    q_pair[face], q_element[face], q_start[face] = pair[i], element[i], start[i]
+                    q_p[face, 0], q_p[face, 1] = p[i, 0], p[i, 1]
+                    q_depth[face] = -(f_probe[j] - (0.0 + _PROBE_OFFSETS[alt, 0] * hx
+                                                    + _PROBE_OFFSETS[alt, 1] * hy))
+                    normal[face, 0], normal[face, 1] = hx, hy
+                    alt_of[face] = face - 1
+                    face += 1
         c = face
+        pair, element, start, p, depth = q_pair, q_element, q_start, q_p, q_depth
     else:
         _, g = _evaluate(code, consts, depth_p, nesting, p, c)
         for i in range(c):
@@ -296,6 +343,9 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
             reach if sep[l] >= 0.0 else _ON_FACE)
         if supported[l] and -sep[l] > deepest[pair[r_idx[l]]] + slop:
             accepted[r_idx[l]] = False
+    for r in range(c):              # a kink's second face only where its first is cut
+        if alt_of[r] >= 0 and accepted[alt_of[r]]:
+            accepted[r] = False
     use = np.empty(n_near, dtype=np.int64)
     n_use = 0
     for l in range(n_near):

@@ -211,10 +211,14 @@ def _edge_normals(mesh: Shape, local: np.ndarray, c: _Candidates) -> np.ndarray:
     return normal
 
 
-def _face_normals(field: Field, p: np.ndarray, depth: np.ndarray, edge: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _face_normals(field: Field, p: np.ndarray, depth: np.ndarray, edge: np.ndarray,
+                  centre: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                             np.ndarray]:
     """Unit gradient (C, 2) at points p (C, 2), (C,) bool: it is a face's normal, and
-    the depths (C,) (changed where a kink takes a face's, below).
+    the depths (C,) (changed where a kink takes a face's, below); then a second face
+    for kinks crossed by the mesh's edge, (C,) bool: there is one, its normal (C, 2)
+    and the depths below it (C,).
 
     One evaluation of 7 C points. The normal at p is trusted when (a) the gradient
     is the same at p +- h x and p +- h y (p is not on a kink of f, such as the
@@ -239,6 +243,21 @@ def _face_normals(field: Field, p: np.ndarray, depth: np.ndarray, edge: np.ndarr
     no contact plane; without the rule the kink (the deepest point of the overlap,
     on other's medial axis) was dropped and the pair reported a vertex 3.4 mm deep
     where the overlap is 1.4 cm.
+
+    A kink inside other on a mesh outline edge that runs along neither face is
+    crossed by the edge: the edge cuts across a corner of other, or across one of its
+    arms (a star's spike through an L's corner, two L's arms in a '+'). The kink is
+    the deepest point of that edge inside other, and no vertex of either polygon may
+    be (each outline crosses the other's with its vertices outside). Neither face is
+    the incident edge's reference face; it takes first the face on the side of the
+    mesh's centre of mass (``centre`` (C, 2), in other's frame: among the probes'
+    gradients the g_a with the largest g_a.(centre - p), so that every crossed kink of
+    a pair pushes the mesh the same way, out where its bulk is), then the face the
+    probes' gradients turn most from it, its second (``_reference_faces`` takes the
+    second only where the first is cut). Without it such a crossing was seen by no
+    row: the '+' read 0.1 m where
+    its arms overlap 0.2 m deep on either side of the kink, and a star's spike cut 92
+    mm into an L's corner while the rows read under 2 mm (docs/stability.md).
     """
     n = len(p)
     points = np.concatenate([p, (p[:, None, :] + _PROBE * _AXES[None]).reshape(-1, 2)])
@@ -257,14 +276,24 @@ def _face_normals(field: Field, p: np.ndarray, depth: np.ndarray, edge: np.ndarr
     a = np.argmin(facing, axis=1)
     rows = np.arange(n)
     along = ~face & (depth > 0.0) & (facing[rows, a] <= -_RUNS_ALONG)
+    crossed = ~face & (depth > 0.0) & ~along & np.any(edge != 0.0, axis=1)
+    toward = np.einsum("cad,cd->ca", around, centre - p)                   # (C, 4)
+    a = np.where(crossed, np.argmax(toward, axis=1), a)
     g_a = around[rows, a]
     below = -(f[n:].reshape(n, 4)[rows, a] - np.einsum("cd,cd->c", _PROBE * _AXES[a], g_a))
-    return (np.where(along[:, None], g_a, g0), face | along,
-            np.where(along, below, depth))
+    turn = np.sum((around - g_a[:, None, :]) ** 2, axis=2)                # (C, 4)
+    b = np.argmax(turn, axis=1)
+    second = crossed & (turn[rows, b] > _KINK ** 2)
+    g_b = around[rows, b]
+    below_b = -(f[n:].reshape(n, 4)[rows, b] - np.einsum("cd,cd->c", _PROBE * _AXES[b], g_b))
+    taken = along | crossed
+    return (np.where(taken[:, None], g_a, g0), face | taken, np.where(taken, below, depth),
+            second, g_b, below_b)
 
 
 def _reference_faces(field: Field, c: _Candidates, vertices: np.ndarray, deepest: np.ndarray,
-                     margin: float, slop: float) -> tuple[np.ndarray, _Candidates]:
+                     margin: float, slop: float, second_of: np.ndarray
+                     ) -> tuple[np.ndarray, _Candidates]:
     """Which candidates' faces are contact planes, and the vertices measured on them.
 
     For candidate r (point p, depth d, outward normal g), the face point is
@@ -285,6 +314,8 @@ def _reference_faces(field: Field, c: _Candidates, vertices: np.ndarray, deepest
     (``deepest`` (n,): max of -f over the mesh, from the descent) plus ``slop``:
     otherwise the mesh cuts through the plane (a side face near the end of a thin
     overlap), and pushing along it would take more than the actual penetration.
+    second_of (C,): for a kink's second face (``_face_normals``) the row of its first,
+    else -1; a second face is a contact plane only where its first is not.
     Returns the (C,) mask and the supported vertices of accepted faces with s <
     margin as candidates (depth -s, normal g), deepest faces first.
     """
@@ -301,6 +332,8 @@ def _reference_faces(field: Field, c: _Candidates, vertices: np.ndarray, deepest
     cut = supported & (-sep > deepest[c.pair[r_idx]] + slop)
     accepted = np.ones(len(c.depth), bool)
     accepted[r_idx[cut]] = False
+    second = np.flatnonzero(second_of >= 0)
+    accepted[second] &= ~accepted[second_of[second]]
     use = supported & accepted[r_idx]
     r_idx, v_idx, sep = r_idx[use], v_idx[use], sep[use]
     order = np.lexsort((-c.depth[r_idx], c.pair[r_idx]))
@@ -335,15 +368,21 @@ def _mesh_in_field_numpy(mesh: Shape, other: Shape, pose_mesh: np.ndarray,
     deepest = np.full(n, -np.inf)
     np.maximum.at(deepest, c.pair, c.depth)
     if polygon_pair:
-        c.normal, face, c.depth = _face_normals(other.field, c.point, c.depth,
-                                                _edge_normals(mesh, local, c))
-        c = c.take(face)
+        normal, face, depth, second, normal_b, depth_b = _face_normals(
+            other.field, c.point, c.depth, _edge_normals(mesh, local, c), offset[c.pair])
+        # Each kept candidate, then its second face if it has one.
+        row, which = np.nonzero(np.stack([face, second], axis=1))
+        c = c.take(row)
+        c.normal = np.where((which == 1)[:, None], normal_b[row], normal[row])
+        c.depth = np.where(which == 1, depth_b[row], depth[row])
+        second_of = np.where(which == 1, np.arange(len(row)) - 1, -1)
         if len(c.depth) == 0:
             return c.pair, c.point, c.normal, c.depth, c.element, c.start
     else:
         c.normal = safe_normalize(compiled.evaluate(other.field, c.point)[1])
+        second_of = np.full(len(c.depth), -1)
     accepted, measured = _reference_faces(other.field, c, vertices, deepest, margin,
-                                          settings.linear_slop)
+                                          settings.linear_slop, second_of)
     c = _Candidates.concatenate([measured, c.take(accepted)])
     c = c.take(_first_per_key(c.pair, c.element, c.start))
 
@@ -384,7 +423,7 @@ def compile_finish(mesh: Shape, other: Shape, settings: Settings) -> None:
             np.zeros((0, starts), np.bool_), start_ids,
             table.code[table.start[p]:table.start[p + 1]], table.consts, table.depth,
             table.nesting, 0.0, True, float(settings.linear_slop), np.zeros(0), np.zeros(0),
-            np.zeros((0, 3)))
+            np.zeros((0, 3)), np.zeros((0, 3)))
 
 
 def mesh_in_field(mesh: Shape, other: Shape, pose_mesh: np.ndarray, pose_other: np.ndarray,
@@ -473,7 +512,7 @@ def mesh_in_fields(fields: ShapeFields, mesh_of: np.ndarray, other_of: np.ndarra
             point[at:at + k], value[at:at + k], distinct[at:at + k], start_ids,
             table.code[table.start[p]:table.start[p + 1]], table.consts, table.depth,
             table.nesting, float(margin[lo]), bool(polygon_pair), float(settings.linear_slop),
-            co[lo:hi], so[lo:hi], pose_other[lo:hi])
+            co[lo:hi], so[lo:hi], pose_other[lo:hi], pose_mesh[lo:hi])
         parts.append((pair + lo, *rest))
         at += k
     return tuple(np.concatenate(column) for column in zip(*parts, strict=True))
