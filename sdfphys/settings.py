@@ -204,7 +204,8 @@ class Settings:
         "by at most twice this); 0: searched anew every step.", low=0.0, high=1.0)
     time_of_impact: bool = _knob(
         True, "", "Conservative advancement for bodies moving more than half their "
-        "extent per step (no tunnelling).")
+        "extent per step, against static and kinematic bodies (no tunnelling through "
+        "the ground, walls and platforms; dynamic pairs keep their contact rows).")
     sleeping: bool = _knob(
         True, "", "Islands (bodies in contact) whose every body stays slower than "
         "sleep_speed for time_to_sleep fall asleep: they cost nothing until an awake or "

@@ -22,17 +22,7 @@ SCENES = sorted(p.stem for p in (ROOT / "scenes").glob("*.toml"))
 BOUND = 0.01
 
 #: Scenes over the bound, with the cause found (deepest pair, time, figures).
-OPEN: dict[str, str] = {
-    "concave_polygons": "poly5 / poly10 at t = 0.93 s, 10.3 mm: the two fall together "
-                        "at 5 m/s, poly5 is stopped by poly0 under it within the step "
-                        "(an end-pose row on poly0's face) and poly10, 3 mm above it "
-                        "and barely closing at the step's start, presses 10.3 mm "
-                        "into it by the step's end: a column struck at once, which the "
-                        "impact passes solve for exact pairs only (circles, convex "
-                        "polygons; converged concave polygon rows spin: "
-                        "docs/solver.md, Impacts); nudged runs "
-                        "(tools/penetration_spread.py) 10.3 mm each",
-}
+OPEN: dict[str, str] = {}
 
 
 def deepest_contact(name: str) -> float:

@@ -281,6 +281,45 @@ def test_a_circle_with_a_row_against_the_obstacle_is_left_to_the_rows():
         assert list(t < 1.0) == stopped
 
 
+
+def test_a_fast_body_is_stopped_against_obstacles_only():
+    """``obstacles``: the bodies a fast body may be stopped against (the world passes its
+    static and kinematic ones, as Box2D v3 traces its non-bullet bodies). The same fast
+    ball and wall as above: stopped short of the wall when the wall is an obstacle,
+    not when it is not (a dynamic wall's pair is left to its contact rows)."""
+    shapes = [shape_from_spec(s) for s in (WALL, BALL)]
+    fields = [s.field for s in shapes]
+    radius = np.array([s.radius for s in shapes])
+    core = np.array([0.05, 0.1])
+    start = np.array([[0.0, 0.0], [-3.0, 0.3]])
+    end = np.array([[0.0, 0.0], [0.4, 0.3]])
+    angle = np.zeros(2)
+    for obstacles, stopped in ((None, True), (np.array([True, False]), True),
+                               (np.array([False, True]), False)):
+        t = toi.step_fractions(fields, [None] * 2, np.arange(2), start, end, angle, angle,
+                               radius, core, np.array([1]), SLOP, obstacles=obstacles)
+        assert (t[0] < 1.0) == stopped
+
+
+def test_a_fast_column_stops_together_on_the_ground():
+    """Two 0.4 m boxes falling at 60 m/s, 2 mm apart, the lower one 0.3 m above the
+    ground: the step's rows do not hold the lower one (the ground is beyond its capped
+    reach) and the time of impact stops it short of the ground. The upper one touches
+    it (a row within the speculative distance) and stops with it at the same fraction
+    of its step (``world_stages._stop_groups``): the pair stays apart. Stopped alone,
+    the lower box was put back under the upper one, which ended 81 mm inside it."""
+    world = World()
+    world.add_body({"type": "box", "size": [10.0, 1.0]}, position=(0.0, -0.5), kind="static")
+    h = 0.4
+    for y in (0.3 + h / 2, 0.3 + h + 0.002 + h / 2):
+        world.add_body({"type": "box", "size": [h, h]}, position=(0.0, y),
+                       velocity=(0.0, -60.0))
+    world.step()
+    assert world.stage_counts["time_of_impact"] == 1
+    com = world.position
+    assert com[1][1] - h / 2 > SLOP                        # stopped short of the ground
+    assert com[2][1] - com[1][1] - h >= 0.0               # and the upper box on it
+
 def scattered_traces(seed: int, n_bodies: int = 60):
     """A crowd of shapes of every kind (boxes, polygons concave and convex, circles,
     exact, CSG and smooth sdf fields, an unbounded ground), half of them fast, moving
