@@ -43,7 +43,8 @@ Not traced: fast bodies against each other (each is traced only against bodies t
 are not fast), and the motion of the obstacle during the step (its end pose is used).
 The world traces fast bodies against static and kinematic bodies only, as Box2D v3
 does its non-bullet bodies (``step_fractions``' ``obstacles``); dynamic pairs are left
-to their contact rows, whose margin grows with the bodies' reach.
+to their contact rows, whose margin grows with the bodies' reach, but for bodies that
+moved beyond that reach (``bullets``), traced against every body.
 """
 
 from __future__ import annotations
@@ -335,7 +336,8 @@ def step_fractions(fields: list[Field], vertices: list[np.ndarray | None],
                    group: np.ndarray | None = None, pair_filter=None,
                    contact_pairs: np.ndarray | None = None,
                    programs: Programs | None = None,
-                   obstacles: np.ndarray | None = None) -> np.ndarray:
+                   obstacles: np.ndarray | None = None,
+                   bullets: np.ndarray | None = None) -> np.ndarray:
     """The world's stage: min of ``time_of_impact`` and ``vertex_time_of_impact`` (F,),
     the candidate pairs found once for both (arguments as theirs). pair_filter: the
     bodies' ``collide.filter.PairFilter`` or None: pairs it filters out, and pairs with a
@@ -370,21 +372,27 @@ def step_fractions(fields: list[Field], vertices: list[np.ndarray | None],
     the traces run in numpy rounds (the same stop times).
 
     Obstacles. obstacles: (B,) bool, the bodies a fast body may be stopped against, or
-    None: every body. The world passes its static and kinematic bodies (Box2D v3
-    traces its non-bullet bodies against static shapes only): against a dynamic
-    obstacle the trace used its end pose, and the rewind put the fast body back
-    along its path into whatever moved with it. In scenes/concave_polygons.toml two
-    polygons fell together, 3 mm apart; the solver stopped the lower one on a third,
-    dynamic, 3 mm deep and the upper one on it (-0.7 mm), and the trace against the
-    third put the lower one back 8.6 mm, 10.3 mm into the upper one (t = 0.93 s, the
-    scene's deepest contact). Dynamic pairs keep their contact rows, whose margin grows
-    with the bodies' reach; the traces keep catching what passes through the ground,
-    walls and platforms."""
+    None: every body; bullets: (F,) bool, fast bodies stopped against every body
+    whatever ``obstacles`` says, or None: none. The world passes its static and
+    kinematic bodies as obstacles, and as bullets the fast bodies that moved farther
+    than their contact rows reached (``collide.REACH_CAP_RADII`` bounding radii; Box2D
+    v3 traces its bodies that are not bullets against static shapes only): against a
+    dynamic obstacle the trace used its end pose, and the rewind put the fast body
+    back along its path into whatever moved with it. In scenes/concave_polygons.toml
+    two polygons fell together, 3 mm apart; the solver stopped the lower one on a
+    third, dynamic, 3 mm deep and the upper one on it (-0.7 mm), and the trace against
+    the third put the lower one back 8.6 mm, 10.3 mm into the upper one (t = 0.93 s,
+    the scene's deepest contact). Dynamic pairs keep their contact rows, whose margin
+    grows with the bodies' reach, except where the reach was capped: a slug at 300
+    m/s crosses 5 m a step and its rows reach 0.1 m, so it is traced against the
+    boxes of a stack as against the ground (tests/stability, the stack bullets)."""
     if len(fast) == 0:
         return np.ones(0)
     pairs = _candidate_pairs(fast, start, end, radius)
     if obstacles is not None:
         keep = obstacles[pairs[1]]
+        if bullets is not None:
+            keep |= bullets[pairs[0]]
         pairs = (pairs[0][keep], pairs[1][keep])
     if pair_filter is not None:
         keep = pair_filter.allows(fast[pairs[0]], pairs[1], solid=True)

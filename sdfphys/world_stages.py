@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import world_sleep
-from .collide import Contacts, compile_evaluator, find_contacts, shape_fields
+from .collide import REACH_CAP_RADII, Contacts, compile_evaluator, find_contacts, shape_fields
 from .collide import compile_ahead as collide_ahead
 from .collide import compile_behind as collide_behind
 from .collide.curvature import curvature_radii, turning_bodies
@@ -208,7 +208,8 @@ def restitution(world: World, constraints: ContactConstraints, bodies: BodyState
 def time_of_impact(world: World, bodies: BodyState, start_com: np.ndarray,
                    start_angle: np.ndarray, contacts: Contacts) -> None:
     """Stage 5: fast bodies stopped at their time of impact (``sdfphys.toi``) against
-    static and kinematic bodies; a circle is not traced against a body it had a contact
+    static and kinematic bodies, and against every body where they moved beyond their
+    rows' reach (``_bullets``); a circle is not traced against a body it had a contact
     row with (``contacts``, this step's). A stopped body stops its joint group and the
     dynamic bodies it touches (``_stop_groups``)."""
     s = world.settings
@@ -227,7 +228,9 @@ def time_of_impact(world: World, bodies: BodyState, start_com: np.ndarray,
                               bodies.angle, radius, core, fast, s.linear_slop, group,
                               pair_filter(world),
                               np.column_stack([contacts.body_a, contacts.body_b]),
-                              _programs(world), world._view("kind") != DYNAMIC)
+                              _programs(world), world._view("kind") != DYNAMIC,
+                              _bullets(start_com, bodies.com, start_angle, bodies.angle,
+                                       radius, fast))
     fast, fraction = world._joints.spread_fractions(_stop_groups(world, fast, contacts),
                                                     fast, fraction)
     t = fraction[:, None]
@@ -235,6 +238,17 @@ def time_of_impact(world: World, bodies: BodyState, start_com: np.ndarray,
     bodies.angle[fast] = start_angle[fast] + fraction * (bodies.angle[fast]
                                                          - start_angle[fast])
     world.stage_counts["time_of_impact"] += 1
+
+
+def _bullets(start_com: np.ndarray, end_com: np.ndarray, start_angle: np.ndarray,
+             end_angle: np.ndarray, radius: np.ndarray, fast: np.ndarray) -> np.ndarray:
+    """(F,) bool: the ``fast`` bodies whose step carried a point of them farther
+    (|c1 - c0| + |a1 - a0| r, r the bounding radius) than a contact row can reach
+    (``collide.REACH_CAP_RADII`` r): their rows may not have seen what they crossed, and
+    the time of impact traces them against every body (``toi.step_fractions``)."""
+    travel = (np.hypot(*(end_com[fast] - start_com[fast]).T)
+              + np.abs(end_angle[fast] - start_angle[fast]) * radius[fast])
+    return travel > REACH_CAP_RADII * radius[fast]
 
 
 def _stop_groups(world: World, fast: np.ndarray, contacts: Contacts) -> np.ndarray | None:

@@ -286,7 +286,8 @@ def test_a_fast_body_is_stopped_against_obstacles_only():
     """``obstacles``: the bodies a fast body may be stopped against (the world passes its
     static and kinematic ones, as Box2D v3 traces its non-bullet bodies). The same fast
     ball and wall as above: stopped short of the wall when the wall is an obstacle,
-    not when it is not (a dynamic wall's pair is left to its contact rows)."""
+    not when it is not (a dynamic wall's pair is left to its contact rows), unless the
+    ball is a bullet (``bullets``: it moved beyond its rows' reach)."""
     shapes = [shape_from_spec(s) for s in (WALL, BALL)]
     fields = [s.field for s in shapes]
     radius = np.array([s.radius for s in shapes])
@@ -294,10 +295,13 @@ def test_a_fast_body_is_stopped_against_obstacles_only():
     start = np.array([[0.0, 0.0], [-3.0, 0.3]])
     end = np.array([[0.0, 0.0], [0.4, 0.3]])
     angle = np.zeros(2)
-    for obstacles, stopped in ((None, True), (np.array([True, False]), True),
-                               (np.array([False, True]), False)):
+    for obstacles, bullet, stopped in ((None, False, True),
+                                       (np.array([True, False]), False, True),
+                                       (np.array([False, True]), False, False),
+                                       (np.array([False, True]), True, True)):
         t = toi.step_fractions(fields, [None] * 2, np.arange(2), start, end, angle, angle,
-                               radius, core, np.array([1]), SLOP, obstacles=obstacles)
+                               radius, core, np.array([1]), SLOP, obstacles=obstacles,
+                               bullets=np.array([bullet]))
         assert (t[0] < 1.0) == stopped
 
 
