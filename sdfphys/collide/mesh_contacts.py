@@ -255,9 +255,9 @@ def _face_normals(field: Field, p: np.ndarray, depth: np.ndarray, edge: np.ndarr
     a pair pushes the mesh the same way, out where its bulk is), then the face the
     probes' gradients turn most from it, its second (``_reference_faces`` takes the
     second only where the first is cut). Without it such a crossing was seen by no
-    row: the '+' read 0.1 m where
-    its arms overlap 0.2 m deep on either side of the kink, and a star's spike cut 92
-    mm into an L's corner while the rows read under 2 mm (docs/stability.md).
+    row: the '+' read 0.1 m where its arms overlap 0.2 m deep on either side of the
+    kink, and a star's spike cut 92 mm into an L's corner while the rows read under
+    2 mm (docs/stability.md).
     """
     n = len(p)
     points = np.concatenate([p, (p[:, None, :] + _PROBE * _AXES[None]).reshape(-1, 2)])
@@ -309,9 +309,9 @@ def _reference_faces(field: Field, c: _Candidates, vertices: np.ndarray, deepest
     across the plank within the margin (the world's margin grows with the bodies'
     reach; tests/test_narrowphase.py, the plank and the clamp), and a star's spike
     crossed a U's arm 85 mm deep while the pair's rows read 0.3 mm (docs/stability.md,
-    "Discussion"). The face is a contact plane
-    when no supported vertex lies deeper below it than the pair's deepest point
-    (``deepest`` (n,): max of -f over the mesh, from the descent) plus ``slop``:
+    "Every shipped scene under 1 cm"). The face is a contact plane when no supported
+    vertex lies deeper below it than the pair's deepest point (``deepest`` (n,): max
+    of -f over the mesh, from the descent) plus ``slop``:
     otherwise the mesh cuts through the plane (a side face near the end of a thin
     overlap), and pushing along it would take more than the actual penetration.
     second_of (C,): for a kink's second face (``_face_normals``) the row of its first,
