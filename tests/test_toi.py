@@ -307,11 +307,12 @@ def test_a_fast_body_is_stopped_against_obstacles_only():
 
 def test_a_fast_column_stops_together_on_the_ground():
     """Two 0.4 m boxes falling at 60 m/s, 2 mm apart, the lower one 0.3 m above the
-    ground: the step's rows do not hold the lower one (the ground is beyond its capped
-    reach) and the time of impact stops it short of the ground. The upper one touches
-    it (a row within the speculative distance) and stops with it at the same fraction
-    of its step (``world_stages._stop_groups``): the pair stays apart. Stopped alone,
-    the lower box was put back under the upper one, which ended 81 mm inside it."""
+    ground: the time of impact traces the lower one against the ground and puts it
+    back short of it (its bounding disc one to two slop from the ground, 88 mm above
+    it). The upper one touches it (a row within the speculative distance) and stops
+    with it at the same fraction of its step (``world_stages._stop_groups``): the pair
+    stays apart. Stopped alone, the lower box was put back under the upper one, which
+    ended 81 mm inside it."""
     world = World()
     world.add_body({"type": "box", "size": [10.0, 1.0]}, position=(0.0, -0.5), kind="static")
     h = 0.4
