@@ -30,11 +30,15 @@ between kernels does not have.
 Work while waiting (``while_waiting``): a process may leave jobs (callables that
 compile kernels it will need later) to run, one at a time and each once, whenever it
 finds a kernel's lock held by another process while it holds none itself (a kernel it
-calls, not a callee of one it is compiling), instead of sleeping. A job's own waits
-sleep (no job runs inside a job). A job holds locks only of kernels it compiles and
-their callees, as any caller does, so the argument above still holds. The parent of a
-cold start leaves its step's last stages there (``sdfphys._warm``), so that it compiles
-them while the compiling child holds a kernel it needs.
+calls, not a callee of one it is compiling), instead of sleeping. A job never waits:
+where it meets a kernel another process is compiling it stops (``KernelBusy``) and is
+dropped, and that kernel compiles, or loads, at its first real call. (A job that waited
+there kept the parent of a box stack's cold start idle for the 8 s the child spent
+compiling the field evaluator after the kernel the parent had been waiting for.) A job
+holds locks only of kernels it compiles and their callees, as any caller does, so the
+argument above still holds. The parent of a cold start leaves its step's last stages
+there (``sdfphys._warm``), so that it compiles them while the compiling child holds a
+kernel it needs.
 """
 
 from __future__ import annotations
@@ -47,8 +51,8 @@ from pathlib import Path
 
 from numba.core import dispatcher, sigutils
 
-__all__ = ["POLL_SECONDS", "STALE_SECONDS", "held_elsewhere", "install", "lock_path",
-           "while_waiting"]
+__all__ = ["POLL_SECONDS", "STALE_SECONDS", "KernelBusy", "held_elsewhere", "install",
+           "lock_path", "while_waiting"]
 
 #: Seconds between two looks at a lock another process holds.
 POLL_SECONDS = 0.02
@@ -69,6 +73,12 @@ _held: dict[str, int] = {}
 _jobs: list[Callable[[], None]] = []
 #: Held while a job runs: one job at a time, none inside another.
 _job_running = threading.Lock()
+#: The thread running a job, if any (its waits stop the job instead: ``KernelBusy``).
+_job_thread: list[int] = []
+
+
+class KernelBusy(Exception):
+    """A job met a kernel another process is compiling: the job stops and is dropped."""
 
 
 def while_waiting(jobs: Iterable[Callable[[], None]]) -> None:
@@ -89,10 +99,13 @@ def _run_a_job() -> bool:
         if not _jobs:
             return False
         job = _jobs.pop(0)
+        _job_thread.append(threading.get_ident())
         try:
             job()
         except Exception:
             pass
+        finally:
+            _job_thread.clear()
         return True
     finally:
         _job_running.release()
@@ -153,6 +166,8 @@ def _acquire(path: str) -> bool:
                     os.unlink(path)
                 except OSError:
                     pass
+            elif threading.get_ident() in _job_thread:
+                raise KernelBusy(path)
             elif not _run_a_job():
                 time.sleep(POLL_SECONDS)
             continue

@@ -47,7 +47,8 @@ def test_a_lock_held_by_a_live_process_is_waited_for(tmp_path):
 
 def test_jobs_run_once_each_while_waiting_and_not_inside_a_held_lock(tmp_path):
     """While another live process holds the lock, the waiting process runs its jobs in
-    order, each once; a job that fails is dropped; a job's own wait runs no other job;
+    order, each once; a job that fails is dropped; a job that meets a lock another
+    process holds stops at once (``KernelBusy``) and is dropped, running no other job;
     none runs while this process holds a lock of its own (a callee's wait)."""
     path, other = str(tmp_path / "kernel.nbi.lock"), str(tmp_path / "callee.nbi.lock")
     ran = []
@@ -55,9 +56,14 @@ def test_jobs_run_once_each_while_waiting_and_not_inside_a_held_lock(tmp_path):
     def nested():
         ran.append("nested")
         Path(other).write_text(str(os.getppid()))
-        threading.Timer(0.2, os.unlink, args=(other,)).start()
-        assert _compile_lock._acquire(other)     # waits; "never" must not run meanwhile
-        _compile_lock._release(other)
+        t0 = time.monotonic()
+        try:
+            _compile_lock._acquire(other)        # held elsewhere: no wait, no other job
+        except _compile_lock.KernelBusy:
+            ran.append(f"busy {time.monotonic() - t0 < 0.1}")
+            raise
+        finally:
+            os.unlink(other)
 
     def fails():
         ran.append("fails")
@@ -71,14 +77,14 @@ def test_jobs_run_once_each_while_waiting_and_not_inside_a_held_lock(tmp_path):
     try:
         Path(path).write_text(str(os.getppid()))
         assert _compile_lock._acquire(path)
-        assert ran == ["nested", "fails", "last"]
+        assert ran == ["nested", "busy True", "fails", "last"]
         _compile_lock._release(path)
         held = str(tmp_path / "held.nbi.lock")
         assert _compile_lock._acquire(held)
         Path(path).write_text(str(os.getppid()))
         threading.Timer(0.3, os.unlink, args=(path,)).start()
         assert _compile_lock._acquire(path)      # waits, holding `held`: no job
-        assert ran == ["nested", "fails", "last"]
+        assert ran == ["nested", "busy True", "fails", "last"]
         _compile_lock._release(path)
         _compile_lock._release(held)
     finally:
