@@ -198,8 +198,8 @@ def pymunk_stack_bullets(speed: float = SLUG_SPEED) -> dict[str, float]:
     fastest = 0.0
     for _ in pm_steps(space, 30):
         past |= pm_state(shot)[0][:, 0] > pm_state(target)[0][:, 0]
-        velocity = np.concatenate([pm_state(shot)[2], pm_state(target)[2]])
-        fastest = max(fastest, float(np.max(np.hypot(*velocity.T))))
+        moving = np.concatenate([pm_state(shot)[2], pm_state(target)[2]])
+        fastest = max(fastest, float(np.max(np.hypot(*moving.T))))
     return {"tunnelled": float(past.mean()), "fastest": fastest / speed}
 
 
