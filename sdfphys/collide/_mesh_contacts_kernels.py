@@ -210,10 +210,8 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
         now = deepest[pair[i]]
         if not (now >= depth[i] or math.isnan(now)):
             deepest[pair[i]] = depth[i]
-    # 3. Normals (``_face_normals`` for a polygon pair).
-    normal = np.empty((c, 2))
-    # Per row: the row of the face it falls back from (a kink's second face), or -1.
-    alt_of = np.full(c, -1, dtype=np.int64)
+    # 3. Normals (``_face_normals`` for a polygon pair). alt_of, per row: the row of the
+    # face it falls back from (a kink's second face), or -1.
     if polygon_pair:
         probes = np.empty((5 * c, 2))
         for i in range(c):
@@ -310,6 +308,8 @@ def _finish(triangles: np.ndarray, outline_edges: np.ndarray, vertices: np.ndarr
         c = face
         pair, element, start, p, depth = q_pair, q_element, q_start, q_p, q_depth
     else:
+        normal = np.empty((c, 2))
+        alt_of = np.full(c, -1, dtype=np.int64)
         _, g = _evaluate(code, consts, depth_p, nesting, p, c)
         for i in range(c):
             normal[i, 0], normal[i, 1] = unit_or(g[i, 0], g[i, 1], 1.0, 0.0)
